@@ -1,0 +1,30 @@
+# hooke: the two entry points are `make demo` and `make test`; both install missing Debian
+# packages first (scripts/install-deps.sh), then configure and build Release in build/.
+BUILD ?= build
+JOBS ?= 2
+CMAKE_FLAGS ?=
+
+.PHONY: all deps configure build demo test clean
+
+all: build
+
+deps:
+	bash scripts/install-deps.sh
+
+configure: deps
+	cmake -S . -B $(BUILD) -DCMAKE_BUILD_TYPE=Release $(CMAKE_FLAGS)
+
+build: configure
+	cmake --build $(BUILD) -j $(JOBS)
+
+# The default scene: a cloth hanging from two corners -> out/demo/{final.png,log.csv,final.csv,frames/}
+demo: configure
+	cmake --build $(BUILD) -j $(JOBS) --target hooke
+	$(BUILD)/bin/hooke run problems/scenes/hanging_cloth.toml --out out/demo
+	@echo "demo: picture out/demo/final.png, data out/demo/log.csv and out/demo/final.csv, frames out/demo/frames.pvd"
+
+test: build
+	cd $(BUILD) && ctest --output-on-failure -j $(JOBS)
+
+clean:
+	rm -rf $(BUILD) out

@@ -1,0 +1,123 @@
+// Cloth grid and cantilever: particles on a rectangular lattice with structural (i±1, j±1),
+// shear (diagonals) and flexion (i±2, j±2) springs.
+#include <cmath>
+
+#include "problems/builders/mesh_build.hpp"
+
+namespace hooke {
+
+namespace {
+
+struct SpringKind {
+  bool enabled;
+  double k, c;
+};
+
+SpringKind read_kind(TableReader& mesh, TableReader& springs, const std::string& kind, bool def_on,
+                     double k_def, double c_def) {
+  SpringKind s;
+  s.enabled = mesh.boolean(kind, def_on);
+  s.k = springs.non_negative(kind + "_stiffness", k_def);
+  s.c = springs.non_negative(kind + "_damping", c_def);
+  return s;
+}
+
+/// Fills out with an nx x ny lattice; id = j * nx + i; position origin + i*du + j*dw.
+void lattice(long long nx, long long ny, const Vec3& du, const Vec3& dw, double mass,
+             const SpringKind& structural, const SpringKind& shear, const SpringKind& flexion,
+             MeshBuild& out) {
+  const Index n = nx * ny;
+  out.resize(n);
+  auto id = [nx](long long i, long long j) { return static_cast<int>(j * nx + i); };
+  for (long long j = 0; j < ny; ++j)
+    for (long long i = 0; i < nx; ++i) {
+      out.x.segment<3>(3 * id(i, j)) = double(i) * du + double(j) * dw;
+      out.masses[id(i, j)] = mass;
+    }
+  auto add = [&](long long i0, long long j0, long long i1, long long j1, const SpringKind& s,
+                 bool limited) {
+    if (i1 < 0 || i1 >= nx || j1 < 0 || j1 >= ny) return;
+    const int a = id(i0, j0), b = id(i1, j1);
+    const double L = (out.x.segment<3>(3 * a) - out.x.segment<3>(3 * b)).norm();
+    out.springs.push_back({a, b, s.k, L, s.c, limited});
+  };
+  for (long long j = 0; j < ny; ++j)
+    for (long long i = 0; i < nx; ++i) {
+      if (structural.enabled) {
+        add(i, j, i + 1, j, structural, true);
+        add(i, j, i, j + 1, structural, true);
+      }
+      if (shear.enabled) {
+        add(i, j, i + 1, j + 1, shear, true);
+        add(i + 1, j, i, j + 1, shear, true);
+      }
+      if (flexion.enabled) {
+        add(i, j, i + 2, j, flexion, false);
+        add(i, j, i, j + 2, flexion, false);
+      }
+    }
+}
+
+void pin_grid(TableReader& mesh, const std::vector<std::vector<double>>& pins, long long nx,
+              long long ny, MeshBuild& out) {
+  for (size_t k = 0; k < pins.size(); ++k) {
+    const std::string key = "pins[" + std::to_string(k) + "]";
+    long long ij[2];
+    const long long size[2] = {nx, ny};
+    for (int c = 0; c < 2; ++c) {
+      const double d = pins[k][static_cast<size_t>(c)];
+      if (d != std::floor(d)) mesh.fail(key, "grid coordinates must be integers [i, j]");
+      long long v = static_cast<long long>(d);
+      if (v < 0) v += size[c];
+      if (v < 0 || v >= size[c])
+        mesh.fail(key, std::string(c == 0 ? "i" : "j") + " = " + std::to_string(static_cast<long long>(d)) +
+                           " outside the grid (0.." + std::to_string(size[c] - 1) +
+                           ", negative counts from the end)");
+      ij[c] = v;
+    }
+    out.pinned[static_cast<size_t>(ij[1] * nx + ij[0])] = 1;
+  }
+}
+
+}  // namespace
+
+void build_grid(TableReader& mesh, TableReader& springs, MeshBuild& out) {
+  const long long nx = mesh.integer("nx", 20, 2, 1000000000LL);
+  const long long ny = mesh.integer("ny", 20, 2, 1000000000LL);
+  check_size(mesh, "nx", double(nx) * double(ny), 6.0 * double(nx) * double(ny));
+  const double width = mesh.positive("width", 1.0);
+  const double height = mesh.positive("height", 1.0);
+  const std::string orient = mesh.choice("orientation", "horizontal", {"horizontal", "vertical"});
+  const double mass = read_particle_mass(mesh, nx * ny, 1.0);
+  const double k = springs.non_negative("stiffness", 1e3);
+  const double c = springs.non_negative("damping", 0.0);
+  const SpringKind structural = read_kind(mesh, springs, "structural", true, k, c);
+  const SpringKind shear = read_kind(mesh, springs, "shear", true, k, c);
+  const SpringKind flexion = read_kind(mesh, springs, "flexion", true, k, c);
+  const Vec3 du(width / double(nx - 1), 0.0, 0.0);
+  const Vec3 dw = orient == "horizontal" ? Vec3(0.0, 0.0, height / double(ny - 1))
+                                         : Vec3(0.0, -height / double(ny - 1), 0.0);
+  lattice(nx, ny, du, dw, mass, structural, shear, flexion, out);
+  // Default: the two corners of row j = 0 (a cloth hanging from two corners).
+  const auto pins = mesh.rows("pins", 2, 2, std::vector<std::vector<double>>{{0, 0}, {-1, 0}});
+  pin_grid(mesh, pins, nx, ny, out);
+}
+
+void build_cantilever(TableReader& mesh, TableReader& springs, MeshBuild& out) {
+  const long long nx = mesh.integer("nx", 21, 2, 1000000000LL);
+  const long long ny = mesh.integer("ny", 3, 2, 1000000000LL);
+  check_size(mesh, "nx", double(nx) * double(ny), 6.0 * double(nx) * double(ny));
+  const double length = mesh.positive("length", 1.0);
+  const double thickness = mesh.positive("thickness", 0.1);
+  const double mass = read_particle_mass(mesh, nx * ny, 1.0);
+  const double k = springs.non_negative("stiffness", 1e4);
+  const double c = springs.non_negative("damping", 0.0);
+  const SpringKind structural = read_kind(mesh, springs, "structural", true, k, c);
+  const SpringKind shear = read_kind(mesh, springs, "shear", true, k, c);
+  const SpringKind flexion = read_kind(mesh, springs, "flexion", true, k, c);
+  lattice(nx, ny, Vec3(length / double(nx - 1), 0, 0), Vec3(0, -thickness / double(ny - 1), 0), mass,
+          structural, shear, flexion, out);
+  for (long long j = 0; j < ny; ++j) out.pinned[static_cast<size_t>(j * nx)] = 1;  // clamped end
+}
+
+}  // namespace hooke

@@ -1,0 +1,278 @@
+#include "problems/scene.hpp"
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "hooke/constraints/collider.hpp"
+#include "hooke/constraints/strain_limit.hpp"
+#include "hooke/forces/air_drag.hpp"
+#include "hooke/forces/gravity.hpp"
+#include "hooke/forces/hooke_spring.hpp"
+#include "hooke/forces/spring_damper.hpp"
+#include "hooke/registry.hpp"
+#include "problems/builders/mesh_build.hpp"
+#include "problems/ode_problems.hpp"
+
+namespace hooke {
+
+long long TimeSettings::steps() const {
+  if (duration <= 0.0) return 0;
+  return static_cast<long long>(std::ceil(duration / dt * (1.0 - 1e-12)));
+}
+
+const std::vector<std::string>& mesh_types() {
+  static const std::vector<std::string> types = {"grid",        "cantilever", "chain",
+                                                 "hair",        "damped-springs",
+                                                 "two-particle", "particles", "obj"};
+  return types;
+}
+
+namespace {
+
+/// Applies one "section.key=value" override to the parsed table. The value is parsed as a TOML
+/// value; if that fails it is taken as a string (so --set integrator.method=rk4 works unquoted).
+void apply_override(toml::table& root, const std::string& item) {
+  const std::string where = "--set " + item;
+  const auto eq = item.find('=');
+  if (eq == std::string::npos || eq == 0)
+    throw InputError("<command line>", item, "expected section.key=value");
+  const std::string path = item.substr(0, eq), text = item.substr(eq + 1);
+  toml::table parsed;
+  try {
+    parsed = toml::parse("v = " + text);
+  } catch (const toml::parse_error&) {
+    parsed = toml::table{{"v", text}};
+  }
+  toml::table* t = &root;
+  std::string rest = path;
+  for (size_t dot; (dot = rest.find('.')) != std::string::npos;) {
+    const std::string part = rest.substr(0, dot);
+    rest = rest.substr(dot + 1);
+    if (part.empty()) throw InputError("<command line>", path, "empty section name");
+    auto* node = t->get(part);
+    if (!node) {
+      t->insert(part, toml::table{});
+      node = t->get(part);
+    }
+    t = node->as_table();
+    if (!t) throw InputError("<command line>", path, "'" + part + "' is not a table in the scene");
+  }
+  if (rest.empty()) throw InputError("<command line>", path, "empty key name");
+  t->insert_or_assign(rest, std::move(*parsed.get("v")));
+}
+
+MeshBuild build_mesh(TableReader& mesh, TableReader& springs, const std::string& base_dir) {
+  MeshBuild b;
+  const std::string type = mesh.choice("type", std::nullopt, mesh_types());
+  if (type == "grid") build_grid(mesh, springs, b);
+  else if (type == "cantilever") build_cantilever(mesh, springs, b);
+  else if (type == "chain") build_chain(mesh, springs, b);
+  else if (type == "hair") build_hair(mesh, springs, b);
+  else if (type == "damped-springs") build_damped_springs(mesh, springs, b);
+  else if (type == "two-particle") build_two_particle(mesh, springs, b);
+  else if (type == "particles") build_particles(mesh, springs, b);
+  else build_obj(mesh, springs, base_dir, b);
+  return b;
+}
+
+void read_ode(TableReader& ode, Scene& scene) {
+  const std::string problem = ode.choice("problem", std::nullopt, {"decay", "circle"});
+  if (problem == "decay") {
+    const double rate = ode.number("rate", 1.0);
+    const double x0 = ode.number("x0", 1.0);
+    scene.ode = std::make_unique<DecayOde>(rate);
+    scene.ode_initial = Vec::Constant(1, x0);
+    scene.ode_exact = [rate, x0](double t, VecRef X) { X[0] = x0 * std::exp(-rate * t); };
+  } else {
+    const auto x0 = ode.numbers("x0", std::vector<double>{1.0, 0.0});
+    if (x0.size() != 2) ode.fail("x0", "must be [x, y]");
+    scene.ode = std::make_unique<CircleOde>();
+    scene.ode_initial = Vec::Map(x0.data(), 2);
+    scene.ode_exact = [x0](double t, VecRef X) {
+      X[0] = std::cos(t) * x0[0] - std::sin(t) * x0[1];
+      X[1] = std::sin(t) * x0[0] + std::cos(t) * x0[1];
+    };
+  }
+}
+
+/// Forces, colliders and strain limiting: each added only when the scene declares it.
+void add_forces_and_constraints(TableReader& root, const MeshBuild& b, Scene& scene) {
+  MassSpringSystem& sys = *scene.system;
+  const Index n = b.num_particles();
+  auto springs = std::make_unique<HookeSpring>();
+  auto dampers = std::make_unique<SpringDamper>();
+  for (const auto& s : b.springs) {
+    springs->add(s.i, s.j, s.k, s.L);
+    if (s.c > 0.0) dampers->add(s.i, s.j, s.c);
+    scene.edges.push_back({s.i, s.j});
+    scene.edge_rest.push_back(s.L);
+  }
+  if (springs->size()) sys.add_force(std::move(springs));
+  if (dampers->size()) sys.add_force(std::move(dampers));
+
+  if (auto f = root.table("forces")) {
+    if (f->has("gravity")) sys.add_force(std::make_unique<Gravity>(b.masses, f->vec3("gravity")));
+    const double drag = f->non_negative("drag", 0.0);
+    const Vec3 wind = f->vec3("wind", Vec3::Zero());
+    if (wind.norm() > 0.0 && drag == 0.0)
+      f->fail("wind", "wind acts through air drag: set forces.drag > 0 (kg/s per particle)");
+    if (drag > 0.0) sys.add_force(std::make_unique<AirDrag>(n, drag, wind));
+    f->finish();
+  }
+
+  if (auto c = root.table("collision")) {
+    if (auto g = c->table("ground")) {
+      const Vec3 normal = g->vec3("normal", Vec3(0, 1, 0));
+      if (normal.norm() == 0.0) g->fail("normal", "must be a nonzero vector");
+      const double height = g->number("height", 0.0);
+      const double mu = g->non_negative("friction", 0.0);
+      g->finish();
+      sys.add_constraint(std::make_unique<GroundPlane>(normal, height, mu));
+    }
+    if (auto sp = c->table("sphere")) {
+      const Vec3 centre = sp->vec3("center", Vec3::Zero());
+      const double radius = sp->positive("radius", 0.5);
+      const double mu = sp->non_negative("friction", 0.0);
+      sp->finish();
+      sys.add_constraint(std::make_unique<SphereCollider>(centre, radius, mu));
+    }
+    c->finish();
+  }
+
+  if (auto sl = root.table("strain_limit")) {
+    const double max_strain = sl->positive("max_strain", 0.1);
+    const int passes = static_cast<int>(sl->integer("passes", 10, 1, 1000000));
+    sl->finish();
+    auto limit = std::make_unique<StrainLimit>(max_strain, passes);
+    for (const auto& s : b.springs)
+      if (s.limited && s.L > 0.0) limit->add(s.i, s.j, s.L);
+    sys.add_constraint(std::move(limit));
+  }
+}
+
+void read_run_settings(TableReader& root, Scene& scene) {
+  {
+    auto it = root.table("integrator");
+    TableReader& r = *it;
+    const std::string method = r.string("method", "symplectic-euler");
+    try {
+      method_info(method);
+    } catch (const UnknownMethod& e) {
+      r.fail("method", e.what());
+    }
+    scene.integrator.method = method;
+    for (const char* key : {"beta", "linear_solver", "newton_iterations", "tolerance"})
+      r.reject_if_present(key, "only implicit methods use it; explicit method '" + method +
+                                   "' would ignore it");
+    r.finish();
+  }
+  {
+    auto it = root.table("time");
+    TableReader& r = *it;
+    scene.time.dt = r.positive("dt", 1e-3);
+    scene.time.duration = r.non_negative("duration", 1.0);
+    if (scene.time.duration / scene.time.dt > 1e12)
+      r.fail("dt", "duration / dt = " + std::to_string(scene.time.duration / scene.time.dt) +
+                       " steps is more than 1e12");
+    r.finish();
+  }
+  const long long steps = scene.time.steps();
+  {
+    auto it = root.table("output");
+    TableReader& r = *it;
+    scene.output.dir = r.string("dir", "out/" + scene.name);
+    if (scene.output.dir.empty()) r.fail("dir", "must not be empty");
+    scene.output.every = r.integer("every", std::max(1LL, steps / 50), 0, 1LL << 62);
+    scene.output.log_every = r.integer("log_every", std::max(1LL, steps / 10000), 1, 1LL << 62);
+    scene.output.vtk = r.boolean("vtk", true);
+    scene.output.png = r.boolean("png", true);
+    r.finish();
+  }
+  {
+    auto it = root.table("run");
+    TableReader& r = *it;
+    scene.run.energy_growth_limit = r.positive("energy_growth_limit", 10.0);
+    r.finish();
+  }
+}
+
+Scene load_parsed(toml::table tbl, const std::string& file,
+                  const std::vector<std::string>& overrides) {
+  for (const auto& o : overrides) apply_override(tbl, o);
+  Scene scene;
+  scene.file = file;
+  scene.name = std::filesystem::path(file).stem().string();
+  const bool is_ode = tbl.contains("ode");
+  // Sections every scene has are created empty so their defaults land in the resolved scene.
+  for (const char* sec : {"integrator", "time", "output", "run"})
+    if (!tbl.contains(sec)) tbl.insert(sec, toml::table{});
+  if (!is_ode && !tbl.contains("springs")) tbl.insert("springs", toml::table{});
+  TableReader root(tbl, scene.resolved, file, "");
+
+  if (is_ode) {
+    for (const char* sec : {"mesh", "springs", "forces", "collision", "strain_limit"})
+      root.reject_if_present(sec, "an [ode] scene has no particles; remove this section");
+    auto ode = root.table("ode");
+    read_ode(*ode, scene);
+    ode->finish();
+  } else {
+    if (!root.has("mesh")) root.fail("mesh", "is required (or an [ode] section)");
+    auto mesh = root.table("mesh");
+    auto springs = root.table("springs");
+    const std::string base_dir = std::filesystem::path(file).parent_path().string();
+    MeshBuild b = build_mesh(*mesh, *springs, base_dir.empty() ? "." : base_dir);
+    mesh->finish();
+    springs->finish();
+    scene.system = std::make_unique<MassSpringSystem>(b.masses, b.pinned);
+    scene.initial.x = b.x;
+    scene.initial.v = b.v;
+    for (Index i = 0; i < b.num_particles(); ++i)
+      if (b.pinned[size_t(i)]) scene.initial.v.segment<3>(3 * i).setZero();
+    scene.initial.t = 0.0;
+    scene.exact = b.exact;
+    add_forces_and_constraints(root, b, scene);
+    scene.system->finalize();
+  }
+  read_run_settings(root, scene);
+  root.finish();
+  return scene;
+}
+
+toml::table parse_toml(const std::string& text, const std::string& file) {
+  try {
+    return toml::parse(text, file);
+  } catch (const toml::parse_error& e) {
+    const auto& src = e.source();
+    throw InputError(file,
+                     "line " + std::to_string(src.begin.line) + ", column " +
+                         std::to_string(src.begin.column),
+                     std::string(e.description()));
+  }
+}
+
+}  // namespace
+
+Scene load_scene_from_string(const std::string& text, const std::string& file,
+                             const std::vector<std::string>& overrides) {
+  return load_parsed(parse_toml(text, file), file, overrides);
+}
+
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  if (!fs::exists(path, ec)) throw InputError(path, "file", "does not exist");
+  if (fs::is_directory(path, ec)) throw InputError(path, "file", "is a directory, not a scene file");
+  const auto size = fs::file_size(path, ec);
+  if (!ec && size > (64u << 20))
+    throw InputError(path, "file", "is " + std::to_string(size >> 20) +
+                                       " MiB; scene files are limited to 64 MiB (use an obj mesh)");
+  std::ifstream in(path, std::ios::binary);
+  if (!in) throw InputError(path, "file", "cannot be read");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return load_scene_from_string(ss.str(), path, overrides);
+}
+
+}  // namespace hooke

@@ -1,0 +1,89 @@
+#pragma once
+#include <array>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <toml++/toml.h>
+
+#include "hooke/model/mass_spring_system.hpp"
+#include "hooke/model/ode_system.hpp"
+#include "hooke/model/state.hpp"
+#include "problems/input_error.hpp"
+
+namespace hooke {
+
+/// [integrator]: the time-stepping method and its options.
+struct IntegratorSettings {
+  std::string method = "symplectic-euler";  ///< registry name (hooke::methods())
+};
+
+/// [time]: step size and simulated duration.
+struct TimeSettings {
+  double dt = 1e-3;       ///< step size h (s), > 0
+  double duration = 1.0;  ///< simulated time (s), >= 0; the last step is shortened to land on it
+  /// Number of steps needed to reach duration with steps of at most dt.
+  long long steps() const;
+};
+
+/// [output]: where and how often to write.
+struct OutputSettings {
+  std::string dir;         ///< output directory (default out/<scene name>)
+  long long every = 0;     ///< write a VTK frame every N steps (0 = only the first and last)
+  long long log_every = 1; ///< write a log.csv row every N steps
+  bool vtk = true;         ///< write VTK frames at all
+  bool png = true;         ///< write final.png (a picture of the final state)
+};
+
+/// [run]: divergence detection.
+struct RunSettings {
+  /// The run stops (exit 3) when total energy exceeds its initial value by more than
+  /// energy_growth_limit times the scene's energy scale (every spring stretched by its rest
+  /// length, plus initial kinetic energy, plus gravity's energy over the initial extent).
+  double energy_growth_limit = 10.0;
+};
+
+/// An exact solution of a mass-spring scene, where one is known: writes the state at time t.
+using ExactMassSpring = std::function<void(double t, State& s)>;
+/// An exact solution of an ODE scene: writes X(t).
+using ExactOde = std::function<void(double t, VecRef X)>;
+
+/// A loaded, validated scene: either a mass-spring system with its initial state, or a generic
+/// first-order ODE (the [ode] test problems), plus the run settings and the resolved TOML.
+struct Scene {
+  std::string file;  ///< path of the scene file as given
+  std::string name;  ///< file stem, used for the default output directory
+
+  // Mass-spring scenes.
+  std::unique_ptr<MassSpringSystem> system;
+  State initial;
+  std::vector<std::array<int, 2>> edges;  ///< every spring's endpoints (for frames and pictures)
+  std::vector<double> edge_rest;          ///< rest length of each edge (m)
+  ExactMassSpring exact;                  ///< empty unless the scene has an exact solution
+
+  // ODE scenes.
+  std::unique_ptr<OdeSystem> ode;
+  Vec ode_initial;
+  ExactOde ode_exact;
+
+  IntegratorSettings integrator;
+  TimeSettings time;
+  OutputSettings output;
+  RunSettings run;
+  toml::table resolved;  ///< the scene with every default filled (written as scene.toml)
+
+  bool is_ode() const { return ode != nullptr; }
+};
+
+/// Loads and validates a scene file, applying "section.key=value" overrides first. Throws
+/// InputError (file, dotted key, reason) for anything invalid.
+Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
+/// The same from TOML text (file is used in messages and to resolve relative mesh paths).
+Scene load_scene_from_string(const std::string& text, const std::string& file,
+                             const std::vector<std::string>& overrides = {});
+
+/// Names of the mesh types ("grid", "chain", ...), for messages and `hooke scenes`.
+const std::vector<std::string>& mesh_types();
+
+}  // namespace hooke

@@ -1,0 +1,285 @@
+#include "problems/table_reader.hpp"
+
+#include <cmath>
+#include <sstream>
+
+namespace hooke {
+
+namespace {
+std::string fmt(double v) {
+  std::ostringstream os;
+  os.precision(17);
+  os << v;
+  return os.str();
+}
+const char* type_name(const toml::node& n) {
+  switch (n.type()) {
+    case toml::node_type::table: return "a table";
+    case toml::node_type::array: return "an array";
+    case toml::node_type::string: return "a string";
+    case toml::node_type::integer: return "an integer";
+    case toml::node_type::floating_point: return "a float";
+    case toml::node_type::boolean: return "a boolean";
+    default: return "a date/time";
+  }
+}
+}  // namespace
+
+TableReader::TableReader(const toml::table& tbl, toml::table& resolved, std::string file,
+                         std::string prefix)
+    : m_tbl(tbl), m_out(resolved), m_file(std::move(file)), m_prefix(std::move(prefix)) {}
+
+bool TableReader::has(const std::string& key) const { return m_tbl.contains(key); }
+
+std::string TableReader::path(const std::string& key) const {
+  return m_prefix.empty() ? key : m_prefix + "." + key;
+}
+
+void TableReader::fail(const std::string& key, const std::string& reason) const {
+  throw InputError(m_file, path(key), reason);
+}
+
+const toml::node& TableReader::node(const std::string& key) const { return *m_tbl.get(key); }
+
+double TableReader::to_number(const toml::node& n, const std::string& key) const {
+  double v;
+  if (auto i = n.as_integer())
+    v = static_cast<double>(i->get());
+  else if (auto f = n.as_floating_point())
+    v = f->get();
+  else
+    fail(key, std::string("must be a number, got ") + type_name(n));
+  if (!std::isfinite(v)) fail(key, "must be finite, got " + fmt(v));
+  return v;
+}
+
+void TableReader::record(const std::string& key, toml::node&& value) {
+  // Copy into the resolved table; node&& is a concrete value/array created by the caller.
+  if (auto a = value.as_array()) m_out.insert_or_assign(key, std::move(*a));
+  else if (auto s = value.as_string()) m_out.insert_or_assign(key, s->get());
+  else if (auto i = value.as_integer()) m_out.insert_or_assign(key, i->get());
+  else if (auto f = value.as_floating_point()) m_out.insert_or_assign(key, f->get());
+  else if (auto b = value.as_boolean()) m_out.insert_or_assign(key, b->get());
+}
+
+double TableReader::number(const std::string& key, std::optional<double> def) {
+  m_used.insert(key);
+  double v;
+  if (has(key))
+    v = to_number(node(key), key);
+  else if (def)
+    v = *def;
+  else
+    fail(key, "is required");
+  record(key, toml::value<double>(v));
+  return v;
+}
+
+double TableReader::positive(const std::string& key, std::optional<double> def) {
+  const double v = number(key, def);
+  if (!(v > 0.0)) fail(key, "must be > 0, got " + fmt(v));
+  return v;
+}
+
+double TableReader::non_negative(const std::string& key, std::optional<double> def) {
+  const double v = number(key, def);
+  if (!(v >= 0.0)) fail(key, "must be >= 0, got " + fmt(v));
+  return v;
+}
+
+long long TableReader::integer(const std::string& key, std::optional<long long> def, long long lo,
+                               long long hi) {
+  m_used.insert(key);
+  long long v;
+  if (has(key)) {
+    const toml::node& n = node(key);
+    if (auto i = n.as_integer())
+      v = i->get();
+    else
+      fail(key, std::string("must be an integer, got ") + type_name(n));
+  } else if (def) {
+    v = *def;
+  } else {
+    fail(key, "is required");
+  }
+  if (v < lo || v > hi)
+    fail(key, "must be in [" + std::to_string(lo) + ", " + std::to_string(hi) + "], got " +
+                  std::to_string(v));
+  record(key, toml::value<int64_t>(v));
+  return v;
+}
+
+bool TableReader::boolean(const std::string& key, std::optional<bool> def) {
+  m_used.insert(key);
+  bool v;
+  if (has(key)) {
+    const toml::node& n = node(key);
+    if (auto b = n.as_boolean())
+      v = b->get();
+    else
+      fail(key, std::string("must be true or false, got ") + type_name(n));
+  } else if (def) {
+    v = *def;
+  } else {
+    fail(key, "is required");
+  }
+  record(key, toml::value<bool>(v));
+  return v;
+}
+
+std::string TableReader::string(const std::string& key, std::optional<std::string> def) {
+  m_used.insert(key);
+  std::string v;
+  if (has(key)) {
+    const toml::node& n = node(key);
+    if (auto s = n.as_string())
+      v = s->get();
+    else
+      fail(key, std::string("must be a string, got ") + type_name(n));
+  } else if (def) {
+    v = *def;
+  } else {
+    fail(key, "is required");
+  }
+  record(key, toml::value<std::string>(v));
+  return v;
+}
+
+std::string TableReader::choice(const std::string& key, std::optional<std::string> def,
+                                const std::vector<std::string>& allowed) {
+  const std::string v = string(key, def);
+  for (const auto& a : allowed)
+    if (a == v) return v;
+  std::string list;
+  for (const auto& a : allowed) list += (list.empty() ? "" : ", ") + a;
+  fail(key, "unknown value '" + v + "'; expected one of: " + list);
+}
+
+Vec3 TableReader::vec3(const std::string& key, std::optional<Vec3> def) {
+  m_used.insert(key);
+  Vec3 v;
+  if (has(key)) {
+    const auto* a = node(key).as_array();
+    if (!a || a->size() != 3) fail(key, "must be an array of 3 numbers [x, y, z]");
+    for (int c = 0; c < 3; ++c) v[c] = to_number(*a->get(static_cast<size_t>(c)), key);
+  } else if (def) {
+    v = *def;
+  } else {
+    fail(key, "is required");
+  }
+  record(key, toml::array{v[0], v[1], v[2]});
+  return v;
+}
+
+std::vector<double> TableReader::numbers(const std::string& key,
+                                         std::optional<std::vector<double>> def) {
+  m_used.insert(key);
+  std::vector<double> v;
+  if (has(key)) {
+    const auto* a = node(key).as_array();
+    if (!a) fail(key, "must be an array of numbers");
+    v.reserve(a->size());
+    for (size_t k = 0; k < a->size(); ++k)
+      v.push_back(to_number(*a->get(k), key + "[" + std::to_string(k) + "]"));
+  } else if (def) {
+    v = *def;
+  } else {
+    fail(key, "is required");
+  }
+  toml::array out;
+  for (double d : v) out.push_back(d);
+  record(key, std::move(out));
+  return v;
+}
+
+std::vector<long long> TableReader::integers(const std::string& key,
+                                             std::optional<std::vector<long long>> def) {
+  m_used.insert(key);
+  std::vector<long long> v;
+  if (has(key)) {
+    const auto* a = node(key).as_array();
+    if (!a) fail(key, "must be an array of integers");
+    v.reserve(a->size());
+    for (size_t k = 0; k < a->size(); ++k) {
+      const auto* i = a->get(k)->as_integer();
+      if (!i) fail(key + "[" + std::to_string(k) + "]", "must be an integer");
+      v.push_back(i->get());
+    }
+  } else if (def) {
+    v = *def;
+  } else {
+    fail(key, "is required");
+  }
+  toml::array out;
+  for (long long d : v) out.push_back(static_cast<int64_t>(d));
+  record(key, std::move(out));
+  return v;
+}
+
+std::vector<std::vector<double>> TableReader::rows(
+    const std::string& key, size_t min_len, size_t max_len,
+    std::optional<std::vector<std::vector<double>>> def) {
+  m_used.insert(key);
+  std::vector<std::vector<double>> v;
+  if (!has(key)) {
+    if (!def) fail(key, "is required");
+    toml::array out;
+    for (const auto& r : *def) {
+      toml::array rout;
+      for (double d : r) rout.push_back(d);
+      out.push_back(std::move(rout));
+    }
+    record(key, std::move(out));
+    return *def;
+  }
+  const auto* a = node(key).as_array();
+  if (!a) fail(key, "must be an array of arrays");
+  v.reserve(a->size());
+  toml::array out;
+  for (size_t k = 0; k < a->size(); ++k) {
+    const std::string item = key + "[" + std::to_string(k) + "]";
+    const auto* row = a->get(k)->as_array();
+    if (!row || row->size() < min_len || row->size() > max_len)
+      fail(item, "must be an array of " +
+                     (min_len == max_len ? std::to_string(min_len)
+                                         : std::to_string(min_len) + " to " + std::to_string(max_len)) +
+                     " numbers");
+    std::vector<double> r;
+    toml::array rout;
+    for (size_t c = 0; c < row->size(); ++c) {
+      r.push_back(to_number(*row->get(c), item));
+      rout.push_back(r.back());
+    }
+    out.push_back(std::move(rout));
+    v.push_back(std::move(r));
+  }
+  record(key, std::move(out));
+  return v;
+}
+
+std::optional<TableReader> TableReader::table(const std::string& key) {
+  m_used.insert(key);
+  if (!has(key)) return std::nullopt;
+  const auto* t = node(key).as_table();
+  if (!t) fail(key, std::string("must be a table, got ") + type_name(node(key)));
+  auto [it, inserted] = m_out.insert_or_assign(key, toml::table{});
+  (void)inserted;
+  return TableReader(*t, *it->second.as_table(), m_file, path(key));
+}
+
+void TableReader::reject_if_present(const std::string& key, const std::string& reason) const {
+  if (has(key)) fail(key, reason);
+}
+
+void TableReader::finish() const {
+  for (const auto& [k, v] : m_tbl) {
+    (void)v;
+    const std::string key(k.str());
+    if (m_used.count(key)) continue;
+    std::string known;
+    for (const auto& u : m_used) known += (known.empty() ? "" : ", ") + u;
+    fail(key, "unknown key" + (known.empty() ? std::string() : "; known keys here: " + known));
+  }
+}
+
+}  // namespace hooke

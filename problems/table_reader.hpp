@@ -1,0 +1,72 @@
+#pragma once
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <toml++/toml.h>
+
+#include "hooke/core.hpp"
+#include "problems/input_error.hpp"
+
+namespace hooke {
+
+/// Strict, typed reading of one TOML table of a scene. Every getter checks type, finiteness and
+/// range, records the value it returns (explicit or default) into the resolved table so the run
+/// can write the scene with every default filled, and marks the key as used; finish() rejects any
+/// key that no getter asked for. Errors are InputError naming the file and the dotted key.
+class TableReader {
+ public:
+  /// tbl: the table to read; resolved: where to record values; file: for messages;
+  /// prefix: dotted path of tbl ("" for the root).
+  TableReader(const toml::table& tbl, toml::table& resolved, std::string file, std::string prefix);
+
+  bool has(const std::string& key) const;
+  /// Dotted path of key under this table, as used in messages ("mesh.nx").
+  std::string path(const std::string& key) const;
+  const std::string& file() const { return m_file; }
+  [[noreturn]] void fail(const std::string& key, const std::string& reason) const;
+
+  /// A finite number (integer or float). Without a default the key is required.
+  double number(const std::string& key, std::optional<double> def = std::nullopt);
+  /// A finite number > 0.
+  double positive(const std::string& key, std::optional<double> def = std::nullopt);
+  /// A finite number >= 0.
+  double non_negative(const std::string& key, std::optional<double> def = std::nullopt);
+  /// An integer in [lo, hi].
+  long long integer(const std::string& key, std::optional<long long> def, long long lo, long long hi);
+  bool boolean(const std::string& key, std::optional<bool> def = std::nullopt);
+  std::string string(const std::string& key, std::optional<std::string> def = std::nullopt);
+  /// A string from `allowed`; the message lists them.
+  std::string choice(const std::string& key, std::optional<std::string> def,
+                     const std::vector<std::string>& allowed);
+  /// An array of exactly 3 finite numbers.
+  Vec3 vec3(const std::string& key, std::optional<Vec3> def = std::nullopt);
+  /// An array of finite numbers (empty allowed).
+  std::vector<double> numbers(const std::string& key, std::optional<std::vector<double>> def = std::nullopt);
+  /// An array of integers (empty allowed).
+  std::vector<long long> integers(const std::string& key,
+                                  std::optional<std::vector<long long>> def = std::nullopt);
+  /// An array of arrays of finite numbers, each with between min_len and max_len entries.
+  std::vector<std::vector<double>> rows(
+      const std::string& key, size_t min_len, size_t max_len,
+      std::optional<std::vector<std::vector<double>>> def = std::nullopt);
+  /// The sub-table key, if present (it must be a table).
+  std::optional<TableReader> table(const std::string& key);
+  /// Throws if key is present: reason says why it does not apply.
+  void reject_if_present(const std::string& key, const std::string& reason) const;
+  /// Throws for the first key no getter asked for, listing the known keys of this table.
+  void finish() const;
+
+ private:
+  const toml::node& node(const std::string& key) const;
+  double to_number(const toml::node& n, const std::string& key) const;
+  void record(const std::string& key, toml::node&& value);
+
+  const toml::table& m_tbl;
+  toml::table& m_out;
+  std::string m_file, m_prefix;
+  std::set<std::string> m_used;
+};
+
+}  // namespace hooke

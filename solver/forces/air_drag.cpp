@@ -1,0 +1,20 @@
+#include "hooke/forces/air_drag.hpp"
+
+namespace hooke {
+
+void AirDrag::add_forces(ConstRef /*x*/, ConstRef v, VecRef f) const {
+  for (Index i = 0; i < m_n; ++i) f.segment<3>(3 * i) -= m_c * (v.segment<3>(3 * i) - m_wind);
+}
+
+void AirDrag::bind(const BlockPattern& p) {
+  m_diag.resize(static_cast<size_t>(m_n));
+  for (Index i = 0; i < m_n; ++i) m_diag[i] = p.slot(int(i), int(i));
+}
+
+void AirDrag::add_jacobians(ConstRef, ConstRef, const JacobianOptions&, SparseMatrix&,
+                            SparseMatrix& D) const {
+  const Mat3 B = -m_c * Mat3::Identity();
+  for (Index i = 0; i < m_n; ++i) add_block(D, m_diag[i], B);
+}
+
+}  // namespace hooke

@@ -1,0 +1,47 @@
+#pragma once
+#include <limits>
+
+#include "hooke/core.hpp"
+#include "hooke/model/block_pattern.hpp"
+
+namespace hooke {
+
+/// Options of a Jacobian assembly that change what is written, not the pattern.
+struct JacobianOptions {
+  /// Drop the indefinite transverse term of compressed springs (Choi and Ko 2002 style clamp of
+  /// max(0, 1 - L/l)), making -K positive semi-definite. Off gives the exact df/dx.
+  bool clamp_compressed = false;
+};
+
+/// One force acting on a mass-spring system of n particles (positions and velocities are 3n
+/// vectors). A force must give its force and analytic Jacobians K = df/dx and D = df/dv; it may
+/// give a potential energy (conservative forces) and a maximum spring strain.
+///
+/// Life cycle: constructed by a scene builder, declare_blocks() once, bind() once after the
+/// pattern is finalized (cache slots), then only the const evaluation calls, which must not
+/// allocate and must be safe to call from several threads on different outputs.
+class Force {
+ public:
+  virtual ~Force() = default;
+  /// Lowercase hyphenated name for logs ("hooke-spring", "gravity", ...).
+  virtual const char* name() const = 0;
+  /// Adds this force into f (3n vector, newtons).
+  virtual void add_forces(ConstRef x, ConstRef v, VecRef f) const = 0;
+  /// Potential energy (J) whose negative gradient is the conservative part of the force;
+  /// 0 for purely dissipative or external non-conservative forces.
+  virtual double potential_energy(ConstRef /*x*/) const { return 0.0; }
+  /// Declares the 3x3 blocks this force writes into K and D.
+  virtual void declare_blocks(BlockPattern& /*pattern*/) const {}
+  /// Caches slot indices of the finalized pattern.
+  virtual void bind(const BlockPattern& /*pattern*/) {}
+  /// Adds df/dx into K and df/dv into D (both 3n x 3n with the bound pattern).
+  virtual void add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options,
+                             SparseMatrix& K, SparseMatrix& D) const = 0;
+  /// Largest relative elongation (l - L) / L over this force's springs; -infinity if it has none.
+  virtual double max_strain(ConstRef /*x*/) const { return -std::numeric_limits<double>::infinity(); }
+  /// An energy scale (J) used to recognise a blown-up run: for springs, the energy of every spring
+  /// stretched by its own rest length. 0 if the force has no natural scale.
+  virtual double energy_scale() const { return 0.0; }
+};
+
+}  // namespace hooke

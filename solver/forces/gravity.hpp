@@ -1,0 +1,24 @@
+#pragma once
+#include "hooke/forces/force.hpp"
+
+namespace hooke {
+
+/// Uniform gravity f_i = m_i g with energy -sum_i m_i g . x_i; K = D = 0.
+class Gravity final : public Force {
+ public:
+  /// masses: n vector (kg); g: acceleration (m/s^2).
+  Gravity(Vec masses, const Vec3& g) : m_masses(std::move(masses)), m_g(g) {}
+  const Vec3& acceleration() const { return m_g; }
+
+  const char* name() const override { return "gravity"; }
+  void add_forces(ConstRef x, ConstRef v, VecRef f) const override;
+  double potential_energy(ConstRef x) const override;
+  void add_jacobians(ConstRef, ConstRef, const JacobianOptions&, SparseMatrix&,
+                     SparseMatrix&) const override {}
+
+ private:
+  Vec m_masses;
+  Vec3 m_g;
+};
+
+}  // namespace hooke

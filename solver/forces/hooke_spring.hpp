@@ -1,0 +1,54 @@
+#pragma once
+#include "hooke/forces/force.hpp"
+#include "hooke/forces/spring_set.hpp"
+
+namespace hooke {
+
+/// Per-spring kernels of the linear (Hooke) spring between particles a and b with stiffness k and
+/// rest length L. With d = x_a - x_b, l = |d|, u = d / l:
+///   force on a      f_a = -k (l - L) u,     f_b = -f_a
+///   energy          E = k/2 (l - L)^2
+///   df_a/dx_a       B = -k [ u u^T + (1 - L/l) (I - u u^T) ]  (Baraff and Witkin 1998)
+/// and df_a/dx_b = -B. When l < L the transverse factor (1 - L/l) is negative (the compressed
+/// case): B is then indefinite; clamp_compressed replaces the factor by max(0, 1 - L/l).
+/// At l = 0 the direction is undefined: the force is zero and B = -k I (finite surrogate).
+namespace hooke_spring_kernel {
+inline Vec3 force(const Vec3& d, double k, double L) {
+  const double l = d.norm();
+  if (l == 0.0) return Vec3::Zero();
+  return (-k * (l - L) / l) * d;
+}
+inline Mat3 dfdx(const Vec3& d, double k, double L, bool clamp_compressed) {
+  const double l = d.norm();
+  if (l == 0.0) return -k * Mat3::Identity();
+  const Vec3 u = d / l;
+  const Mat3 uu = u * u.transpose();
+  double t = 1.0 - L / l;
+  if (clamp_compressed && t < 0.0) t = 0.0;
+  return -k * (uu + t * (Mat3::Identity() - uu));
+}
+}  // namespace hooke_spring_kernel
+
+/// A set of linear springs (elastic part only; axial damping is SpringDamper).
+class HookeSpring final : public Force {
+ public:
+  /// Adds a spring between particles a != b with stiffness k >= 0 (N/m) and rest length L >= 0 (m).
+  void add(int a, int b, double k, double L) { m_springs.add(a, b, k, L); }
+  size_t size() const { return m_springs.size(); }
+  const SpringSet& springs() const { return m_springs; }
+
+  const char* name() const override { return "hooke-spring"; }
+  void add_forces(ConstRef x, ConstRef v, VecRef f) const override;
+  double potential_energy(ConstRef x) const override;
+  void declare_blocks(BlockPattern& p) const override { m_springs.declare(p); }
+  void bind(const BlockPattern& p) override { m_springs.bind(p); }
+  void add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options, SparseMatrix& K,
+                     SparseMatrix& D) const override;
+  double max_strain(ConstRef x) const override;
+  double energy_scale() const override;
+
+ private:
+  SpringSet m_springs;
+};
+
+}  // namespace hooke

@@ -1,0 +1,56 @@
+#pragma once
+#include <utility>
+#include <vector>
+
+#include "hooke/core.hpp"
+
+namespace hooke {
+
+/// Where one 3x3 block (i, j) lives in the value array of a compressed-column 3n x 3n matrix
+/// built from a BlockPattern: entry (r, c) of the block, r, c in 0..2, is
+/// valuePtr()[offset + c * stride + r]. Rows of a block are contiguous because all three rows of
+/// block row i are always present, and the three columns of block column j share one row pattern.
+struct BlockSlot {
+  int offset = -1;  ///< index of entry (3i, 3j) in the value array
+  int stride = 0;   ///< number of stored entries per scalar column of block column j
+};
+
+/// Adds the 3x3 block B into the values of A at slot s. No bounds checks: slots come from the
+/// pattern A was created from.
+inline void add_block(SparseMatrix& A, const BlockSlot& s, const Mat3& B) {
+  double* p = A.valuePtr() + s.offset;
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) p[c * s.stride + r] += B(r, c);
+}
+
+/// The nonzero 3x3 blocks of the assembled Jacobians over n particles, built once: forces declare
+/// the (i, j) pairs they touch, finalize() sorts and deduplicates them (the only sort in a run),
+/// and afterwards slots are looked up once per force and reused at every assembly.
+/// Both triangles are stored; every diagonal block is present (the mass matrix needs it).
+class BlockPattern {
+ public:
+  /// An empty pattern over n particles (3n x 3n scalars) with all diagonal blocks.
+  explicit BlockPattern(Index num_particles = 0);
+  /// Declares the symmetric pair of blocks (i, j) and (j, i). Only before finalize().
+  void add_pair(int i, int j);
+  /// Sorts and deduplicates the declared blocks and builds the scalar structure.
+  void finalize();
+  bool finalized() const { return m_finalized; }
+  Index num_particles() const { return m_n; }
+  /// Number of stored 3x3 blocks (both triangles).
+  Index num_blocks() const { return static_cast<Index>(m_block_rows.size()); }
+  /// Slot of block (i, j); throws InternalError if the block was not declared. Setup-time only
+  /// (binary search).
+  BlockSlot slot(int i, int j) const;
+  /// A 3n x 3n matrix with this structure and all values zero (allocates: setup-time only).
+  SparseMatrix make_matrix() const;
+
+ private:
+  Index m_n = 0;
+  bool m_finalized = false;
+  std::vector<std::pair<int, int>> m_declared;  // (column block, row block)
+  std::vector<int> m_block_col_start;           // CSC over blocks: start per block column
+  std::vector<int> m_block_rows;                // row block of each stored block
+};
+
+}  // namespace hooke

@@ -1,0 +1,94 @@
+#include "hooke/model/mass_spring_system.hpp"
+
+#include <algorithm>
+#include <limits>
+
+namespace hooke {
+
+MassSpringSystem::MassSpringSystem(Vec masses, std::vector<char> pinned)
+    : m_masses(std::move(masses)), m_pinned(std::move(pinned)), m_pattern(m_masses.size()) {
+  const Index n = m_masses.size();
+  HOOKE_ASSERT(static_cast<Index>(m_pinned.size()) == n,
+               "pinned has " << m_pinned.size() << " flags for " << n << " particles");
+  m_mass_diag.resize(3 * n);
+  m_free_inv_mass.resize(3 * n);
+  for (Index i = 0; i < n; ++i) {
+    HOOKE_ASSERT(m_masses[i] > 0.0, "mass of particle " << i << " is " << m_masses[i]);
+    m_mass_diag.segment<3>(3 * i).setConstant(m_masses[i]);
+    m_free_inv_mass.segment<3>(3 * i).setConstant(m_pinned[i] ? 0.0 : 1.0 / m_masses[i]);
+  }
+}
+
+void MassSpringSystem::add_force(std::unique_ptr<Force> force) {
+  HOOKE_ASSERT(!m_finalized, "add_force after finalize");
+  m_forces.push_back(std::move(force));
+}
+
+void MassSpringSystem::add_constraint(std::unique_ptr<Constraint> constraint) {
+  HOOKE_ASSERT(!m_finalized, "add_constraint after finalize");
+  m_constraints.push_back(std::move(constraint));
+}
+
+void MassSpringSystem::finalize() {
+  HOOKE_ASSERT(!m_finalized, "finalize called twice");
+  for (const auto& f : m_forces) f->declare_blocks(m_pattern);
+  m_pattern.finalize();
+  for (auto& f : m_forces) f->bind(m_pattern);
+  m_finalized = true;
+}
+
+Index MassSpringSystem::num_pinned() const {
+  return static_cast<Index>(std::count_if(m_pinned.begin(), m_pinned.end(), [](char p) { return p != 0; }));
+}
+
+void MassSpringSystem::compute_forces(ConstRef x, ConstRef v, VecRef f) const {
+  HOOKE_ASSERT(x.size() == dofs() && v.size() == dofs() && f.size() == dofs(),
+               "compute_forces: sizes " << x.size() << ", " << v.size() << ", " << f.size()
+                                        << " for " << dofs() << " dofs");
+  f.setZero();
+  for (const auto& force : m_forces) force->add_forces(x, v, f);
+}
+
+double MassSpringSystem::potential_energy(ConstRef x) const {
+  double E = 0.0;
+  for (const auto& force : m_forces) E += force->potential_energy(x);
+  return E;
+}
+
+double MassSpringSystem::kinetic_energy(ConstRef v) const {
+  return 0.5 * v.cwiseAbs2().dot(m_mass_diag);
+}
+
+double MassSpringSystem::max_strain(ConstRef x) const {
+  double m = -std::numeric_limits<double>::infinity();
+  for (const auto& force : m_forces) m = std::max(m, force->max_strain(x));
+  return m == -std::numeric_limits<double>::infinity() ? 0.0 : m;
+}
+
+double MassSpringSystem::energy_scale() const {
+  double E = 0.0;
+  for (const auto& force : m_forces) E += force->energy_scale();
+  return E;
+}
+
+Jacobians MassSpringSystem::make_jacobians() const {
+  HOOKE_ASSERT(m_finalized, "make_jacobians before finalize");
+  return Jacobians{m_pattern.make_matrix(), m_pattern.make_matrix()};
+}
+
+void MassSpringSystem::assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
+                                          const JacobianOptions& options) const {
+  HOOKE_ASSERT(m_finalized, "assemble_jacobians before finalize");
+  HOOKE_ASSERT(J.K.nonZeros() == 9 * m_pattern.num_blocks() &&
+                   J.D.nonZeros() == 9 * m_pattern.num_blocks(),
+               "Jacobians were not made from this system's pattern");
+  std::fill(J.K.valuePtr(), J.K.valuePtr() + J.K.nonZeros(), 0.0);
+  std::fill(J.D.valuePtr(), J.D.valuePtr() + J.D.nonZeros(), 0.0);
+  for (const auto& force : m_forces) force->add_jacobians(x, v, options, J.K, J.D);
+}
+
+void MassSpringSystem::apply_constraints(ConstRef x0, double h, VecRef x1, VecRef v1) const {
+  for (const auto& c : m_constraints) c->project(x0, h, m_pinned, x1, v1);
+}
+
+}  // namespace hooke

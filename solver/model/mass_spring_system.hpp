@@ -1,0 +1,80 @@
+#pragma once
+#include <memory>
+#include <vector>
+
+#include "hooke/constraints/constraint.hpp"
+#include "hooke/forces/force.hpp"
+#include "hooke/model/block_pattern.hpp"
+#include "hooke/model/state.hpp"
+
+namespace hooke {
+
+/// K = df/dx and D = df/dv of a whole system, 3n x 3n, sharing the system's block pattern.
+/// Created once (make_jacobians) and refilled by assemble_jacobians at every step.
+struct Jacobians {
+  SparseMatrix K;
+  SparseMatrix D;
+};
+
+/// A mass-spring system: n particles with masses and pins, a list of forces and a list of post-step
+/// constraints. Built once by a scene builder, then finalize()d and read-only during a run: all
+/// mutable scratch (forces, Jacobian values) belongs to the caller.
+///
+/// Pinned particles keep their position: their acceleration is zero, and constraints never move
+/// them. Forces on them are still computed (and appear in K and D); implicit solvers remove their
+/// rows and columns.
+class MassSpringSystem {
+ public:
+  /// masses: n vector of positive masses (kg); pinned: n flags (nonzero = pinned).
+  MassSpringSystem(Vec masses, std::vector<char> pinned);
+
+  /// Adds a force or constraint (before finalize only).
+  void add_force(std::unique_ptr<Force> force);
+  void add_constraint(std::unique_ptr<Constraint> constraint);
+  /// Builds the Jacobian block pattern and binds the forces to it. Call once, after all forces.
+  void finalize();
+
+  Index num_particles() const { return m_masses.size(); }
+  /// Number of scalar unknowns of positions (3n).
+  Index dofs() const { return 3 * num_particles(); }
+  /// Particle masses, n vector (kg).
+  const Vec& masses() const { return m_masses; }
+  /// Diagonal of the mass matrix M, 3n vector.
+  const Vec& mass_diagonal() const { return m_mass_diag; }
+  /// Inverse masses per scalar DOF with 0 for pinned particles (3n vector): a = inv * f.
+  const Vec& free_inverse_mass() const { return m_free_inv_mass; }
+  const std::vector<char>& pinned() const { return m_pinned; }
+  Index num_pinned() const;
+  const std::vector<std::unique_ptr<Force>>& forces() const { return m_forces; }
+  const std::vector<std::unique_ptr<Constraint>>& constraints() const { return m_constraints; }
+  const BlockPattern& pattern() const { return m_pattern; }
+
+  /// f = sum of all forces at (x, v); f is overwritten (3n).
+  void compute_forces(ConstRef x, ConstRef v, VecRef f) const;
+  /// Sum of the forces' potential energies (J).
+  double potential_energy(ConstRef x) const;
+  /// 1/2 v^T M v (J).
+  double kinetic_energy(ConstRef v) const;
+  /// Largest spring strain (l - L) / L over all forces (0 if no force has springs).
+  double max_strain(ConstRef x) const;
+  /// Sum of the forces' energy scales (see Force::energy_scale).
+  double energy_scale() const;
+
+  /// Zeroed K and D with this system's pattern (allocates: once per stepper).
+  Jacobians make_jacobians() const;
+  /// Overwrites the values of J.K and J.D with df/dx and df/dv at (x, v). No allocation.
+  void assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
+                          const JacobianOptions& options = {}) const;
+  /// Applies every constraint, in order, to the end-of-step state (x1, v1).
+  void apply_constraints(ConstRef x0, double h, VecRef x1, VecRef v1) const;
+
+ private:
+  Vec m_masses, m_mass_diag, m_free_inv_mass;
+  std::vector<char> m_pinned;
+  std::vector<std::unique_ptr<Force>> m_forces;
+  std::vector<std::unique_ptr<Constraint>> m_constraints;
+  BlockPattern m_pattern;
+  bool m_finalized = false;
+};
+
+}  // namespace hooke

@@ -1,0 +1,68 @@
+#include "hooke/registry.hpp"
+
+#include <functional>
+
+#include "hooke/integrators/explicit_mass_spring_stepper.hpp"
+
+namespace hooke {
+
+namespace {
+
+struct ExplicitEntry {
+  MethodInfo info;
+  std::function<std::unique_ptr<ExplicitStepper>()> make;
+};
+
+// The one table of explicit methods; higher-level method kinds add their own tables below.
+const std::vector<ExplicitEntry>& explicit_table() {
+  static const std::vector<ExplicitEntry> table = {
+      {{"forward-euler", MethodKind::Explicit, "forward Euler, order 1"},
+       [] { return ExplicitRungeKutta::forward_euler(); }},
+      {{"symplectic-euler", MethodKind::Explicit,
+        "symplectic (semi-implicit) Euler: v first, then x with the new v; order 1"},
+       [] { return std::make_unique<SymplecticEuler>(); }},
+      {{"midpoint", MethodKind::Explicit, "explicit midpoint Runge-Kutta, order 2"},
+       [] { return ExplicitRungeKutta::midpoint(); }},
+      {{"trapezoid", MethodKind::Explicit, "explicit trapezoid (Heun), order 2"},
+       [] { return ExplicitRungeKutta::trapezoid(); }},
+      {{"rk4", MethodKind::Explicit, "classical Runge-Kutta, order 4"},
+       [] { return ExplicitRungeKutta::rk4(); }},
+  };
+  return table;
+}
+
+}  // namespace
+
+const std::vector<MethodInfo>& methods() {
+  static const std::vector<MethodInfo> all = [] {
+    std::vector<MethodInfo> v;
+    for (const auto& e : explicit_table()) v.push_back(e.info);
+    return v;
+  }();
+  return all;
+}
+
+std::string method_names() {
+  std::string s;
+  for (const auto& m : methods()) s += (s.empty() ? "" : ", ") + std::string(m.name);
+  return s;
+}
+
+const MethodInfo& method_info(const std::string& name) {
+  for (const auto& m : methods())
+    if (name == m.name) return m;
+  throw UnknownMethod("unknown method '" + name + "'; available: " + method_names());
+}
+
+std::unique_ptr<ExplicitStepper> make_explicit_stepper(const std::string& name) {
+  for (const auto& e : explicit_table())
+    if (name == e.info.name) return e.make();
+  method_info(name);  // throws for unknown names
+  throw UnknownMethod("method '" + name + "' is not an explicit method and cannot run a generic ODE");
+}
+
+std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringSystem& system) {
+  return std::make_unique<ExplicitMassSpringStepper>(system, make_explicit_stepper(name));
+}
+
+}  // namespace hooke

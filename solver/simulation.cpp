@@ -1,0 +1,28 @@
+#include "hooke/simulation.hpp"
+
+#include <utility>
+
+namespace hooke {
+
+Simulation::Simulation(const MassSpringSystem& system, std::unique_ptr<Stepper> stepper,
+                       State initial)
+    : m_system(system), m_stepper(std::move(stepper)), m_state(std::move(initial)), m_next(m_state) {
+  HOOKE_ASSERT(m_state.x.size() == system.dofs() && m_state.v.size() == system.dofs(),
+               "initial state has " << m_state.x.size() << " positions for " << system.dofs()
+                                    << " dofs");
+}
+
+StepSummary Simulation::advance(double h) {
+  StepSummary s = m_stepper->step(m_state, h, m_next);
+  if (s.status != Status::Converged && s.status != Status::NotConverged) return s;
+  m_system.apply_constraints(m_state.x, h, m_next.x, m_next.v);
+  if (!m_next.is_finite()) {
+    s.status = Status::Fatal;
+    s.message = std::string(m_stepper->name()) + ": state became non-finite";
+    return s;
+  }
+  std::swap(m_state, m_next);
+  return s;
+}
+
+}  // namespace hooke

@@ -1,0 +1,26 @@
+#pragma once
+#include <memory>
+
+#include "hooke/integrators/stepper.hpp"
+#include "hooke/model/mass_spring_system.hpp"
+
+namespace hooke {
+
+/// One mass-spring run without any I/O: a read-only system, a stepper and the current state.
+/// advance(h) takes one step, applies the system's constraints and checks that the new state is
+/// finite; on any failure the current state is left unchanged and the summary says why.
+class Simulation {
+ public:
+  Simulation(const MassSpringSystem& system, std::unique_ptr<Stepper> stepper, State initial);
+  StepSummary advance(double h);
+  const State& state() const { return m_state; }
+  const MassSpringSystem& system() const { return m_system; }
+  Stepper& stepper() { return *m_stepper; }
+
+ private:
+  const MassSpringSystem& m_system;
+  std::unique_ptr<Stepper> m_stepper;
+  State m_state, m_next;
+};
+
+}  // namespace hooke
