@@ -102,7 +102,9 @@ double energy_scale(const MassSpringSystem& sys, const State& s0) {
 
 int run_mass_spring(Scene& scene, const std::string& dir, const RunOptions& options) {
   const MassSpringSystem& sys = *scene.system;
-  Simulation sim(sys, make_stepper(scene.integrator.method, sys), scene.initial);
+  Simulation sim(sys, make_stepper(scene.integrator.method, sys, scene.integrator.options),
+                 scene.initial);
+  long long not_converged = 0;
   const long long N = scene.time.steps();
   const std::string frames_dir = dir + "/frames";
   if (scene.output.vtk) {
@@ -155,6 +157,11 @@ int run_mass_spring(Scene& scene, const std::string& dir, const RunOptions& opti
     wall += std::chrono::duration<double>(Clock::now() - t0).count();
     iterations = sum.iterations;
     residual = sum.residual;
+    if (sum.status == Status::NotConverged && not_converged++ == 0) {
+      progress.done();
+      std::fprintf(stderr, "warning: %s: step %lld (t = %.9g): %s (continuing; counted below)\n",
+                   scene.file.c_str(), step, t_next, sum.message.c_str());
+    }
     if (sum.status == Status::Fatal || sum.status == Status::BrokeDown) {
       progress.done();
       std::fflush(log.get());
@@ -187,6 +194,9 @@ int run_mass_spring(Scene& scene, const std::string& dir, const RunOptions& opti
   }
   if (N == 0) progress.update(0, 0.0);
   progress.done();
+  if (not_converged > 0)
+    std::fprintf(stderr, "warning: %s: %lld of %lld steps did not converge to the requested tolerance\n",
+                 scene.file.c_str(), not_converged, N);
   write_final_csv(dir + "/final.csv", sim.state());
   if (scene.output.png)
     write_png_picture(dir + "/final.png", sim.state(), sys.pinned(), scene.edges, scene.edge_rest);

@@ -11,6 +11,7 @@
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/forces/spring_damper.hpp"
+#include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "problems/builders/mesh_build.hpp"
 #include "problems/ode_problems.hpp"
@@ -157,15 +158,41 @@ void read_run_settings(TableReader& root, Scene& scene) {
     auto it = root.table("integrator");
     TableReader& r = *it;
     const std::string method = r.string("method", "symplectic-euler");
+    MethodKind kind = MethodKind::Explicit;
     try {
-      method_info(method);
-    } catch (const UnknownMethod& e) {
+      kind = method_info(method).kind;
+    } catch (const UnknownName& e) {
       r.fail("method", e.what());
     }
     scene.integrator.method = method;
-    for (const char* key : {"beta", "linear_solver", "newton_iterations", "tolerance"})
-      r.reject_if_present(key, "only implicit methods use it; explicit method '" + method +
-                                   "' would ignore it");
+    static const char* implicit_keys[] = {"beta", "linear_solver", "newton_iterations", "tolerance",
+                                          "linear_tolerance", "max_linear_iterations",
+                                          "clamp_compressed"};
+    if (kind == MethodKind::Explicit) {
+      for (const char* key : implicit_keys)
+        r.reject_if_present(key, "only implicit methods use it; explicit method '" + method +
+                                     "' would ignore it");
+    } else {
+      MethodOptions& o = scene.integrator.options;
+      if (method == "implicit")
+        o.implicit.beta = r.number("beta", 1.0);
+      else
+        r.reject_if_present("beta", "only method 'implicit' has beta; '" + method + "' would ignore it");
+      if (!(o.implicit.beta >= 0.0 && o.implicit.beta <= 1.0))
+        r.fail("beta", "must be in [0, 1], got " + std::to_string(o.implicit.beta));
+      o.linear_solver = r.string("linear_solver", default_linear_solver());
+      try {
+        make_linear_solver(o.linear_solver);  // validates the name (or names the missing package)
+      } catch (const UnknownName& e) {
+        r.fail("linear_solver", e.what());
+      }
+      o.implicit.newton_iterations = int(r.integer("newton_iterations", 1, 1, 100000));
+      o.implicit.newton_tolerance = r.positive("tolerance", o.implicit.newton_tolerance);
+      o.implicit.linear_tolerance = r.positive("linear_tolerance", o.implicit.linear_tolerance);
+      o.implicit.max_linear_iterations =
+          int(r.integer("max_linear_iterations", o.implicit.max_linear_iterations, 1, 1000000000));
+      o.implicit.clamp_compressed = r.boolean("clamp_compressed", true);
+    }
     r.finish();
   }
   {

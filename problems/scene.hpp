@@ -10,6 +10,7 @@
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/model/ode_system.hpp"
 #include "hooke/model/state.hpp"
+#include "hooke/registry.hpp"
 #include "problems/input_error.hpp"
 
 namespace hooke {
@@ -17,6 +18,7 @@ namespace hooke {
 /// [integrator]: the time-stepping method and its options.
 struct IntegratorSettings {
   std::string method = "symplectic-euler";  ///< registry name (hooke::methods())
+  MethodOptions options;                     ///< implicit methods only
 };
 
 /// [time]: step size and simulated duration.

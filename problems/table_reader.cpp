@@ -29,7 +29,10 @@ TableReader::TableReader(const toml::table& tbl, toml::table& resolved, std::str
                          std::string prefix)
     : m_tbl(tbl), m_out(resolved), m_file(std::move(file)), m_prefix(std::move(prefix)) {}
 
-bool TableReader::has(const std::string& key) const { return m_tbl.contains(key); }
+bool TableReader::has(const std::string& key) const {
+  m_known.insert(key);
+  return m_tbl.contains(key);
+}
 
 std::string TableReader::path(const std::string& key) const {
   return m_prefix.empty() ? key : m_prefix + "." + key;
@@ -257,6 +260,10 @@ std::vector<std::vector<double>> TableReader::rows(
   return v;
 }
 
+void TableReader::set_resolved(const std::string& key, const std::string& value) {
+  m_out.insert_or_assign(key, value);
+}
+
 std::optional<TableReader> TableReader::table(const std::string& key) {
   m_used.insert(key);
   if (!has(key)) return std::nullopt;
@@ -268,7 +275,7 @@ std::optional<TableReader> TableReader::table(const std::string& key) {
 }
 
 void TableReader::reject_if_present(const std::string& key, const std::string& reason) const {
-  if (has(key)) fail(key, reason);
+  if (m_tbl.contains(key)) fail(key, reason);
 }
 
 void TableReader::finish() const {
@@ -276,8 +283,10 @@ void TableReader::finish() const {
     (void)v;
     const std::string key(k.str());
     if (m_used.count(key)) continue;
+    std::set<std::string> names = m_used;
+    names.insert(m_known.begin(), m_known.end());
     std::string known;
-    for (const auto& u : m_used) known += (known.empty() ? "" : ", ") + u;
+    for (const auto& u : names) known += (known.empty() ? "" : ", ") + u;
     fail(key, "unknown key" + (known.empty() ? std::string() : "; known keys here: " + known));
   }
 }

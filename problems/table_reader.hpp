@@ -21,6 +21,8 @@ class TableReader {
   /// prefix: dotted path of tbl ("" for the root).
   TableReader(const toml::table& tbl, toml::table& resolved, std::string file, std::string prefix);
 
+  /// True if key is present. Also notes key as one this table knows, so finish() lists it among
+  /// the known keys even when it was absent (keys read only when present, like forces.gravity).
   bool has(const std::string& key) const;
   /// Dotted path of key under this table, as used in messages ("mesh.nx").
   std::string path(const std::string& key) const;
@@ -51,6 +53,9 @@ class TableReader {
   std::vector<std::vector<double>> rows(
       const std::string& key, size_t min_len, size_t max_len,
       std::optional<std::vector<std::vector<double>>> def = std::nullopt);
+  /// Replaces the string recorded in the resolved table for key (already read by a getter), e.g. a
+  /// relative path made absolute so that the resolved scene runs from any directory.
+  void set_resolved(const std::string& key, const std::string& value);
   /// The sub-table key, if present (it must be a table).
   std::optional<TableReader> table(const std::string& key);
   /// Throws if key is present: reason says why it does not apply.
@@ -67,6 +72,7 @@ class TableReader {
   toml::table& m_out;
   std::string m_file, m_prefix;
   std::set<std::string> m_used;
+  mutable std::set<std::string> m_known;  ///< keys asked about with has(), for finish()'s hint
 };
 
 }  // namespace hooke

@@ -6,6 +6,9 @@
 #include <sstream>
 #include <stdexcept>
 #include <string>
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 namespace hooke {
 
@@ -26,6 +29,13 @@ class InternalError : public std::logic_error {
   using std::logic_error::logic_error;
 };
 
+/// Thrown when a method or backend name is not in its registry table; the message lists the
+/// available names, or names the build option / Debian package of a backend this build lacks.
+class UnknownName : public std::invalid_argument {
+ public:
+  using std::invalid_argument::invalid_argument;
+};
+
 /// Outcome of a numerical solve (linear solve, nonlinear step, whole step). Recoverable cases
 /// (NotConverged) let the caller shrink h or report; BrokeDown means the method met something it
 /// cannot handle (e.g. CG on an indefinite matrix); Fatal means the result must not be used.
@@ -40,6 +50,20 @@ inline const char* to_string(Status s) {
     case Status::Fatal: return "fatal";
   }
   return "unknown";
+}
+
+/// True if a loop over `work` items should run in an OpenMP parallel region: large enough
+/// (work >= threshold) to pay for the threads, and more than one thread available. Loops branch on
+/// this instead of using an OpenMP if() clause, because a region that runs on one thread still
+/// makes libgomp allocate and free a thread team, which the step loop must not do.
+inline bool run_parallel(long long work, long long threshold) {
+#ifdef _OPENMP
+  return work >= threshold && omp_get_max_threads() > 1;
+#else
+  (void)work;
+  (void)threshold;
+  return false;
+#endif
 }
 
 }  // namespace hooke

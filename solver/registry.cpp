@@ -3,6 +3,8 @@
 #include <functional>
 
 #include "hooke/integrators/explicit_mass_spring_stepper.hpp"
+#include "hooke/linear/linear_registry.hpp"
+#include "hooke_config.hpp"
 
 namespace hooke {
 
@@ -31,12 +33,31 @@ const std::vector<ExplicitEntry>& explicit_table() {
   return table;
 }
 
+struct ImplicitEntry {
+  MethodInfo info;
+  ImplicitScheme scheme;
+};
+
+const std::vector<ImplicitEntry>& implicit_table() {
+  static const std::vector<ImplicitEntry> table = {
+      {{"implicit", MethodKind::Implicit,
+        "beta-unified implicit step (beta = 1: backward Euler), Newton on a linear backend"},
+       ImplicitScheme::Beta},
+      {{"implicit-midpoint", MethodKind::Implicit, "implicit midpoint rule, Newton on a linear backend"},
+       ImplicitScheme::Midpoint},
+      {{"bdf2", MethodKind::Implicit, "two-step BDF, Newton on a linear backend"},
+       ImplicitScheme::Bdf2},
+  };
+  return table;
+}
+
 }  // namespace
 
 const std::vector<MethodInfo>& methods() {
   static const std::vector<MethodInfo> all = [] {
     std::vector<MethodInfo> v;
     for (const auto& e : explicit_table()) v.push_back(e.info);
+    for (const auto& e : implicit_table()) v.push_back(e.info);
     return v;
   }();
   return all;
@@ -61,7 +82,20 @@ std::unique_ptr<ExplicitStepper> make_explicit_stepper(const std::string& name) 
   throw UnknownMethod("method '" + name + "' is not an explicit method and cannot run a generic ODE");
 }
 
-std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringSystem& system) {
+std::string default_linear_solver() { return HOOKE_WITH_CHOLMOD ? "cholmod" : "pcg-block"; }
+
+std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringSystem& system,
+                                      const MethodOptions& options) {
+  for (const auto& e : implicit_table())
+    if (name == e.info.name) {
+      const std::string err = options.implicit.validate();
+      if (!err.empty()) throw std::invalid_argument(err);
+      return std::make_unique<ImplicitStepper>(
+          system, e.scheme,
+          make_linear_solver(options.linear_solver.empty() ? default_linear_solver()
+                                                           : options.linear_solver),
+          options.implicit);
+    }
   return std::make_unique<ExplicitMassSpringStepper>(system, make_explicit_stepper(name));
 }
 

@@ -5,13 +5,24 @@
 #include <vector>
 
 #include "hooke/integrators/explicit_stepper.hpp"
+#include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 
 namespace hooke {
 
 /// Kinds of time-stepping method; scenes use the kind to decide which options apply.
-enum class MethodKind { Explicit };
+enum class MethodKind {
+  Explicit,  ///< runs on any OdeSystem; takes no options
+  Implicit,  ///< Newton on a linear backend; takes MethodOptions
+};
+
+/// Options of the implicit methods (explicit methods take none).
+struct MethodOptions {
+  /// Linear backend by name (linear_solvers()); "" = the default: cholmod when built, else pcg-block.
+  std::string linear_solver;
+  ImplicitOptions implicit;
+};
 
 /// One entry of the method table.
 struct MethodInfo {
@@ -20,12 +31,8 @@ struct MethodInfo {
   const char* description;  ///< one line for --help and error messages
 };
 
-/// Thrown when a name is not in the table; the message lists the available names (or the build
-/// option / Debian package of a backend that this build lacks).
-class UnknownMethod : public std::invalid_argument {
- public:
-  using std::invalid_argument::invalid_argument;
-};
+/// Thrown when a method name is not in the table (see UnknownName).
+using UnknownMethod = UnknownName;
 
 /// Every method this build has, in table order.
 const std::vector<MethodInfo>& methods();
@@ -35,7 +42,11 @@ const MethodInfo& method_info(const std::string& name);
 std::string method_names();
 /// An explicit stepper for any OdeSystem; throws UnknownMethod if name is not an explicit method.
 std::unique_ptr<ExplicitStepper> make_explicit_stepper(const std::string& name);
-/// A stepper for a finalized mass-spring system (which must outlive it); throws UnknownMethod.
-std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringSystem& system);
+/// Name of the default linear backend of implicit methods.
+std::string default_linear_solver();
+/// A stepper for a finalized mass-spring system (which must outlive it); throws UnknownMethod
+/// (or UnknownName for an unknown linear backend). Explicit methods ignore options.
+std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringSystem& system,
+                                      const MethodOptions& options = {});
 
 }  // namespace hooke

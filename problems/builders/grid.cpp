@@ -36,7 +36,10 @@ void lattice(long long nx, long long ny, const Vec3& du, const Vec3& dw, double 
     }
   auto add = [&](long long i0, long long j0, long long i1, long long j1, const SpringKind& s,
                  bool limited) {
-    if (i1 < 0 || i1 >= nx || j1 < 0 || j1 >= ny) return;
+    // Both ends must be inside: the second shear diagonal starts at i + 1, which is off the grid
+    // in the last column (id(nx, j) would wrap to the start of row j + 1).
+    auto inside = [nx, ny](long long i, long long j) { return i >= 0 && i < nx && j >= 0 && j < ny; };
+    if (!inside(i0, j0) || !inside(i1, j1)) return;
     const int a = id(i0, j0), b = id(i1, j1);
     const double L = (out.x.segment<3>(3 * a) - out.x.segment<3>(3 * b)).norm();
     out.springs.push_back({a, b, s.k, L, s.c, limited});

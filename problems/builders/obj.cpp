@@ -99,6 +99,8 @@ void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_
   namespace fs = std::filesystem;
   const fs::path p = fs::path(file).is_absolute() ? fs::path(file) : fs::path(base_dir) / file;
   if (!fs::exists(p)) mesh.fail("file", "OBJ file '" + p.string() + "' does not exist");
+  // The resolved scene (scene.toml in the output directory) must find the mesh from anywhere.
+  mesh.set_resolved("file", fs::absolute(p).lexically_normal().string());
   ObjMesh obj = read_obj(p.string());
   const Index n = static_cast<Index>(obj.vertices.size());
   check_size(mesh, "file", double(n), 3.0 * double(obj.triangles.size()));

@@ -11,6 +11,10 @@ struct JacobianOptions {
   /// Drop the indefinite transverse term of compressed springs (Choi and Ko 2002 style clamp of
   /// max(0, 1 - L/l)), making -K positive semi-definite. Off gives the exact df/dx.
   bool clamp_compressed = false;
+  /// Include the position derivative of axial damping (df/dx of SpringDamper, not symmetric).
+  /// Implicit steps on symmetric backends drop it, as Baraff and Witkin 1998 do; Newton on the
+  /// exact residual still converges to the same step, only the linearisation changes.
+  bool damping_position_terms = true;
 };
 
 /// One force acting on a mass-spring system of n particles (positions and velocities are 3n

@@ -13,12 +13,12 @@ inline Vec3 spring_vector(ConstRef x, int a, int b) {
 
 void HookeSpring::add_forces(ConstRef x, ConstRef /*v*/, VecRef f) const {
   const SpringSet& s = m_springs;
-  for (size_t n = 0; n < s.size(); ++n) {
+  s.for_each([&](size_t n) {
     const Vec3 fa = hooke_spring_kernel::force(spring_vector(x, s.i[n], s.j[n]), s.coeff[n],
                                                s.rest_length[n]);
     f.segment<3>(3 * s.i[n]) += fa;
     f.segment<3>(3 * s.j[n]) -= fa;
-  }
+  });
 }
 
 double HookeSpring::potential_energy(ConstRef x) const {
@@ -34,11 +34,11 @@ double HookeSpring::potential_energy(ConstRef x) const {
 void HookeSpring::add_jacobians(ConstRef x, ConstRef /*v*/, const JacobianOptions& options,
                                 SparseMatrix& K, SparseMatrix& /*D*/) const {
   const SpringSet& s = m_springs;
-  for (size_t n = 0; n < s.size(); ++n) {
+  s.for_each([&](size_t n) {
     const Mat3 B = hooke_spring_kernel::dfdx(spring_vector(x, s.i[n], s.j[n]), s.coeff[n],
                                              s.rest_length[n], options.clamp_compressed);
     s.add_spring_block(K, n, B);
-  }
+  });
 }
 
 double HookeSpring::max_strain(ConstRef x) const {

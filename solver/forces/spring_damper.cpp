@@ -4,26 +4,27 @@ namespace hooke {
 
 void SpringDamper::add_forces(ConstRef x, ConstRef v, VecRef f) const {
   const SpringSet& s = m_springs;
-  for (size_t n = 0; n < s.size(); ++n) {
+  s.for_each([&](size_t n) {
     const int a = s.i[n], b = s.j[n];
     const Vec3 fa = spring_damper_kernel::force(x.segment<3>(3 * a) - x.segment<3>(3 * b),
                                                 v.segment<3>(3 * a) - v.segment<3>(3 * b),
                                                 s.coeff[n]);
     f.segment<3>(3 * a) += fa;
     f.segment<3>(3 * b) -= fa;
-  }
+  });
 }
 
-void SpringDamper::add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& /*options*/,
+void SpringDamper::add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options,
                                  SparseMatrix& K, SparseMatrix& D) const {
   const SpringSet& s = m_springs;
-  for (size_t n = 0; n < s.size(); ++n) {
+  s.for_each([&](size_t n) {
     const int a = s.i[n], b = s.j[n];
     const Vec3 d = x.segment<3>(3 * a) - x.segment<3>(3 * b);
     const Vec3 w = v.segment<3>(3 * a) - v.segment<3>(3 * b);
     s.add_spring_block(D, n, spring_damper_kernel::dfdv(d, s.coeff[n]));
-    s.add_spring_block(K, n, spring_damper_kernel::dfdx(d, w, s.coeff[n]));
-  }
+    if (options.damping_position_terms)
+      s.add_spring_block(K, n, spring_damper_kernel::dfdx(d, w, s.coeff[n]));
+  });
 }
 
 }  // namespace hooke

@@ -10,7 +10,8 @@ namespace hooke {
 /// whole-step backends fill iterations (linear or nonlinear, as documented by each) and residual.
 struct StepSummary {
   Status status = Status::Converged;
-  int iterations = 0;     ///< solver iterations spent in this step
+  int iterations = 0;     ///< linear solver iterations spent in this step (summed over Newton)
+  int newton_iterations = 0;  ///< Newton iterations (implicit methods; 0 for explicit ones)
   double residual = 0.0;  ///< final residual norm of the step's solve (0 if none)
   std::string message;    ///< empty on success; says what failed and with which numbers otherwise
 };

@@ -1,0 +1,73 @@
+// One implicit step (beta = 1, one Newton step: the linearised backward Euler of Baraff and Witkin)
+// per linear backend on cloth grids of about 10k, 100k and 1M springs, h = 1/60, linear
+// tolerance 1e-6 relative, iterative backends warm-started from the previous step.
+// Each benchmark first takes 3 steps from rest (so the cloth moves and warm starts mean
+// something), then times further steps of the same run. Counters per step: linear iterations,
+// and the backend's analyze (one-off, amortised over the run), factor and solve seconds, plus
+// force-and-Jacobian assembly seconds.
+//   build/bench/hooke_bench_implicit --benchmark_counters_tabular=true
+//   build/bench/hooke_bench_implicit --benchmark_filter='cholmod/1000000'
+#include <benchmark/benchmark.h>
+
+#include <memory>
+
+#include "bench/cloth_fixture.hpp"
+#include "hooke/linear/linear_registry.hpp"
+#include "hooke/simulation.hpp"
+
+namespace {
+
+void BM_ImplicitStep(benchmark::State& state, std::string backend) {
+  const hooke::Scene scene = hooke::bench::make_cloth(state.range(0));
+  hooke::MethodOptions options;
+  options.linear_solver = backend;
+  options.implicit.beta = 1.0;
+  options.implicit.linear_tolerance = 1e-6;
+  options.implicit.max_linear_iterations = 20000;
+  auto stepper = hooke::make_stepper("implicit", *scene.system, options);
+  auto* implicit = dynamic_cast<hooke::ImplicitStepper*>(stepper.get());
+  hooke::Simulation sim(*scene.system, std::move(stepper), scene.initial);
+  const double h = 1.0 / 60.0;
+  for (int k = 0; k < 3; ++k) sim.advance(h);
+  const hooke::LinearSummary before = implicit->linear_totals();
+  const double assembly_before = implicit->assembly_seconds();
+  long long steps = 0, iterations = 0, not_converged = 0;
+  for (auto _ : state) {
+    const hooke::StepSummary s = sim.advance(h);
+    if (s.status == hooke::Status::BrokeDown || s.status == hooke::Status::Fatal) {
+      state.SkipWithError(s.message.c_str());
+      break;
+    }
+    not_converged += s.status == hooke::Status::NotConverged;
+    iterations += s.iterations;
+    ++steps;
+  }
+  const hooke::LinearSummary& after = implicit->linear_totals();
+  const double n = double(std::max(1LL, steps));
+  state.counters["springs"] = double(scene.edges.size());
+  state.counters["lin_iters"] = double(iterations) / n;
+  state.counters["not_conv"] = double(not_converged);
+  state.counters["analyze_s"] = after.analyze_seconds;
+  state.counters["factor_s"] = (after.factor_seconds - before.factor_seconds) / n;
+  state.counters["solve_s"] = (after.solve_seconds - before.solve_seconds) / n;
+  state.counters["assembly_s"] = (implicit->assembly_seconds() - assembly_before) / n;
+}
+
+// One registration per backend and size; the 1M cases run a single step (they take seconds).
+const int registered = [] {
+  for (const auto& info : hooke::linear_solvers()) {
+    const std::string name = info.name;
+    for (long long springs : {10000LL, 100000LL, 1000000LL}) {
+      auto* b = benchmark::RegisterBenchmark(("ImplicitStep/" + name).c_str(), BM_ImplicitStep, name)
+                    ->Arg(springs)
+                    ->Unit(benchmark::kMillisecond)
+                    ->UseRealTime();
+      if (springs >= 1000000) b->Iterations(2);
+    }
+  }
+  return 0;
+}();
+
+}  // namespace
+
+BENCHMARK_MAIN();

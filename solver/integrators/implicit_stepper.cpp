@@ -1,0 +1,193 @@
+#include "hooke/integrators/implicit_stepper.hpp"
+
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+namespace hooke {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+void accumulate(LinearSummary& total, const LinearSummary& s) {
+  total.iterations += s.iterations;
+  total.analyze_seconds += s.analyze_seconds;
+  total.factor_seconds += s.factor_seconds;
+  total.solve_seconds += s.solve_seconds;
+}
+}  // namespace
+
+std::string ImplicitOptions::validate() const {
+  std::ostringstream os;
+  if (!(beta >= 0.0 && beta <= 1.0)) os << "beta = " << beta << ": must be in [0, 1]";
+  else if (newton_iterations < 1) os << "newton_iterations = " << newton_iterations << ": must be >= 1";
+  else if (!(newton_tolerance > 0.0) || !std::isfinite(newton_tolerance))
+    os << "newton_tolerance = " << newton_tolerance << ": must be finite and > 0";
+  else if (!(linear_tolerance > 0.0) || !std::isfinite(linear_tolerance))
+    os << "linear_tolerance = " << linear_tolerance << ": must be finite and > 0";
+  else if (max_linear_iterations < 1)
+    os << "max_linear_iterations = " << max_linear_iterations << ": must be >= 1";
+  return os.str();
+}
+
+ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme scheme,
+                                 std::unique_ptr<LinearSolver> solver, ImplicitOptions options)
+    : m_system(system), m_scheme(scheme), m_solver(std::move(solver)), m_options(options),
+      m_J(system.make_jacobians()), m_A(system) {
+  const std::string err = m_options.validate();
+  HOOKE_ASSERT(err.empty(), "ImplicitOptions: " << err);
+  m_jac_options.clamp_compressed = m_options.clamp_compressed;
+  m_jac_options.damping_position_terms = !m_solver->requires_spd();
+  const Index N = system.dofs(), nf = m_A.free_dofs();
+  for (Vec* v : {&m_v0, &m_vb, &m_xa, &m_va, &m_xe, &m_v1, &m_xlin, &m_vlin, &m_f, &m_rhs, &m_tmp,
+                 &m_dx, &m_dv, &m_prev_x, &m_prev_v})
+    v->setZero(N);
+  m_rhs_free.setZero(nf);
+  m_delta.setZero(nf);
+  const LinearSummary a = m_solver->analyze(m_A.matrix());
+  HOOKE_ASSERT(a.status == Status::Converged, "linear backend analyze failed: " << a.message);
+  accumulate(m_totals, a);
+}
+
+const char* ImplicitStepper::name() const {
+  switch (m_scheme) {
+    case ImplicitScheme::Beta: return "implicit";
+    case ImplicitScheme::Midpoint: return "implicit-midpoint";
+    case ImplicitScheme::Bdf2: return "bdf2";
+  }
+  return "implicit";
+}
+
+StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
+  const Index N = m_system.dofs();
+  HOOKE_ASSERT(s0.x.size() == N && s0.v.size() == N, "state size mismatch");
+  const Vec& mass = m_system.mass_diagonal();
+  const Vec& free_inv = m_system.free_inverse_mass();
+  // Pinned particles never move: their velocity is taken as zero throughout.
+  m_v0 = s0.v.cwiseProduct((free_inv.array() > 0.0).cast<double>().matrix());
+
+  // One-leg coefficients: M (v1 - vb) = hf f(xa + bx v1, va + cv v1), x1 = xe + ex v1.
+  double bx, cv, hf, ex;
+  // BDF2 continues only if this step follows the previous one with the same h (to round-off:
+  // run loops compute h as differences of step times).
+  const bool bdf2 = m_scheme == ImplicitScheme::Bdf2 && m_has_prev &&
+                    std::abs(m_prev_h - h) <= 1e-9 * h &&
+                    std::abs(m_prev_t1 - s0.t) <= 1e-9 * std::max(h, std::abs(s0.t));
+  if (m_scheme == ImplicitScheme::Beta || (m_scheme == ImplicitScheme::Bdf2 && !bdf2)) {
+    const double beta = m_scheme == ImplicitScheme::Beta ? m_options.beta : 1.0;
+    m_xa = s0.x;
+    bx = beta * h;
+    m_va = (1.0 - beta) * m_v0;
+    cv = beta;
+    m_vb = m_v0;
+    hf = h;
+    m_xe = s0.x;
+    ex = h;
+  } else if (m_scheme == ImplicitScheme::Midpoint) {
+    m_xa = s0.x + (0.25 * h) * m_v0;
+    bx = 0.25 * h;
+    m_va = 0.5 * m_v0;
+    cv = 0.5;
+    m_vb = m_v0;
+    hf = h;
+    m_xe = s0.x + (0.5 * h) * m_v0;
+    ex = 0.5 * h;
+  } else {
+    m_xa = (4.0 / 3.0) * s0.x - (1.0 / 3.0) * m_prev_x;
+    bx = (2.0 / 3.0) * h;
+    m_va.setZero();
+    cv = 1.0;
+    m_vb = (4.0 / 3.0) * m_v0 - (1.0 / 3.0) * m_prev_v;
+    hf = (2.0 / 3.0) * h;
+    m_xe = m_xa;
+    ex = bx;
+  }
+  if (m_scheme == ImplicitScheme::Bdf2) {
+    m_prev_x = s0.x;
+    m_prev_v = m_v0;
+    m_prev_h = h;
+    m_prev_t1 = s0.t + h;
+    m_has_prev = true;
+  }
+
+  StepSummary out;
+  LinearSolveOptions lin;
+  lin.tolerance = m_options.linear_tolerance;
+  lin.max_iterations = m_options.max_linear_iterations;
+  lin.warm_start = true;
+  m_v1 = m_v0;  // initial guess
+  m_xlin = s0.x;
+  m_vlin = m_v0;
+  double delta_norm = 0.0;
+  bool converged = m_options.newton_iterations == 1;
+  for (int k = 0; k < m_options.newton_iterations; ++k) {
+    if (k > 0) {
+      m_xlin = m_xa + bx * m_v1;
+      m_vlin = m_va + cv * m_v1;
+    }
+    const auto ta = Clock::now();
+    m_system.compute_forces(m_xlin, m_vlin, m_f);
+    m_system.assemble_jacobians(m_xlin, m_vlin, m_J, m_jac_options);
+    // rhs = hf (f_lin + K dx + D dv) - M (v1 - vb), with dx, dv the gap between the current
+    // iterate's arguments and the linearisation point (nonzero only in the first iteration).
+    m_dx = m_xa + bx * m_v1 - m_xlin;
+    m_dv = m_va + cv * m_v1 - m_vlin;
+    m_rhs = m_f;
+    m_tmp.noalias() = m_J.K * m_dx;
+    m_rhs += m_tmp;
+    m_tmp.noalias() = m_J.D * m_dv;
+    m_rhs += m_tmp;
+    m_rhs *= hf;
+    m_rhs -= mass.cwiseProduct(m_v1 - m_vb);
+    m_A.assemble(m_J, hf * cv, hf * bx);
+    m_A.gather(m_rhs, m_rhs_free);
+    m_assembly_seconds += since(ta);
+
+    const LinearSummary fs = m_solver->factor(m_A.matrix());
+    accumulate(m_totals, fs);
+    if (fs.status != Status::Converged) {
+      out.status = fs.status;
+      out.message = fs.message;
+      out.newton_iterations = k;
+      return out;
+    }
+    const LinearSummary ss = m_solver->solve(m_rhs_free, m_delta, lin);
+    accumulate(m_totals, ss);
+    out.iterations += ss.iterations;
+    out.residual = ss.residual;
+    out.newton_iterations = k + 1;
+    if (ss.status == Status::BrokeDown || ss.status == Status::Fatal) {
+      out.status = ss.status;
+      out.message = ss.message;
+      return out;
+    }
+    if (ss.status == Status::NotConverged) {
+      out.status = Status::NotConverged;
+      out.message = ss.message;
+    }
+    m_A.scatter_add(m_delta, m_v1);
+    if (m_options.newton_iterations > 1) {
+      delta_norm = m_delta.lpNorm<Eigen::Infinity>();
+      const double scale = std::max({m_v1.lpNorm<Eigen::Infinity>(), m_v0.lpNorm<Eigen::Infinity>(), 1e-12});
+      if (delta_norm <= m_options.newton_tolerance * scale) {
+        converged = true;
+        break;
+      }
+    }
+  }
+  if (!converged && out.status == Status::Converged) {
+    std::ostringstream os;
+    os << name() << ": Newton did not converge in " << m_options.newton_iterations
+       << " iterations: last ||delta v||_inf = " << delta_norm << " (tolerance "
+       << m_options.newton_tolerance << " relative)";
+    out.status = Status::NotConverged;
+    out.message = os.str();
+  }
+  s1.v = m_v1;
+  s1.x = m_xe + ex * m_v1;
+  s1.t = s0.t + h;
+  return out;
+}
+
+}  // namespace hooke

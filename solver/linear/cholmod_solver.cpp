@@ -1,0 +1,140 @@
+#include "hooke/linear/cholmod_solver.hpp"
+
+#include <cholmod.h>
+
+#include <chrono>
+#include <vector>
+
+namespace hooke {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+}  // namespace
+
+std::string CholmodOptions::validate() const {
+  if (ordering != "default" && ordering != "amd" && ordering != "metis" && ordering != "natural")
+    return "ordering = '" + ordering + "': must be one of default, amd, metis, natural";
+  return "";
+}
+
+struct CholmodSolver::Impl {
+  CholmodOptions options;
+  cholmod_common c;
+  cholmod_factor* L = nullptr;
+  cholmod_sparse A{};                 // header over our arrays (values shared with Eigen)
+  std::vector<SuiteSparse_long> p, i; // long-index copies of the pattern (made once)
+  cholmod_dense B{};                  // header over the right-hand side
+  cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve2 workspace, reused
+  Index n = 0;
+  bool factored = false;
+};
+
+CholmodSolver::CholmodSolver(CholmodOptions options) : m(std::make_unique<Impl>()) {
+  const std::string err = options.validate();
+  HOOKE_ASSERT(err.empty(), "CholmodOptions: " << err);
+  m->options = std::move(options);
+  cholmod_l_start(&m->c);
+  m->c.print = 0;  // failures are reported through LinearSummary, not printed
+  m->c.supernodal = m->options.supernodal ? CHOLMOD_SUPERNODAL : CHOLMOD_SIMPLICIAL;
+  if (m->options.ordering != "default") {
+    m->c.nmethods = 1;
+    m->c.method[0].ordering = m->options.ordering == "amd"     ? CHOLMOD_AMD
+                              : m->options.ordering == "metis" ? CHOLMOD_METIS
+                                                               : CHOLMOD_NATURAL;
+    m->c.postorder = true;
+  }
+}
+
+CholmodSolver::~CholmodSolver() {
+  if (m->L) cholmod_l_free_factor(&m->L, &m->c);
+  if (m->X) cholmod_l_free_dense(&m->X, &m->c);
+  if (m->Y) cholmod_l_free_dense(&m->Y, &m->c);
+  if (m->E) cholmod_l_free_dense(&m->E, &m->c);
+  cholmod_l_finish(&m->c);
+}
+
+LinearSummary CholmodSolver::analyze(const SparseMatrix& A) {
+  const auto t0 = Clock::now();
+  HOOKE_ASSERT(A.rows() == A.cols() && A.isCompressed(), "cholmod: A must be square and compressed");
+  LinearSummary s;
+  m->n = A.rows();
+  m->p.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.cols() + 1);
+  m->i.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+  cholmod_sparse& S = m->A;
+  S.nrow = S.ncol = size_t(A.rows());
+  S.nzmax = size_t(A.nonZeros());
+  S.p = m->p.data();
+  S.i = m->i.data();
+  S.nz = nullptr;
+  S.x = const_cast<double*>(A.valuePtr());
+  S.z = nullptr;
+  S.stype = 1;  // symmetric: CHOLMOD reads the upper triangle and ignores the lower one
+  S.itype = CHOLMOD_LONG;
+  S.xtype = CHOLMOD_REAL;
+  S.dtype = CHOLMOD_DOUBLE;
+  S.sorted = 1;
+  S.packed = 1;
+  if (m->L) cholmod_l_free_factor(&m->L, &m->c);
+  m->L = cholmod_l_analyze(&S, &m->c);
+  m->factored = false;
+  s.analyze_seconds = since(t0);
+  if (!m->L || m->c.status < CHOLMOD_OK) {
+    s.status = Status::Fatal;
+    s.message = "cholmod: analyze failed with CHOLMOD status " + std::to_string(m->c.status) +
+                (m->c.status == CHOLMOD_OUT_OF_MEMORY ? " (out of memory)" : "");
+  }
+  m->B.nrow = size_t(m->n);
+  m->B.ncol = 1;
+  m->B.nzmax = size_t(m->n);
+  m->B.d = size_t(m->n);
+  m->B.xtype = CHOLMOD_REAL;
+  m->B.dtype = CHOLMOD_DOUBLE;
+  return s;
+}
+
+LinearSummary CholmodSolver::factor(const SparseMatrix& A) {
+  const auto t0 = Clock::now();
+  LinearSummary s;
+  HOOKE_ASSERT(m->L, "cholmod: factor before analyze");
+  HOOKE_ASSERT(A.rows() == m->n && size_t(A.nonZeros()) == m->A.nzmax,
+               "cholmod: factor on a pattern other than the analysed one");
+  m->A.x = const_cast<double*>(A.valuePtr());
+  cholmod_l_factorize(&m->A, m->L, &m->c);
+  s.factor_seconds = since(t0);
+  m->factored = false;
+  if (m->c.status == CHOLMOD_NOT_POSDEF) {
+    s.status = Status::BrokeDown;
+    s.message = "cholmod: A is not positive definite (leading minor of order " +
+                std::to_string(m->L->minor + 1) + " of " + std::to_string(m->n) +
+                " is not positive; compressed springs? enable clamp_compressed)";
+  } else if (m->c.status < CHOLMOD_OK) {
+    s.status = Status::Fatal;
+    s.message = "cholmod: factorization failed with CHOLMOD status " + std::to_string(m->c.status);
+  } else {
+    m->factored = true;
+  }
+  return s;
+}
+
+LinearSummary CholmodSolver::solve(ConstRef b, VecRef x, const LinearSolveOptions& /*options*/) {
+  const auto t0 = Clock::now();
+  LinearSummary s;
+  HOOKE_ASSERT(m->factored, "cholmod: solve without a successful factor");
+  HOOKE_ASSERT(b.size() == m->n && x.size() == m->n, "cholmod: size mismatch");
+  m->B.x = const_cast<double*>(b.data());
+  if (!cholmod_l_solve2(CHOLMOD_A, m->L, &m->B, nullptr, &m->X, nullptr, &m->Y, &m->E, &m->c)) {
+    s.status = Status::Fatal;
+    s.message = "cholmod: solve failed with CHOLMOD status " + std::to_string(m->c.status);
+    return s;
+  }
+  x = Eigen::Map<const Vec>(static_cast<const double*>(m->X->x), m->n);
+  s.solve_seconds = since(t0);
+  return s;
+}
+
+double CholmodSolver::factor_nonzeros() const {
+  return m->L ? double(m->c.lnz) : 0.0;
+}
+
+}  // namespace hooke

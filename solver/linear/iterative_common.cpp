@@ -1,0 +1,69 @@
+#include <Eigen/LU>
+#include <array>
+
+#include "hooke/linear/iterative_common.hpp"
+
+namespace hooke::linear_detail {
+
+std::vector<int> diagonal_positions(const SparseMatrix& A) {
+  std::vector<int> pos(static_cast<size_t>(A.cols()), -1);
+  for (int c = 0; c < A.outerSize(); ++c)
+    for (int k = A.outerIndexPtr()[c]; k < A.outerIndexPtr()[c + 1]; ++k)
+      if (A.innerIndexPtr()[k] == c) pos[size_t(c)] = k;
+  for (size_t c = 0; c < pos.size(); ++c)
+    HOOKE_ASSERT(pos[c] >= 0, "diagonal entry " << c << " is not stored in the pattern");
+  return pos;
+}
+
+std::vector<std::array<int, 9>> block_diagonal_positions(const SparseMatrix& A) {
+  HOOKE_ASSERT(A.rows() % 3 == 0 && A.rows() == A.cols(), "matrix is not 3n x 3n");
+  std::vector<std::array<int, 9>> pos(static_cast<size_t>(A.cols() / 3));
+  for (auto& p : pos) p.fill(-1);
+  for (int c = 0; c < A.outerSize(); ++c)
+    for (int k = A.outerIndexPtr()[c]; k < A.outerIndexPtr()[c + 1]; ++k) {
+      const int r = A.innerIndexPtr()[k];
+      if (r / 3 == c / 3) pos[size_t(c / 3)][size_t((c % 3) * 3 + r % 3)] = k;
+    }
+  return pos;
+}
+
+Index invert_diagonal_blocks(const SparseMatrix& A, const std::vector<std::array<int, 9>>& pos,
+                             bool spd, std::vector<Mat3>& inv) {
+  inv.resize(pos.size());
+  const double* v = A.valuePtr();
+  for (size_t b = 0; b < pos.size(); ++b) {
+    Mat3 B;
+    for (int e = 0; e < 9; ++e) B(e % 3, e / 3) = pos[b][size_t(e)] >= 0 ? v[pos[b][size_t(e)]] : 0.0;
+    if (spd) {
+      // Leading minors > 0 <=> symmetric part positive definite (Sylvester); cheap and exact.
+      const Mat3 S = 0.5 * (B + B.transpose());
+      if (!(S(0, 0) > 0 && S.topLeftCorner<2, 2>().determinant() > 0 && S.determinant() > 0))
+        return Index(b);
+    }
+    bool ok = false;
+    B.computeInverseWithCheck(inv[b], ok);
+    if (!ok) return Index(b);
+  }
+  return -1;
+}
+
+void CsrMirror::build(const SparseMatrix& A) {
+  const int n = int(A.rows());
+  row_start.assign(size_t(n) + 1, 0);
+  const int nnz = int(A.nonZeros());
+  for (int k = 0; k < nnz; ++k) row_start[size_t(A.innerIndexPtr()[k]) + 1]++;
+  for (int r = 0; r < n; ++r) row_start[size_t(r) + 1] += row_start[size_t(r)];
+  col.resize(size_t(nnz));
+  perm.resize(size_t(nnz));
+  value.resize(size_t(nnz));
+  std::vector<int> next(row_start.begin(), row_start.end() - 1);
+  for (int c = 0; c < A.outerSize(); ++c)
+    for (int k = A.outerIndexPtr()[c]; k < A.outerIndexPtr()[c + 1]; ++k) {
+      const int r = A.innerIndexPtr()[k];
+      const int slot = next[size_t(r)]++;
+      col[size_t(slot)] = c;
+      perm[size_t(slot)] = k;
+    }
+}
+
+}  // namespace hooke::linear_detail

@@ -1,0 +1,68 @@
+#include "hooke/linear/linear_registry.hpp"
+
+#include <functional>
+
+#include "hooke/linear/conjugate_gradient.hpp"
+#include "hooke/linear/stationary.hpp"
+#include "hooke_config.hpp"
+#if HOOKE_WITH_CHOLMOD
+#include "hooke/linear/cholmod_solver.hpp"
+#endif
+
+namespace hooke {
+
+namespace {
+
+struct Entry {
+  LinearSolverInfo info;
+  std::function<std::unique_ptr<LinearSolver>()> make;
+};
+
+const std::vector<Entry>& table() {
+  static const std::vector<Entry> t = {
+#if HOOKE_WITH_CHOLMOD
+      {{"cholmod", "CHOLMOD supernodal Cholesky (SuiteSparse), analysed once, refactored per step"},
+       [] { return std::make_unique<CholmodSolver>(); }},
+#endif
+      {{"pcg-block", "conjugate gradients, 3x3 block-Jacobi preconditioner"},
+       [] { return std::make_unique<ConjugateGradientSolver>(Preconditioner::BlockJacobi); }},
+      {{"pcg", "conjugate gradients, Jacobi (diagonal) preconditioner"},
+       [] { return std::make_unique<ConjugateGradientSolver>(Preconditioner::Jacobi); }},
+      {{"cg", "conjugate gradients, no preconditioner"},
+       [] { return std::make_unique<ConjugateGradientSolver>(Preconditioner::None); }},
+      {{"colored-gauss-seidel", "multicolour 3x3-block Gauss-Seidel, parallel within a colour"},
+       [] { return std::make_unique<ColoredGaussSeidelSolver>(); }},
+      {{"gauss-seidel", "scalar Gauss-Seidel, natural order"},
+       [] { return std::make_unique<GaussSeidelSolver>(); }},
+      {{"jacobi", "3x3 block Jacobi iteration (per particle), parallel"}, [] { return std::make_unique<JacobiSolver>(); }},
+  };
+  return t;
+}
+
+}  // namespace
+
+const std::vector<LinearSolverInfo>& linear_solvers() {
+  static const std::vector<LinearSolverInfo> all = [] {
+    std::vector<LinearSolverInfo> v;
+    for (const auto& e : table()) v.push_back(e.info);
+    return v;
+  }();
+  return all;
+}
+
+std::string linear_solver_names() {
+  std::string s;
+  for (const auto& e : table()) s += (s.empty() ? "" : ", ") + std::string(e.info.name);
+  return s;
+}
+
+std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name) {
+  for (const auto& e : table())
+    if (name == e.info.name) return e.make();
+  if (name == "cholmod")
+    throw UnknownName("linear solver 'cholmod' is not built: install libsuitesparse-dev and "
+                      "reconfigure with -DHOOKE_WITH_CHOLMOD=ON");
+  throw UnknownName("unknown linear solver '" + name + "'; available: " + linear_solver_names());
+}
+
+}  // namespace hooke

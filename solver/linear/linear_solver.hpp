@@ -1,0 +1,53 @@
+#pragma once
+#include <string>
+
+#include "hooke/core.hpp"
+
+namespace hooke {
+
+/// Options of one solve; they may change on every call.
+struct LinearSolveOptions {
+  /// Stop when ||b - A x|| <= tolerance * ||b|| (iterative backends; direct ones ignore it).
+  double tolerance = 1e-8;
+  /// Iteration cap of iterative backends (direct ones ignore it).
+  int max_iterations = 10000;
+  /// Start from the x passed in (true) or from zero (false). Direct backends ignore it.
+  bool warm_start = true;
+  /// "" if valid, else a message naming the field, its value and the rule it breaks.
+  std::string validate() const;
+};
+
+/// What a linear backend reports for analyze, factor and solve calls.
+struct LinearSummary {
+  Status status = Status::Converged;
+  int iterations = 0;          ///< iterations of the last solve (0 for direct backends)
+  double residual = 0.0;       ///< ||b - A x|| / ||b|| of the last solve (0 if b = 0)
+  double analyze_seconds = 0;  ///< wall time of the symbolic analysis (when it happened)
+  double factor_seconds = 0;   ///< wall time of the numeric factorization / refresh
+  double solve_seconds = 0;    ///< wall time of the solve
+  std::string message;         ///< empty on success, else what failed with its numbers
+};
+
+/// A backend for A x = b with A square, sparse (compressed-column, both triangles stored) and,
+/// for most backends, symmetric positive definite. Four verbs:
+///  - analyze(A): once per sparsity pattern (symbolic work, orderings, colourings, scratch);
+///  - factor(A): new values on the analysed pattern, every step (numeric factorization for direct
+///    backends, diagonal/preconditioner refresh for iterative ones). A must stay alive and
+///    unchanged until the next factor(): iterative backends keep a reference to it;
+///  - solve(b, x, options): x is the warm start on entry (if options.warm_start) and the solution
+///    on exit; no allocation;
+///  - the returned LinearSummary reports status, iterations, residual and times.
+/// Must implement all three. Options a backend ignores are listed in its class comment.
+class LinearSolver {
+ public:
+  virtual ~LinearSolver() = default;
+  /// Registry name ("cholmod", "pcg", ...).
+  virtual const char* name() const = 0;
+  /// True if the backend needs A symmetric positive definite to be correct (CG, Cholesky).
+  virtual bool requires_spd() const = 0;
+  virtual LinearSummary analyze(const SparseMatrix& A) = 0;
+  virtual LinearSummary factor(const SparseMatrix& A) = 0;
+  virtual LinearSummary solve(ConstRef b, VecRef x, const LinearSolveOptions& options) = 0;
+};
+
+}  // namespace hooke

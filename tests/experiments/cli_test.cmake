@@ -1,0 +1,204 @@
+# End-to-end checks of the hooke command, one CASE per CTest test:
+#   cmake -DCASE=<case> -DHOOKE=<hooke binary> -DSCENES_DIR=<problems/scenes> -DOUT=<scratch dir>
+#         [-DSCENE=<scene file>] -P cli_test.cmake
+# Cases:
+#   run         runs SCENE for a short time (time.duration=0.02) and checks exit 0 and the files it
+#               writes (scene.toml, log.csv, final.csv; final.png and frames/ for mass-spring
+#               scenes); then runs the written scene.toml again and requires byte-identical
+#               final.csv and an unchanged resolved scene.
+#   diverge     two_particle with rk4 at dt = 0.05 (h omega = 7, far above rk4's 2.83): exit 3, the
+#               message names the step, log.csv is kept, final.csv is not written.
+#   diverge_ode decay with rk4 at dt = 10 (|R(-10)| = 291 per step): the state overflows, exit 3.
+#   info        `hooke info hanging_cloth` exits 0 and describes the 32 x 32 cloth.
+#   scenes      `hooke scenes` lists every shipped scene with its one-line description.
+#   bad_input   missing scene file, malformed --set and unknown subcommand: exit 2 with a message.
+foreach(var CASE HOOKE SCENES_DIR OUT)
+  if(NOT DEFINED ${var})
+    message(FATAL_ERROR "cli_test.cmake: pass -D${var}=...")
+  endif()
+endforeach()
+# `hooke info NAME` and `hooke scenes` look here first: test this tree, not an installed copy.
+set(ENV{HOOKE_SCENES_DIR} "${SCENES_DIR}")
+
+# Runs hooke with the given arguments; sets rc, out, err and a report for failure messages.
+macro(hooke_exec)
+  execute_process(COMMAND "${HOOKE}" ${ARGN}
+                  RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 100)
+  string(REPLACE ";" " " _args "${ARGN}")
+  set(report "\n--- hooke ${_args}\n--- exit: ${rc}\n--- stderr:\n${err}\n--- stdout:\n${out}")
+endmacro()
+
+function(expect_rc want)
+  if(NOT rc STREQUAL "${want}")
+    message(FATAL_ERROR "expected exit code ${want}, got '${rc}'${report}")
+  endif()
+endfunction()
+
+function(expect_contains text needle what)
+  string(FIND "${text}" "${needle}" at)
+  if(at LESS 0)
+    message(FATAL_ERROR "expected ${what} to contain '${needle}'${report}")
+  endif()
+endfunction()
+
+function(expect_file path)
+  if(NOT EXISTS "${path}" OR IS_DIRECTORY "${path}")
+    message(FATAL_ERROR "expected the file ${path}${report}")
+  endif()
+  file(SIZE "${path}" size)
+  if(size EQUAL 0)
+    message(FATAL_ERROR "${path} is empty${report}")
+  endif()
+endfunction()
+
+# Number of lines of a text file.
+function(count_lines path var)
+  file(STRINGS "${path}" lines)
+  list(LENGTH lines n)
+  set(${var} ${n} PARENT_SCOPE)
+endfunction()
+
+# The resolved scene without the lines that name where it was written (header comment, output.dir).
+function(resolved_body path var)
+  file(READ "${path}" text)
+  string(REGEX REPLACE "^#[^\n]*\n" "" text "${text}")
+  string(REGEX REPLACE "\ndir = [^\n]*" "" text "${text}")
+  set(${var} "${text}" PARENT_SCOPE)
+endfunction()
+
+file(REMOVE_RECURSE "${OUT}")
+
+if(CASE STREQUAL "run")
+  file(STRINGS "${SCENE}" sections REGEX "^\\[ode\\]")
+  set(is_ode FALSE)
+  if(sections)
+    set(is_ode TRUE)
+  endif()
+  hooke_exec(run "${SCENE}" --out "${OUT}/first" --no-progress --set time.duration=0.02)
+  expect_rc(0)
+  foreach(f scene.toml log.csv final.csv)
+    expect_file("${OUT}/first/${f}")
+  endforeach()
+  count_lines("${OUT}/first/log.csv" n)
+  if(n LESS 3)
+    message(FATAL_ERROR "log.csv has ${n} lines; expected a header and at least 2 rows${report}")
+  endif()
+  if(NOT is_ode)
+    file(STRINGS "${OUT}/first/final.csv" header LIMIT_COUNT 1)
+    if(NOT header STREQUAL "id,x,y,z,vx,vy,vz")
+      message(FATAL_ERROR "unexpected final.csv header '${header}'${report}")
+    endif()
+    expect_file("${OUT}/first/final.png")
+    file(READ "${OUT}/first/final.png" magic LIMIT 8 HEX)
+    if(NOT magic STREQUAL "89504e470d0a1a0a")
+      message(FATAL_ERROR "final.png does not start with the PNG signature (${magic})${report}")
+    endif()
+    file(GLOB frames "${OUT}/first/frames/*.vtk")
+    list(LENGTH frames nframes)
+    if(nframes LESS 2)
+      message(FATAL_ERROR "expected at least the first and last frame in frames/, found ${nframes}${report}")
+    endif()
+  endif()
+
+  # The written scene.toml, run from its own directory, reproduces the run exactly.
+  hooke_exec(run "${OUT}/first/scene.toml" --out "${OUT}/second" --no-progress)
+  expect_rc(0)
+  file(READ "${OUT}/first/final.csv" a)
+  file(READ "${OUT}/second/final.csv" b)
+  if(NOT a STREQUAL b)
+    message(FATAL_ERROR "rerunning ${OUT}/first/scene.toml gave a different final.csv "
+                        "(compare with ${OUT}/second/final.csv)${report}")
+  endif()
+  resolved_body("${OUT}/first/scene.toml" a)
+  resolved_body("${OUT}/second/scene.toml" b)
+  if(NOT a STREQUAL b)
+    message(FATAL_ERROR "resolving the resolved scene changed it: compare ${OUT}/first/scene.toml "
+                        "and ${OUT}/second/scene.toml${report}")
+  endif()
+
+elseif(CASE STREQUAL "diverge")
+  hooke_exec(run "${SCENE}" --out "${OUT}" --no-progress --set integrator.method=rk4
+             --set time.dt=0.05 --set time.duration=5)
+  expect_rc(3)
+  if(NOT err MATCHES "^error: [^\n]*diverged at step [0-9]+ \\(t = ")
+    message(FATAL_ERROR "expected 'error: FILE: diverged at step N (t = ...' on stderr${report}")
+  endif()
+  expect_contains("${err}" "log.csv" "stderr")
+  expect_file("${OUT}/scene.toml")
+  expect_file("${OUT}/log.csv")
+  count_lines("${OUT}/log.csv" n)
+  if(n LESS 2)
+    message(FATAL_ERROR "log.csv was not kept: ${n} lines${report}")
+  endif()
+  if(EXISTS "${OUT}/final.csv")
+    message(FATAL_ERROR "a diverged run must not write final.csv${report}")
+  endif()
+
+elseif(CASE STREQUAL "diverge_ode")
+  hooke_exec(run "${SCENE}" --out "${OUT}" --no-progress --set integrator.method=rk4
+             --set time.dt=10 --set time.duration=5000)
+  expect_rc(3)
+  if(NOT err MATCHES "^error: [^\n]*diverged at step [0-9]+ \\(t = ")
+    message(FATAL_ERROR "expected 'error: FILE: diverged at step N (t = ...' on stderr${report}")
+  endif()
+  expect_file("${OUT}/log.csv")
+  if(EXISTS "${OUT}/final.csv")
+    message(FATAL_ERROR "a diverged run must not write final.csv${report}")
+  endif()
+
+elseif(CASE STREQUAL "info")
+  hooke_exec(info hanging_cloth)
+  expect_rc(0)
+  expect_contains("${out}" "particles:  1024 (2 pinned)" "stdout")
+  expect_contains("${out}" "omega_max:" "stdout")
+  expect_contains("${out}" "rk4" "stdout")
+  hooke_exec(info "${SCENES_DIR}/decay.toml")
+  expect_rc(0)
+  expect_contains("${out}" "ODE" "stdout")
+
+elseif(CASE STREQUAL "scenes")
+  hooke_exec(scenes)
+  expect_rc(0)
+  file(GLOB shipped "${SCENES_DIR}/*.toml")
+  list(LENGTH shipped nshipped)
+  if(nshipped EQUAL 0)
+    message(FATAL_ERROR "no shipped scenes in ${SCENES_DIR}")
+  endif()
+  foreach(scene IN LISTS shipped)
+    get_filename_component(stem "${scene}" NAME_WLE)
+    if(NOT out MATCHES "(^|\n)${stem} ")
+      message(FATAL_ERROR "`hooke scenes` does not list ${stem}${report}")
+    endif()
+    # Its description is the scene file's first comment line.
+    file(READ "${scene}" text)
+    string(REGEX MATCH "^[^\n]*" first "${text}")
+    string(REGEX REPLACE "^#+ *" "" first "${first}")
+    expect_contains("${out}" "${first}" "stdout")
+  endforeach()
+
+elseif(CASE STREQUAL "bad_input")
+  hooke_exec(run "${OUT}/no_such_scene.toml" --out "${OUT}/o" --no-progress)
+  expect_rc(2)
+  if(NOT err MATCHES "^error: [^\n]*no_such_scene.toml: file: ")
+    message(FATAL_ERROR "expected 'error: FILE: file: ...'${report}")
+  endif()
+  hooke_exec(run "${SCENE}" --out "${OUT}/o" --no-progress --set time.dt)
+  expect_rc(2)
+  if(NOT err MATCHES "^error: <command line>: time.dt: ")
+    message(FATAL_ERROR "expected 'error: <command line>: time.dt: ...'${report}")
+  endif()
+  hooke_exec(run "${SCENE}" --out "${OUT}/o" --no-progress --set time.dt=-1)
+  expect_rc(2)
+  expect_contains("${err}" ": time.dt: " "stderr")
+  hooke_exec(frobnicate)
+  expect_rc(2)
+  hooke_exec(run)
+  expect_rc(2)
+  if(EXISTS "${OUT}/o")
+    message(FATAL_ERROR "refused input must not create the output directory${report}")
+  endif()
+
+else()
+  message(FATAL_ERROR "cli_test.cmake: unknown CASE '${CASE}'")
+endif()
+message(STATUS "Cli ${CASE} ok")

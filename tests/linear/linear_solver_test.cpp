@@ -1,0 +1,718 @@
+// Claims of solver/linear/*: every registered linear backend solves the implicit-step matrix
+// A = M - h D - h^2 K of a 32x32 cloth to the reference backend's answer (CHOLMOD when built,
+// else Eigen::SimplicialLDLT), or, for the stationary iterations that may legitimately be too slow
+// at a 1e-12 tolerance, says NotConverged (or BrokeDown if it diverges) instead of returning a
+// wrong x; and the sharp facts of each algorithm hold: Krylov methods on diagonal systems finish
+// in as many iterations as the preconditioned matrix has distinct eigenvalues (one for PCG on a
+// diagonal), block Jacobi on a non-dominant SPD matrix reports divergence, CG and CHOLMOD on
+// indefinite matrices report breakdown, a warm start from the exact solution costs no iteration,
+// b = 0 gives x = 0.
+//
+// Tolerances. The iterative backends stop at ||b - A x|| <= 1e-12 ||b||, which bounds the relative
+// error by cond(A) * 1e-12; the conformance test estimates cond(A) (power iteration on A and on
+// A^-1 through the reference factorization) and checks that this bound is below the 1e-8 used
+// for the comparison, so the comparison tolerance follows from the stopping rule.
+#include <gtest/gtest.h>
+
+#include <Eigen/SparseCholesky>
+#include <unsupported/Eigen/KroneckerProduct>
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "hooke/forces/gravity.hpp"
+#include "hooke/forces/hooke_spring.hpp"
+#include "hooke/forces/spring_damper.hpp"
+#include "hooke/integrators/reduced_matrix.hpp"
+#include "hooke/linear/linear_registry.hpp"
+#include "hooke/linear/linear_solver.hpp"
+#include "hooke/model/mass_spring_system.hpp"
+#include "hooke/registry.hpp"
+
+namespace {
+
+using hooke::Index;
+using hooke::LinearSolveOptions;
+using hooke::LinearSummary;
+using hooke::SparseMatrix;
+using hooke::Status;
+using hooke::Vec;
+using hooke::Vec3;
+
+constexpr double kSolveTol = 1e-12;    // stopping tolerance of the conformance solves
+constexpr double kMatchTol = 1e-8;     // relative distance to the reference solution
+constexpr int kMaxIterations = 20000;  // Krylov backends need 400-650 here (measured)
+// The stationary iterations reduce the residual by ~0.5% per sweep (Gauss-Seidel) on the 32x32
+// cloth: 1e-12 takes ~14700 sweeps (measured; 2-3 s per variant), too long for the sweep; under
+// this cap they stop near 1e-5 (measured) and must say NotConverged
+// (GaussSeidel.ConvergesOnSpdClothMatrix shows that they do converge). Kept small because every
+// coloured Gauss-Seidel / block-Jacobi sweep opens OpenMP parallel regions, which cost
+// milliseconds each when the machine is oversubscribed.
+constexpr int kStationaryCap = 1000;
+
+/// Backends that may stop short of 1e-12 on the 32x32 cloth within kStationaryCap (the
+/// stationary iterations: their sweep count grows like cond(A)). Every other backend must converge.
+bool may_not_converge(const std::string& name) {
+  return name == "jacobi" || name == "gauss-seidel" || name == "colored-gauss-seidel";
+}
+
+/// Direct backends (no iterations, options ignored).
+bool is_direct(const std::string& name) { return name == "cholmod"; }
+
+/// A square grid cloth: n x n particles hanging in the x-y plane, the two top corners pinned,
+/// structural, shear and flexion (two apart) HookeSprings, a SpringDamper on every spring and
+/// gravity. Rest lengths are rest_scale times the grid distances; positions are jittered by
+/// uniform noise of +-jitter * spacing in every coordinate.
+struct ClothSpec {
+  int n = 32;
+  double spacing = 1.0 / 31.0;  // 1 m wide
+  double mass = 1e-3;           // per particle (1 kg/m^2)
+  double k_structural = 1e4, k_shear = 1e3, k_flexion = 1e2;
+  double damping = 0.1;
+  double rest_scale = 1.0;
+  double jitter = 0.0;
+  unsigned seed = 1;
+};
+
+struct Cloth {
+  std::unique_ptr<hooke::MassSpringSystem> system;
+  Vec x;
+  int stretched = 0, compressed = 0;  // springs longer / shorter than rest at x
+};
+
+Cloth make_cloth(const ClothSpec& spec) {
+  const int n = spec.n, np = n * n;
+  const double s = spec.spacing;
+  std::vector<char> pinned(size_t(np), 0);
+  pinned[size_t((n - 1) * n)] = pinned[size_t(n * n - 1)] = 1;  // top row corners
+  Cloth cloth;
+  cloth.system = std::make_unique<hooke::MassSpringSystem>(Vec::Constant(np, spec.mass), pinned);
+  cloth.x.resize(3 * np);
+  std::mt19937 rng(spec.seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) {
+      const Vec3 p(c * s, r * s, 0.0), e(u(rng), u(rng), u(rng));
+      cloth.x.segment<3>(3 * (r * n + c)) = p + spec.jitter * s * e;
+    }
+  auto springs = std::make_unique<hooke::HookeSpring>();
+  auto dampers = std::make_unique<hooke::SpringDamper>();
+  auto add = [&](int a, int b, double k, double grid_length) {
+    const double L = spec.rest_scale * grid_length;
+    springs->add(a, b, k, L);
+    dampers->add(a, b, spec.damping);
+    const double l = (cloth.x.segment<3>(3 * a) - cloth.x.segment<3>(3 * b)).norm();
+    cloth.stretched += l > L;
+    cloth.compressed += l < L;
+  };
+  for (int r = 0; r < n; ++r)
+    for (int c = 0; c < n; ++c) {
+      const int i = r * n + c;
+      if (c + 1 < n) add(i, i + 1, spec.k_structural, s);
+      if (r + 1 < n) add(i, i + n, spec.k_structural, s);
+      if (c + 1 < n && r + 1 < n) add(i, i + n + 1, spec.k_shear, s * std::sqrt(2.0));
+      if (c > 0 && r + 1 < n) add(i, i + n - 1, spec.k_shear, s * std::sqrt(2.0));
+      if (c + 2 < n) add(i, i + 2, spec.k_flexion, 2 * s);
+      if (r + 2 < n) add(i, i + 2 * n, spec.k_flexion, 2 * s);
+    }
+  cloth.system->add_force(std::move(springs));
+  cloth.system->add_force(std::move(dampers));
+  cloth.system->add_force(
+      std::make_unique<hooke::Gravity>(Vec::Constant(np, spec.mass), Vec3(0.0, -9.81, 0.0)));
+  cloth.system->finalize();
+  return cloth;
+}
+
+/// The implicit-step matrix M - h D - h^2 K of a cloth on its free DOFs, with the compressed
+/// springs' indefinite term clamped (clamp = true) or exact, and no damper position terms.
+struct StepMatrix {
+  Cloth cloth;
+  std::unique_ptr<hooke::ReducedMatrix> reduced;
+  const SparseMatrix& A() const { return reduced->matrix(); }
+};
+
+std::unique_ptr<StepMatrix> make_step_matrix(const ClothSpec& spec, double h, bool clamp) {
+  auto m = std::make_unique<StepMatrix>();
+  m->cloth = make_cloth(spec);
+  const hooke::MassSpringSystem& sys = *m->cloth.system;
+  hooke::Jacobians J = sys.make_jacobians();
+  hooke::JacobianOptions opt;
+  opt.clamp_compressed = clamp;
+  opt.damping_position_terms = false;
+  sys.assemble_jacobians(m->cloth.x, Vec::Zero(sys.dofs()), J, opt);
+  m->reduced = std::make_unique<hooke::ReducedMatrix>(sys);
+  m->reduced->assemble(J, h, h * h);
+  return m;
+}
+
+/// The conformance problem: the 32x32 cloth of the brief (k 1e4 / 1e3 / 1e2, damping 0.1,
+/// h = 1e-2), positions jittered by 30% of the spacing. Built once.
+const StepMatrix& cloth_problem() {
+  static const std::unique_ptr<StepMatrix> m = [] {
+    ClothSpec spec;
+    spec.jitter = 0.3;
+    return make_step_matrix(spec, 1e-2, true);
+  }();
+  return *m;
+}
+
+Vec random_vector(Index n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  Vec v(n);
+  for (Index i = 0; i < n; ++i) v[i] = u(rng);
+  return v;
+}
+
+double relative_distance(const Vec& a, const Vec& ref) { return (a - ref).norm() / ref.norm(); }
+
+bool has_backend(const std::string& name) {
+  for (const auto& info : hooke::linear_solvers())
+    if (name == info.name) return true;
+  return false;
+}
+
+std::string describe(const LinearSummary& s) {
+  char buf[256];
+  std::snprintf(buf, sizeof buf, "status %s, %d iterations, residual %.3e, factor %.3g s, solve %.3g s",
+                hooke::to_string(s.status), s.iterations, s.residual, s.factor_seconds,
+                s.solve_seconds);
+  return std::string(buf) + (s.message.empty() ? "" : ", message: " + s.message);
+}
+
+/// Reference solution of A x = b: CHOLMOD when this build has it, else Eigen's SimplicialLDLT.
+Vec reference_solve(const SparseMatrix& A, const Vec& b) {
+  Vec x = Vec::Zero(b.size());
+  if (has_backend("cholmod")) {
+    auto chol = hooke::make_linear_solver("cholmod");
+    EXPECT_EQ(chol->analyze(A).status, Status::Converged);
+    const LinearSummary f = chol->factor(A);
+    EXPECT_EQ(f.status, Status::Converged) << f.message;
+    const LinearSummary s = chol->solve(b, x, {});
+    EXPECT_EQ(s.status, Status::Converged) << s.message;
+  } else {
+    Eigen::SimplicialLDLT<SparseMatrix> ldlt(A);
+    EXPECT_EQ(ldlt.info(), Eigen::Success);
+    x = ldlt.solve(b);
+  }
+  return x;
+}
+
+/// Estimates of the extreme eigenvalues of SPD A: power iteration on A and on A^-1 (through a
+/// sparse LDL^T), `iterations` each. Lower bounds of lambda_max and upper bounds of lambda_min,
+/// so the ratio slightly underestimates cond(A); 200 iterations converge to a few percent here.
+std::pair<double, double> extreme_eigenvalues(const SparseMatrix& A, int iterations) {
+  Eigen::SimplicialLDLT<SparseMatrix> ldlt(A);
+  Vec y = random_vector(A.rows(), 99).normalized(), z = y;
+  double lmax = 0.0, inv_lmin = 0.0;
+  for (int k = 0; k < iterations; ++k) {
+    Vec Ay = A * y;
+    lmax = y.dot(Ay);
+    y = Ay.normalized();
+    Vec Bz = ldlt.solve(z);
+    inv_lmin = z.dot(Bz);
+    z = Bz.normalized();
+  }
+  return {1.0 / inv_lmin, lmax};
+}
+
+/// A 3n x 3n sparse matrix made of copies of the 3x3 block B on the diagonal.
+SparseMatrix block_diagonal(const hooke::Mat3& B, int blocks) {
+  std::vector<Eigen::Triplet<double>> t;
+  for (int b = 0; b < blocks; ++b)
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r)
+        if (B(r, c) != 0.0 || r == c) t.emplace_back(3 * b + r, 3 * b + c, B(r, c));
+  SparseMatrix A(3 * blocks, 3 * blocks);
+  A.setFromTriplets(t.begin(), t.end());
+  A.makeCompressed();
+  return A;
+}
+
+/// A block-diagonal sparse matrix made of `count` copies of the dense square matrix G.
+SparseMatrix repeated_block(const Eigen::MatrixXd& G, int count) {
+  std::vector<Eigen::Triplet<double>> t;
+  const Index g = G.rows();
+  for (int k = 0; k < count; ++k)
+    for (Index c = 0; c < g; ++c)
+      for (Index r = 0; r < g; ++r)
+        if (G(r, c) != 0.0 || r == c) t.emplace_back(k * g + r, k * g + c, G(r, c));
+  SparseMatrix A(count * g, count * g);
+  A.setFromTriplets(t.begin(), t.end());
+  A.makeCompressed();
+  return A;
+}
+
+SparseMatrix diagonal(const Vec& d) {
+  SparseMatrix A(d.size(), d.size());
+  std::vector<Eigen::Triplet<double>> t;
+  for (Index i = 0; i < d.size(); ++i) t.emplace_back(i, i, d[i]);
+  A.setFromTriplets(t.begin(), t.end());
+  A.makeCompressed();
+  return A;
+}
+
+/// analyze + factor; returns the factor summary (an analyze failure is a test failure).
+LinearSummary setup(hooke::LinearSolver& solver, const SparseMatrix& A) {
+  const LinearSummary a = solver.analyze(A);
+  EXPECT_EQ(a.status, Status::Converged) << solver.name() << ": " << a.message;
+  return solver.factor(A);
+}
+
+LinearSolveOptions cold(double tol, int max_iterations) {
+  LinearSolveOptions o;
+  o.tolerance = tol;
+  o.max_iterations = max_iterations;
+  o.warm_start = false;
+  return o;
+}
+
+std::vector<std::string> backend_names() {
+  std::vector<std::string> names;
+  for (const auto& info : hooke::linear_solvers()) names.push_back(info.name);
+  return names;
+}
+
+/// "colored-gauss-seidel" -> "ColoredGaussSeidel" for the test name.
+std::string pascal_case(const std::string& name) {
+  std::string out;
+  bool up = true;
+  for (char c : name) {
+    if (!std::isalnum(static_cast<unsigned char>(c))) {
+      up = true;
+      continue;
+    }
+    out += up ? static_cast<char>(std::toupper(static_cast<unsigned char>(c))) : c;
+    up = false;
+  }
+  return out;
+}
+
+}  // namespace
+
+// ---- Conformance sweep over the registry ----
+
+class LinearBackend : public ::testing::TestWithParam<std::string> {};
+
+TEST_P(LinearBackend, SolvesClothStepMatrixLikeReference) {
+  const std::string name = GetParam();
+  const StepMatrix& P = cloth_problem();
+  const SparseMatrix& A = P.A();
+  ASSERT_GT(P.cloth.stretched, 100);
+  ASSERT_GT(P.cloth.compressed, 100);
+  ASSERT_EQ(A.rows(), 3 * (32 * 32 - 2));
+  const Vec xstar = random_vector(A.rows(), 7);
+  const Vec b = A * xstar;
+  const Vec ref = reference_solve(A, b);
+  // The reference itself is accurate (round-off times cond(A)).
+  ASSERT_LT(relative_distance(ref, xstar), 1e-10);
+
+  auto solver = hooke::make_linear_solver(name);
+  ASSERT_STREQ(solver->name(), name.c_str());
+  const LinearSummary f = setup(*solver, A);
+  ASSERT_EQ(f.status, Status::Converged) << name << ": factor: " << describe(f);
+  const bool stationary = may_not_converge(name);
+  Vec x = Vec::Constant(A.rows(), 123.0);  // ignored: cold start
+  const LinearSummary s =
+      solver->solve(b, x, cold(kSolveTol, stationary ? kStationaryCap : kMaxIterations));
+  const double dist = relative_distance(x, ref);
+  std::printf("[ backend  ] %-22s %s, |x - ref|/|ref| %.2e\n", name.c_str(), describe(s).c_str(),
+              dist);
+  if (stationary && s.status != Status::Converged) {
+    // Out of iterations (NotConverged), or diverging (BrokeDown, saying so): never Converged
+    // with a wrong x, and never a silent failure.
+    EXPECT_TRUE(s.status == Status::NotConverged ||
+                (s.status == Status::BrokeDown && s.message.find("diverges") != std::string::npos))
+        << name << ": " << describe(s);
+    EXPECT_FALSE(s.message.empty()) << name;
+    EXPECT_GT(s.residual, kSolveTol) << name << ": not converged with a converged residual";
+    return;
+  }
+  ASSERT_EQ(s.status, Status::Converged) << name << ": " << describe(s);
+  EXPECT_LE(s.residual, kSolveTol) << name << ": " << describe(s);
+  EXPECT_TRUE(s.message.empty()) << name << ": " << s.message;
+  // The reported residual is the true one (not a drifted recurrence) to within round-off.
+  const double true_residual = (b - A * x).norm() / b.norm();
+  EXPECT_LE(true_residual, 10 * kSolveTol) << name << ": " << describe(s);
+  EXPECT_LT(dist, kMatchTol) << name << ": " << describe(s);
+}
+
+TEST_P(LinearBackend, WarmStartFromExactSolutionTakesNoIteration) {
+  const std::string name = GetParam();
+  const StepMatrix& P = cloth_problem();
+  const SparseMatrix& A = P.A();
+  const Vec xstar = random_vector(A.rows(), 8);
+  const Vec b = A * xstar;  // the same product the backends use for their residual: r = 0
+  auto solver = hooke::make_linear_solver(name);
+  ASSERT_EQ(setup(*solver, A).status, Status::Converged) << name;
+  LinearSolveOptions warm;
+  warm.tolerance = 1e-10;
+  warm.max_iterations = 5;
+  warm.warm_start = true;
+  Vec x = xstar;
+  const LinearSummary s = solver->solve(b, x, warm);
+  EXPECT_EQ(s.status, Status::Converged) << name << ": " << describe(s);
+  EXPECT_EQ(s.iterations, 0) << name << ": " << describe(s);
+  EXPECT_LT(relative_distance(x, xstar), 1e-10) << name;
+  // The flag is honoured: the same call from a cold start has work to do (iterative backends).
+  if (!is_direct(name)) {
+    Vec y = xstar;
+    const LinearSummary c = solver->solve(b, y, cold(1e-10, 5));
+    EXPECT_GT(c.iterations, 0) << name << ": " << describe(c);
+  }
+}
+
+TEST_P(LinearBackend, ZeroRightHandSideGivesZero) {
+  const std::string name = GetParam();
+  const StepMatrix& P = cloth_problem();
+  const SparseMatrix& A = P.A();
+  auto solver = hooke::make_linear_solver(name);
+  ASSERT_EQ(setup(*solver, A).status, Status::Converged) << name;
+  for (bool warm : {false, true}) {
+    Vec x = random_vector(A.rows(), 3);  // a warm start that is not the solution
+    LinearSolveOptions o = cold(1e-12, 100);
+    o.warm_start = warm;
+    const LinearSummary s = solver->solve(Vec::Zero(A.rows()), x, o);
+    EXPECT_EQ(s.status, Status::Converged) << name << " warm " << warm << ": " << describe(s);
+    EXPECT_EQ(x.lpNorm<Eigen::Infinity>(), 0.0) << name << " warm " << warm;
+  }
+}
+
+TEST_P(LinearBackend, SolvesDiagonalSystem) {
+  // Every backend is exact on a diagonal SPD system (Jacobi and Gauss-Seidel in one sweep).
+  const std::string name = GetParam();
+  Vec d(30);
+  for (Index i = 0; i < d.size(); ++i) d[i] = 1.0 + 0.37 * i;
+  const SparseMatrix A = diagonal(d);
+  const Vec xstar = random_vector(d.size(), 11);
+  const Vec b = A * xstar;
+  auto solver = hooke::make_linear_solver(name);
+  ASSERT_EQ(setup(*solver, A).status, Status::Converged) << name;
+  Vec x = Vec::Zero(d.size());
+  const LinearSummary s = solver->solve(b, x, cold(1e-13, 100));
+  EXPECT_EQ(s.status, Status::Converged) << name << ": " << describe(s);
+  EXPECT_LT(relative_distance(x, xstar), 1e-13) << name << ": " << describe(s);
+}
+
+TEST_P(LinearBackend, RefactorsOnSamePatternWithNewValues) {
+  // factor() after a value change (same pattern) gives the new solution, not the old one.
+  const std::string name = GetParam();
+  ClothSpec spec;
+  spec.n = 6;
+  spec.spacing = 0.2;
+  spec.mass = 1.0;  // heavy: A is diagonally dominant, so even Jacobi converges
+  spec.jitter = 0.3;
+  auto P = make_step_matrix(spec, 1e-2, true);
+  SparseMatrix A = P->A();
+  auto solver = hooke::make_linear_solver(name);
+  ASSERT_EQ(setup(*solver, A).status, Status::Converged) << name;
+  const Vec xstar = random_vector(A.rows(), 5);
+  for (int pass = 0; pass < 2; ++pass) {
+    if (pass == 1) {
+      for (Index k = 0; k < A.nonZeros(); ++k) A.valuePtr()[k] *= 2.0;  // A -> 2 A
+      ASSERT_EQ(solver->factor(A).status, Status::Converged) << name;
+    }
+    const Vec b = A * xstar;
+    Vec x = Vec::Zero(A.rows());
+    const LinearSummary s = solver->solve(b, x, cold(1e-13, 200000));
+    EXPECT_EQ(s.status, Status::Converged) << name << " pass " << pass << ": " << describe(s);
+    EXPECT_LT(relative_distance(x, xstar), 1e-9) << name << " pass " << pass;
+  }
+}
+
+INSTANTIATE_TEST_SUITE_P(, LinearBackend, ::testing::ValuesIn(backend_names()),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           return pascal_case(info.param);
+                         });
+
+// ---- The conformance problem's premises ----
+
+TEST(LinearConformanceProblem, ConditionNumberJustifiesComparisonTolerance) {
+  const SparseMatrix& A = cloth_problem().A();
+  const auto [lmin, lmax] = extreme_eigenvalues(A, 300);
+  const double cond = lmax / lmin;
+  std::printf("[ problem  ] 32x32 cloth step matrix: n %ld, nnz %ld, lambda in [%.3e, %.3e], "
+              "cond ~ %.3e\n",
+              long(A.rows()), long(A.nonZeros()), lmin, lmax, cond);
+  EXPECT_GT(lmin, 0.0);
+  // Residual 1e-12 bounds the relative error by cond * 1e-12. The estimate is converged to 0.2%
+  // after 300 iterations (2000 give 4.756e3 instead of 4.746e3); keep a factor 1.5 for it.
+  EXPECT_LT(1.5 * cond * kSolveTol, kMatchTol) << "cond " << cond;
+  // And the problem is not trivially well conditioned (the stationary methods would be fast).
+  EXPECT_GT(cond, 1e3);
+}
+
+// ---- Sharp facts of the algorithms ----
+
+TEST(ConjugateGradient, MultipleOfIdentityConvergesInOneIteration) {
+  const SparseMatrix A = diagonal(Vec::Constant(30, 3.7));
+  const Vec b = random_vector(30, 1);
+  auto cg = hooke::make_linear_solver("cg");
+  ASSERT_EQ(setup(*cg, A).status, Status::Converged);
+  Vec x(30);
+  const LinearSummary s = cg->solve(b, x, cold(1e-14, 100));
+  EXPECT_EQ(s.status, Status::Converged) << describe(s);
+  EXPECT_EQ(s.iterations, 1) << describe(s);
+  EXPECT_LT(relative_distance(x, b / 3.7), 1e-15);
+}
+
+TEST(ConjugateGradient, DiagonalSystemConvergesInDistinctEigenvalueCountIterations) {
+  // Unpreconditioned CG on a general diagonal takes one iteration per distinct eigenvalue (the
+  // Krylov space of diag(d) and a generic b has that dimension); three distinct values here.
+  Vec d(30);
+  for (Index i = 0; i < d.size(); ++i) d[i] = 1.0 + double(i % 3);
+  const SparseMatrix A = diagonal(d);
+  const Vec b = random_vector(30, 2);
+  auto cg = hooke::make_linear_solver("cg");
+  ASSERT_EQ(setup(*cg, A).status, Status::Converged);
+  Vec x(30);
+  const LinearSummary s = cg->solve(b, x, cold(1e-12, 100));
+  EXPECT_EQ(s.status, Status::Converged) << describe(s);
+  EXPECT_EQ(s.iterations, 3) << describe(s);
+  EXPECT_LT(relative_distance(x, b.cwiseQuotient(d)), 1e-12);
+}
+
+TEST(PreconditionedConjugateGradient, DiagonalSystemConvergesInOneIteration) {
+  // Jacobi preconditioning makes P^-1 A = I for any diagonal A; so does the block preconditioner.
+  Vec d(30);
+  for (Index i = 0; i < d.size(); ++i) d[i] = std::pow(10.0, 0.2 * i);  // cond 1e5.8
+  const SparseMatrix A = diagonal(d);
+  const Vec xstar = random_vector(30, 3);
+  const Vec b = A * xstar;
+  for (const char* name : {"pcg", "pcg-block"}) {
+    auto pcg = hooke::make_linear_solver(name);
+    ASSERT_EQ(setup(*pcg, A).status, Status::Converged) << name;
+    Vec x(30);
+    const LinearSummary s = pcg->solve(b, x, cold(1e-14, 100));
+    EXPECT_EQ(s.status, Status::Converged) << name << ": " << describe(s);
+    EXPECT_EQ(s.iterations, 1) << name << ": " << describe(s);
+    EXPECT_LT(relative_distance(x, xstar), 1e-14) << name;
+  }
+}
+
+TEST(PreconditionedConjugateGradient, BlockDiagonalSystemConvergesInOneIterationWithBlockJacobi) {
+  hooke::Mat3 B;
+  B << 4.0, 1.0, 0.5, 1.0, 3.0, -0.7, 0.5, -0.7, 2.0;  // SPD, coupled within the block
+  const SparseMatrix A = block_diagonal(B, 10);
+  const Vec xstar = random_vector(30, 4);
+  const Vec b = A * xstar;
+  auto pcg = hooke::make_linear_solver("pcg-block");
+  ASSERT_EQ(setup(*pcg, A).status, Status::Converged);
+  Vec x(30);
+  const LinearSummary s = pcg->solve(b, x, cold(1e-14, 100));
+  EXPECT_EQ(s.status, Status::Converged) << describe(s);
+  EXPECT_EQ(s.iterations, 1) << describe(s);
+  EXPECT_LT(relative_distance(x, xstar), 1e-14);
+}
+
+TEST(Jacobi, DivergesOnNonDominantSpdMatrixAndSaysSo) {
+  // "jacobi" is block Jacobi over the 3x3 particle blocks, so the classic counterexample
+  // B = [[1, .9, .9], [.9, 1, .9], [.9, .9, 1]] (SPD: eigenvalues 2.8, 0.1, 0.1) is applied
+  // between particles: A = B (x) I_3 on groups of three particles, repeated. The diagonal blocks
+  // are I, and the block-Jacobi iteration matrix I - A has spectral radius 1.8: it diverges.
+  // Documented outcome (stationary.hpp): BrokeDown, with a message saying it diverges.
+  hooke::Mat3 B;
+  B << 1.0, 0.9, 0.9, 0.9, 1.0, 0.9, 0.9, 0.9, 1.0;
+  const Eigen::MatrixXd group = Eigen::kroneckerProduct(B, hooke::Mat3::Identity());
+  const SparseMatrix A = repeated_block(group, 5);  // 45 x 45
+  const Vec xstar = random_vector(A.rows(), 5);
+  const Vec b = A * xstar;
+  auto jacobi = hooke::make_linear_solver("jacobi");
+  ASSERT_EQ(setup(*jacobi, A).status, Status::Converged);
+  Vec x(A.rows());
+  const LinearSummary s = jacobi->solve(b, x, cold(1e-10, 10000));
+  EXPECT_EQ(s.status, Status::BrokeDown) << describe(s);
+  EXPECT_NE(s.status, Status::Converged) << describe(s);
+  EXPECT_NE(s.message.find("diverges"), std::string::npos) << s.message;
+  EXPECT_NE(s.message.find("jacobi"), std::string::npos) << s.message;
+  // It stopped on divergence, long before the iteration cap (1.8^k passes 1e6 by k ~ 25).
+  EXPECT_LT(s.iterations, 100) << describe(s);
+  // Gauss-Seidel converges on the same SPD matrix, as do the Krylov methods.
+  for (const char* name : {"gauss-seidel", "colored-gauss-seidel", "cg", "pcg", "pcg-block"}) {
+    auto solver = hooke::make_linear_solver(name);
+    ASSERT_EQ(setup(*solver, A).status, Status::Converged) << name;
+    Vec y(A.rows());
+    const LinearSummary g = solver->solve(b, y, cold(1e-10, 10000));
+    EXPECT_EQ(g.status, Status::Converged) << name << ": " << describe(g);
+    EXPECT_LT(relative_distance(y, xstar), 1e-8) << name;
+  }
+}
+
+TEST(Jacobi, SolvesBlockDiagonalSystemInOneSweep) {
+  // Block Jacobi inverts the 3x3 diagonal blocks exactly: a block-diagonal system (here the
+  // scalar counterexample B itself, on every particle) takes one sweep.
+  hooke::Mat3 B;
+  B << 1.0, 0.9, 0.9, 0.9, 1.0, 0.9, 0.9, 0.9, 1.0;
+  const SparseMatrix A = block_diagonal(B, 20);
+  const Vec xstar = random_vector(60, 13);
+  const Vec b = A * xstar;
+  auto jacobi = hooke::make_linear_solver("jacobi");
+  ASSERT_EQ(setup(*jacobi, A).status, Status::Converged);
+  Vec x(60);
+  const LinearSummary s = jacobi->solve(b, x, cold(1e-12, 100));
+  EXPECT_EQ(s.status, Status::Converged) << describe(s);
+  EXPECT_EQ(s.iterations, 1) << describe(s);
+  EXPECT_LT(relative_distance(x, xstar), 1e-12);
+}
+
+TEST(GaussSeidel, ConvergesOnSpdClothMatrix) {
+  // Gauss-Seidel converges for every SPD matrix, in scalar and in 3x3-block form. On the 32x32
+  // conformance matrix 1e-12 takes ~14700 sweeps (2-3 s per variant, measured), so this test
+  // asks for 1e-8 (measured: ~3100 sweeps scalar, ~5800 coloured) and then checks the error
+  // against the bound cond(A) * 1e-8 ~ 5e-5.
+  const StepMatrix& P = cloth_problem();
+  const SparseMatrix& A = P.A();
+  const Vec xstar = random_vector(A.rows(), 6);
+  const Vec b = A * xstar;
+  const Vec ref = reference_solve(A, b);
+  for (const char* name : {"gauss-seidel", "colored-gauss-seidel"}) {
+    auto gs = hooke::make_linear_solver(name);
+    ASSERT_EQ(setup(*gs, A).status, Status::Converged) << name;
+    Vec x(A.rows());
+    const LinearSummary s = gs->solve(b, x, cold(1e-8, 20000));
+    std::printf("[ gs-1e-8  ] %-22s %s, |x - ref|/|ref| %.2e\n", name, describe(s).c_str(),
+                relative_distance(x, ref));
+    EXPECT_EQ(s.status, Status::Converged) << name << ": " << describe(s);
+    EXPECT_LT(relative_distance(x, ref), 1e-4) << name << ": " << describe(s);
+  }
+}
+
+TEST(ConjugateGradient, IndefiniteMatrixBreaksDown) {
+  // B has eigenvalues 3, -1, 1 and a positive diagonal (so the Jacobi preconditioner is still
+  // SPD); b is chosen so that the first search direction has b^T A b < 0.
+  hooke::Mat3 B;
+  B << 1.0, 2.0, 0.0, 2.0, 1.0, 0.0, 0.0, 0.0, 1.0;
+  const SparseMatrix A = block_diagonal(B, 10);
+  Vec b(30);
+  for (int k = 0; k < 10; ++k) b.segment<3>(3 * k) = Vec3(1.0, -1.0, 0.1 * k);
+  ASSERT_LT(b.dot(A * b), 0.0);
+  for (const char* name : {"cg", "pcg"}) {
+    auto cg = hooke::make_linear_solver(name);
+    ASSERT_EQ(setup(*cg, A).status, Status::Converged) << name;
+    Vec x(30);
+    const LinearSummary s = cg->solve(b, x, cold(1e-10, 1000));
+    EXPECT_EQ(s.status, Status::BrokeDown) << name << ": " << describe(s);
+    EXPECT_NE(s.message.find("not positive definite"), std::string::npos) << s.message;
+  }
+  // The block-Jacobi preconditioner sees the indefinite block already in factor().
+  auto block = hooke::make_linear_solver("pcg-block");
+  const LinearSummary f = setup(*block, A);
+  EXPECT_EQ(f.status, Status::BrokeDown) << describe(f);
+  EXPECT_NE(f.message.find("not positive definite"), std::string::npos) << f.message;
+}
+
+TEST(ConjugateGradient, CompressedClothWithoutClampNeverReportsConverged) {
+  // The cloth with rest lengths twice the current distances and the exact (unclamped) K: A is
+  // strongly indefinite. With a generic b, the SPD backends must not report Converged: CG meets
+  // negative curvature (BrokeDown), or runs out of iterations (NotConverged); the preconditioned
+  // ones see negative diagonal entries/blocks already in factor().
+  ClothSpec spec;
+  spec.n = 16;
+  spec.spacing = 1.0 / 15.0;
+  spec.rest_scale = 2.0;
+  auto P = make_step_matrix(spec, 1e-2, false);
+  const SparseMatrix& A = P->A();
+  const Vec b = random_vector(A.rows(), 9);
+  int checked = 0;
+  for (const auto& info : hooke::linear_solvers()) {
+    auto solver = hooke::make_linear_solver(info.name);
+    if (!solver->requires_spd()) continue;
+    LinearSummary s = setup(*solver, A);
+    if (s.status == Status::Converged) {
+      Vec x(A.rows());
+      s = solver->solve(b, x, cold(1e-10, 10000));
+    }
+    std::printf("[ indef    ] %-22s %s\n", info.name, describe(s).c_str());
+    EXPECT_TRUE(s.status == Status::BrokeDown || s.status == Status::NotConverged)
+        << info.name << ": " << describe(s);
+    EXPECT_FALSE(s.message.empty()) << info.name;
+    ++checked;
+  }
+  EXPECT_GE(checked, 3);  // cg, pcg, pcg-block (+ cholmod)
+}
+
+TEST(Cholmod, IndefiniteMatrixBreaksDownInFactor) {
+  if (!has_backend("cholmod")) GTEST_SKIP() << "built without CHOLMOD";
+  hooke::Mat3 B;
+  B << 1.0, 2.0, 0.0, 2.0, 1.0, 0.0, 0.0, 0.0, 1.0;  // eigenvalues 3, -1, 1
+  const SparseMatrix A = block_diagonal(B, 10);
+  auto chol = hooke::make_linear_solver("cholmod");
+  const LinearSummary f = setup(*chol, A);
+  EXPECT_EQ(f.status, Status::BrokeDown) << describe(f);
+  EXPECT_NE(f.message.find("not positive definite"), std::string::npos) << f.message;
+  // And it recovers on the next factor() of an SPD matrix with the same pattern.
+  SparseMatrix C = A;
+  for (Index k = 0; k < C.nonZeros(); ++k)
+    if (C.valuePtr()[k] == 2.0) C.valuePtr()[k] = 0.5;  // the off-diagonal pairs: eigenvalues 1.5, 0.5, 1
+  const LinearSummary g = chol->factor(C);
+  EXPECT_EQ(g.status, Status::Converged) << describe(g);
+  const Vec xstar = random_vector(30, 12);
+  Vec x(30);
+  EXPECT_EQ(chol->solve(C * xstar, x, {}).status, Status::Converged);
+  EXPECT_LT(relative_distance(x, xstar), 1e-13);
+}
+
+// ---- Options and the registry ----
+
+TEST(LinearSolveOptions, ValidateRejectsBadValues) {
+  EXPECT_EQ(LinearSolveOptions{}.validate(), "");
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const double inf = std::numeric_limits<double>::infinity();
+  for (double tol : {0.0, -1e-8, nan, inf}) {
+    LinearSolveOptions o;
+    o.tolerance = tol;
+    const std::string err = o.validate();
+    EXPECT_NE(err.find("tolerance"), std::string::npos) << "tolerance " << tol << ": '" << err << "'";
+  }
+  for (int it : {0, -5}) {
+    LinearSolveOptions o;
+    o.max_iterations = it;
+    const std::string err = o.validate();
+    EXPECT_NE(err.find("max_iterations"), std::string::npos) << it << ": '" << err << "'";
+    EXPECT_NE(err.find(std::to_string(it)), std::string::npos) << err;
+  }
+  LinearSolveOptions ok;
+  ok.tolerance = 1e-300;
+  ok.max_iterations = 1;
+  ok.warm_start = false;
+  EXPECT_EQ(ok.validate(), "");
+}
+
+TEST(LinearRegistry, UnknownNameThrowsListingNames) {
+  try {
+    hooke::make_linear_solver("no-such-backend");
+    FAIL() << "no exception";
+  } catch (const hooke::UnknownName& e) {
+    const std::string msg = e.what();
+    EXPECT_NE(msg.find("no-such-backend"), std::string::npos) << msg;
+    for (const auto& info : hooke::linear_solvers())
+      EXPECT_NE(msg.find(info.name), std::string::npos) << info.name << " missing from: " << msg;
+  }
+  // Through make_stepper as well.
+  ClothSpec spec;
+  spec.n = 3;
+  const Cloth cloth = make_cloth(spec);
+  hooke::MethodOptions opt;
+  opt.linear_solver = "no-such-backend";
+  EXPECT_THROW(hooke::make_stepper("implicit", *cloth.system, opt), hooke::UnknownName);
+}
+
+TEST(LinearRegistry, NamesAreUniqueAndConstructible) {
+  const auto names = backend_names();
+  ASSERT_GE(names.size(), 6u);
+  for (size_t i = 0; i < names.size(); ++i) {
+    for (size_t j = 0; j < i; ++j) EXPECT_NE(names[i], names[j]);
+    auto s = hooke::make_linear_solver(names[i]);
+    EXPECT_STREQ(s->name(), names[i].c_str());
+    EXPECT_NE(hooke::linear_solver_names().find(names[i]), std::string::npos);
+  }
+  if (has_backend("cholmod")) {
+    EXPECT_EQ(names.front(), "cholmod");  // the reference comes first
+  }
+}

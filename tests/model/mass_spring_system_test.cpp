@@ -1,0 +1,222 @@
+// Claims of solver/model/mass_spring_system.* and mass_spring_ode.*: kinetic energy is 1/2 v^T M v,
+// pinned particles get zero velocity and acceleration through MassSpringOde while free ones get
+// f / m, and the assembled K and D of a system with several force types equal the central
+// differences of the whole system's compute_forces (the "assembled K and D" check).
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+#include <functional>
+#include <memory>
+#include <random>
+#include <vector>
+
+#include "hooke/forces/air_drag.hpp"
+#include "hooke/forces/gravity.hpp"
+#include "hooke/forces/hooke_spring.hpp"
+#include "hooke/forces/spring_damper.hpp"
+#include "hooke/model/mass_spring_ode.hpp"
+#include "hooke/model/mass_spring_system.hpp"
+
+namespace {
+
+using hooke::Vec;
+using hooke::Vec3;
+using Dense = Eigen::MatrixXd;
+
+double exact_step(double x, double h) {
+  volatile double t = x + h;
+  return t - x;
+}
+
+Dense central_jacobian(const std::function<Vec(const Vec&)>& g, const Vec& y, double h) {
+  const Vec g0 = g(y);
+  Dense J(g0.size(), y.size());
+  Vec yp = y, ym = y;
+  for (Eigen::Index c = 0; c < y.size(); ++c) {
+    const double hc = exact_step(y[c], h);
+    yp[c] = y[c] + hc;
+    ym[c] = y[c] - hc;
+    J.col(c) = (g(yp) - g(ym)) / (2.0 * hc);
+    yp[c] = ym[c] = y[c];
+  }
+  return J;
+}
+
+::testing::AssertionResult near_entrywise(const Dense& A, const Dense& B, double rel = 1e-6) {
+  const double floor = 1e-8 * std::max(A.cwiseAbs().maxCoeff(), 1e-300);
+  for (Eigen::Index c = 0; c < A.cols(); ++c)
+    for (Eigen::Index r = 0; r < A.rows(); ++r) {
+      const double a = A(r, c), b = B(r, c);
+      if (std::abs(a - b) > rel * std::max(std::abs(a), std::abs(b)) + floor)
+        return ::testing::AssertionFailure()
+               << "entry (" << r << ", " << c << "): analytic " << a << " vs FD " << b;
+    }
+  return ::testing::AssertionSuccess();
+}
+
+Vec random_vec(Eigen::Index size, double lo, double hi, std::mt19937& rng) {
+  std::uniform_real_distribution<double> U(lo, hi);
+  Vec v(size);
+  for (Eigen::Index i = 0; i < size; ++i) v[i] = U(rng);
+  return v;
+}
+
+/// A 3 x 3 grid cloth (spacing 1) with structural and shear HookeSprings and SpringDampers,
+/// gravity and air drag with wind; particle 0 (and 2 if pin_two) pinned. Rest lengths are
+/// scaled per spring by factors in [0.6, 1.5] so that the random configurations compress some.
+std::unique_ptr<hooke::MassSpringSystem> make_cloth(std::mt19937& rng, bool pin_two = false) {
+  const int w = 3, n = w * w;
+  const Vec m = random_vec(n, 0.5, 2.0, rng);
+  std::vector<char> pinned(n, 0);
+  pinned[0] = 1;
+  if (pin_two) pinned[2] = 1;
+  auto sys = std::make_unique<hooke::MassSpringSystem>(m, pinned);
+  auto springs = std::make_unique<hooke::HookeSpring>();
+  auto dampers = std::make_unique<hooke::SpringDamper>();
+  std::uniform_real_distribution<double> factor(0.6, 1.5), stiff(10.0, 200.0), damp(0.1, 5.0);
+  auto connect = [&](int a, int b, double L) {
+    springs->add(a, b, stiff(rng), factor(rng) * L);
+    dampers->add(a, b, damp(rng));
+  };
+  for (int r = 0; r < w; ++r)
+    for (int c = 0; c < w; ++c) {
+      const int i = r * w + c;
+      if (c + 1 < w) connect(i, i + 1, 1.0);
+      if (r + 1 < w) connect(i, i + w, 1.0);
+      if (c + 1 < w && r + 1 < w) connect(i, i + w + 1, std::sqrt(2.0));
+      if (c > 0 && r + 1 < w) connect(i, i + w - 1, std::sqrt(2.0));
+    }
+  sys->add_force(std::move(springs));
+  sys->add_force(std::move(dampers));
+  sys->add_force(std::make_unique<hooke::Gravity>(m, Vec3(0.0, -9.81, 0.0)));
+  sys->add_force(std::make_unique<hooke::AirDrag>(n, 0.3, Vec3(1.0, 0.0, -0.5)));
+  sys->finalize();
+  return sys;
+}
+
+/// Grid positions with random perturbation of size `jitter`.
+Vec cloth_positions(std::mt19937& rng, double jitter) {
+  const int w = 3;
+  Vec x(3 * w * w);
+  for (int r = 0; r < w; ++r)
+    for (int c = 0; c < w; ++c) x.segment<3>(3 * (r * w + c)) = Vec3(c, 0.0, r);
+  return x + random_vec(x.size(), -jitter, jitter, rng);
+}
+
+}  // namespace
+
+TEST(MassSpringSystem, KineticEnergyIsHalfVMV) {
+  std::mt19937 rng(61);
+  const int n = 5;
+  const Vec m = random_vec(n, 0.1, 4.0, rng);
+  hooke::MassSpringSystem sys(m, std::vector<char>(n, 0));
+  sys.finalize();
+  const Vec v = random_vec(3 * n, -3, 3, rng);
+  double expected = 0.0;
+  for (int i = 0; i < n; ++i) expected += 0.5 * m[i] * v.segment<3>(3 * i).squaredNorm();
+  EXPECT_NEAR(sys.kinetic_energy(v), expected, 1e-14 * expected);
+  EXPECT_EQ(sys.kinetic_energy(Vec::Zero(3 * n)), 0.0);
+  for (int i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d) EXPECT_EQ(sys.mass_diagonal()[3 * i + d], m[i]);
+}
+
+TEST(MassSpringSystem, PinnedParticlesGetZeroAcceleration) {
+  std::mt19937 rng(62);
+  auto sys = make_cloth(rng, /*pin_two=*/true);
+  const hooke::Index n3 = sys->dofs();
+  EXPECT_EQ(sys->num_pinned(), 2);
+  hooke::MassSpringOde ode(*sys);
+  ASSERT_EQ(ode.dimension(), 2 * n3);
+  ASSERT_EQ(ode.position_dimension(), n3);
+  Vec X(2 * n3);
+  X.head(n3) = cloth_positions(rng, 0.3);
+  X.tail(n3) = random_vec(n3, -1, 1, rng);  // pinned particles given nonzero v on purpose
+  Vec dX(2 * n3);
+  ode.rhs(0.0, X, dX);
+  Vec f(n3);
+  sys->compute_forces(X.head(n3), X.tail(n3), f);
+  int pinned_checked = 0, free_checked = 0;
+  for (hooke::Index i = 0; i < sys->num_particles(); ++i) {
+    const Vec3 xdot = dX.segment<3>(3 * i), vdot = dX.segment<3>(n3 + 3 * i);
+    if (sys->pinned()[i]) {
+      EXPECT_GT(f.segment<3>(3 * i).norm(), 0.0);  // a force acts, yet nothing moves
+      EXPECT_EQ(xdot, Vec3::Zero()) << "pinned particle " << i;
+      EXPECT_EQ(vdot, Vec3::Zero()) << "pinned particle " << i;
+      ++pinned_checked;
+    } else {
+      EXPECT_EQ(xdot, Vec3(X.segment<3>(n3 + 3 * i))) << "particle " << i;
+      EXPECT_LE((vdot - f.segment<3>(3 * i) / sys->masses()[i]).norm(),
+                1e-14 * f.segment<3>(3 * i).norm() / sys->masses()[i])
+          << "particle " << i;
+      ++free_checked;
+    }
+  }
+  EXPECT_EQ(pinned_checked, 2);
+  EXPECT_EQ(free_checked, 7);
+
+  // The position-only evaluation agrees with the full one.
+  Vec qdot(n3), scratch(2 * n3);
+  ode.rhs_position(0.0, X, qdot, scratch);
+  EXPECT_EQ(qdot, dX.head(n3));
+}
+
+TEST(MassSpringSystem, AssembledJacobiansMatchCentralDifferences) {
+  std::mt19937 rng(63);
+  int compared = 0;
+  const int samples = 20;
+  for (int s = 0; s < samples; ++s) {
+    auto sys = make_cloth(rng);
+    const hooke::Index n3 = sys->dofs();
+    const Vec x = cloth_positions(rng, 0.4), v = random_vec(n3, -2, 2, rng);
+    // Shortest spring sets the FD step.
+    double lmin = INFINITY;
+    const auto& sp = static_cast<const hooke::HookeSpring&>(*sys->forces()[0]).springs();
+    for (size_t k = 0; k < sp.size(); ++k)
+      lmin = std::min(lmin, (x.segment<3>(3 * sp.i[k]) - x.segment<3>(3 * sp.j[k])).norm());
+    if (!(lmin > 0.0)) continue;  // guard; counted below
+    hooke::Jacobians J = sys->make_jacobians();
+    sys->assemble_jacobians(x, v, J);
+    auto f_of_x = [&](const Vec& y) -> Vec {
+      Vec f(n3);
+      sys->compute_forces(y, v, f);
+      return f;
+    };
+    auto f_of_v = [&](const Vec& y) -> Vec {
+      Vec f(n3);
+      sys->compute_forces(x, y, f);
+      return f;
+    };
+    ASSERT_TRUE(near_entrywise(Dense(J.K), central_jacobian(f_of_x, x, 1e-5 * lmin)))
+        << "sample " << s;
+    ASSERT_TRUE(near_entrywise(Dense(J.D), central_jacobian(f_of_v, v, 1e-5))) << "sample " << s;
+    // Re-assembling into the same storage overwrites rather than accumulates.
+    const Dense K1(J.K);
+    sys->assemble_jacobians(x, v, J);
+    EXPECT_EQ(Dense(J.K), K1);
+    ++compared;
+  }
+  EXPECT_EQ(compared, samples);
+}
+
+TEST(MassSpringSystem, EnergiesAndStrainSumOverForces) {
+  std::mt19937 rng(64);
+  auto sys = make_cloth(rng);
+  const Vec x = cloth_positions(rng, 0.2);
+  double E = 0.0, strain = -INFINITY;
+  for (const auto& f : sys->forces()) {
+    E += f->potential_energy(x);
+    strain = std::max(strain, f->max_strain(x));
+  }
+  EXPECT_NEAR(sys->potential_energy(x), E, 1e-14 * std::abs(E));
+  EXPECT_EQ(sys->max_strain(x), strain);
+  EXPECT_THROW(sys->add_force(std::make_unique<hooke::AirDrag>(9, 1.0)), hooke::InternalError);
+}
+
+TEST(MassSpringSystem, RejectsBadInput) {
+  EXPECT_THROW({ hooke::MassSpringSystem s(Vec::Ones(3), std::vector<char>(2, 0)); },
+               hooke::InternalError);
+  EXPECT_THROW({ hooke::MassSpringSystem s(Vec::Zero(2), std::vector<char>(2, 0)); },
+               hooke::InternalError);
+}

@@ -1,0 +1,519 @@
+// Tests of the scene layer (problems/scene.*, problems/table_reader.*, problems/builders/*):
+// every shipped scene loads, builders produce the springs and pins their formulas say, defaults
+// and --set overrides land in the resolved table, bad input is an InputError naming file and key,
+// and the two-particle exact solution solves the equations of motion.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <set>
+#include <sstream>
+
+#include "problems/scene.hpp"
+
+namespace hooke {
+namespace {
+
+namespace fs = std::filesystem;
+using Edge = std::pair<int, int>;
+
+/// Root of the source tree: $HOOKE_SOURCE_DIR, else the one this test was built from.
+fs::path source_dir() {
+  if (const char* env = std::getenv("HOOKE_SOURCE_DIR")) return env;
+  return HOOKE_SOURCE_DIR;
+}
+fs::path scenes_dir() { return source_dir() / "problems" / "scenes"; }
+
+std::vector<fs::path> shipped_scenes() {
+  std::vector<fs::path> files;
+  for (const auto& e : fs::directory_iterator(scenes_dir()))
+    if (e.path().extension() == ".toml") files.push_back(e.path());
+  std::sort(files.begin(), files.end());
+  return files;
+}
+
+std::string read_text(const fs::path& p) {
+  std::ifstream in(p);
+  std::stringstream ss;
+  ss << in.rdbuf();
+  return ss.str();
+}
+
+/// Loads text and returns the InputError it must throw (fails the test if it does not).
+InputError load_error(const std::string& text, const std::string& file = "scene.toml",
+                      const std::vector<std::string>& overrides = {}) {
+  try {
+    load_scene_from_string(text, file, overrides);
+  } catch (const InputError& e) {
+    return e;
+  }
+  ADD_FAILURE() << "expected an InputError for:\n" << text;
+  return InputError("", "", "");
+}
+
+std::set<Edge> edge_set(const Scene& s) {
+  std::set<Edge> out;
+  for (const auto& e : s.edges) out.insert({std::min(e[0], e[1]), std::max(e[0], e[1])});
+  return out;
+}
+
+double distance(const Vec& x, int a, int b) {
+  return (x.segment<3>(3 * a) - x.segment<3>(3 * b)).norm();
+}
+
+const std::string kTwoParticle = R"(
+[mesh]
+type = "two-particle"
+mass = 2.0
+rest_length = 1.0
+stretch = 0.1
+
+[springs]
+stiffness = 500.0
+
+[integrator]
+method = "rk4"
+
+[time]
+dt = 1e-3
+duration = 1.0
+)";
+
+// ---------------------------------------------------------------------------------------------
+// Shipped scenes
+
+TEST(Scene, EveryShippedSceneLoads) {
+  const auto files = shipped_scenes();
+  ASSERT_FALSE(files.empty()) << "no scenes in " << scenes_dir();
+  int loaded = 0, mass_spring = 0;
+  for (const auto& f : files) {
+    SCOPED_TRACE(f.string());
+    try {
+      const Scene s = load_scene(f.string());
+      EXPECT_EQ(s.name, f.stem().string());
+      EXPECT_NE(s.is_ode(), s.system != nullptr);
+      EXPECT_GT(s.time.dt, 0.0);
+      EXPECT_GT(s.time.steps(), 0);
+      EXPECT_NE(s.resolved["time"]["dt"].as_floating_point(), nullptr);
+      if (!s.is_ode()) {
+        ++mass_spring;
+        const Index n = s.system->num_particles();
+        EXPECT_GT(n, 0);
+        EXPECT_EQ(s.initial.x.size(), 3 * n);
+        EXPECT_EQ(s.initial.v.size(), 3 * n);
+        EXPECT_TRUE(s.initial.is_finite());
+        EXPECT_GT(s.system->masses().minCoeff(), 0.0);
+        EXPECT_EQ(s.edges.size(), s.edge_rest.size());
+        for (const auto& e : s.edges) {
+          EXPECT_NE(e[0], e[1]);
+          EXPECT_TRUE(e[0] >= 0 && e[0] < n && e[1] >= 0 && e[1] < n);
+        }
+      } else {
+        EXPECT_EQ(s.ode_initial.size(), s.ode->dimension());
+      }
+      ++loaded;
+    } catch (const InputError& e) {
+      ADD_FAILURE() << e.what();
+    }
+  }
+  EXPECT_EQ(loaded, int(files.size()));
+  EXPECT_GT(mass_spring, 0);
+}
+
+// Writing the resolved table and loading it again gives the same scene: every value a builder
+// used was recorded, with full precision.
+TEST(Scene, ResolvedTableReloadsToTheSameScene) {
+  int compared = 0;
+  for (const auto& f : shipped_scenes()) {
+    SCOPED_TRACE(f.string());
+    const Scene a = load_scene(f.string());
+    std::ostringstream text;
+    text << a.resolved;
+    // A different directory: paths in the resolved table must not depend on the scene's location.
+    const Scene b = load_scene_from_string(text.str(), "/nonexistent/elsewhere/" + f.filename().string());
+    EXPECT_EQ(a.integrator.method, b.integrator.method);
+    EXPECT_EQ(a.time.dt, b.time.dt);
+    EXPECT_EQ(a.time.duration, b.time.duration);
+    EXPECT_EQ(a.output.every, b.output.every);
+    ASSERT_EQ(a.is_ode(), b.is_ode());
+    if (a.is_ode()) {
+      EXPECT_EQ(a.ode_initial, b.ode_initial);
+    } else {
+      EXPECT_TRUE(a.initial == b.initial);
+      EXPECT_EQ(a.system->masses(), b.system->masses());
+      EXPECT_EQ(a.system->pinned(), b.system->pinned());
+      EXPECT_EQ(a.edges, b.edges);
+      EXPECT_EQ(a.edge_rest, b.edge_rest);
+      EXPECT_EQ(a.system->forces().size(), b.system->forces().size());
+      EXPECT_EQ(a.system->constraints().size(), b.system->constraints().size());
+    }
+    std::ostringstream again;
+    again << b.resolved;
+    EXPECT_EQ(text.str(), again.str()) << "resolving a resolved scene changed it";
+    ++compared;
+  }
+  EXPECT_GT(compared, 0);
+}
+
+// ---------------------------------------------------------------------------------------------
+// Grid builder
+
+std::string grid_text(long long nx, long long ny, bool structural, bool shear, bool flexion) {
+  std::ostringstream os;
+  os << std::boolalpha << "[mesh]\ntype = \"grid\"\nnx = " << nx << "\nny = " << ny
+     << "\nstructural = " << structural << "\nshear = " << shear << "\nflexion = " << flexion
+     << "\n";
+  return os.str();
+}
+
+TEST(SceneGrid, SpringCountsMatchFormulas) {
+  const std::vector<std::pair<long long, long long>> sizes = {{2, 2}, {2, 3}, {3, 2},
+                                                              {4, 5}, {7, 3}, {10, 10}};
+  int checked = 0;
+  for (const auto& [nx, ny] : sizes)
+    for (int mask = 0; mask < 8; ++mask) {
+      const bool st = mask & 1, sh = mask & 2, fl = mask & 4;
+      SCOPED_TRACE(grid_text(nx, ny, st, sh, fl));
+      const Scene s = load_scene_from_string(grid_text(nx, ny, st, sh, fl), "grid.toml");
+      const long long structural = (nx - 1) * ny + nx * (ny - 1);
+      const long long shear = 2 * (nx - 1) * (ny - 1);
+      const long long flexion = (nx - 2) * ny + nx * (ny - 2);
+      const long long expected = (st ? structural : 0) + (sh ? shear : 0) + (fl ? flexion : 0);
+      EXPECT_EQ(s.system->num_particles(), nx * ny);
+      EXPECT_EQ(static_cast<long long>(s.edges.size()), expected);
+      EXPECT_EQ(static_cast<long long>(edge_set(s).size()), expected) << "duplicate springs";
+      for (size_t k = 0; k < s.edges.size(); ++k)
+        EXPECT_DOUBLE_EQ(s.edge_rest[k], distance(s.initial.x, s.edges[k][0], s.edges[k][1]))
+            << "a grid spring starts at rest";
+      ++checked;
+    }
+  EXPECT_EQ(checked, int(sizes.size()) * 8);
+}
+
+TEST(SceneGrid, NegativePinCoordinatesCountFromTheEnd) {
+  const Scene s = load_scene_from_string(R"(
+[mesh]
+type = "grid"
+nx = 5
+ny = 4
+pins = [[-1, -1], [0, -1], [-5, -4], [2, -2]]
+)",
+                                         "grid.toml");
+  // id = j * nx + i: (4, 3) -> 19, (0, 3) -> 15, (0, 0) -> 0, (2, 2) -> 12.
+  std::set<Index> pinned;
+  for (Index i = 0; i < s.system->num_particles(); ++i)
+    if (s.system->pinned()[size_t(i)]) pinned.insert(i);
+  EXPECT_EQ(pinned, (std::set<Index>{0, 12, 15, 19}));
+  EXPECT_EQ(s.system->num_pinned(), 4);
+
+  const InputError e = load_error("[mesh]\ntype = \"grid\"\nnx = 5\nny = 4\npins = [[0, 0], [-6, 0]]\n");
+  EXPECT_EQ(e.key(), "mesh.pins[1]");
+}
+
+TEST(SceneGrid, DefaultPinsAreTheCornersOfTheFirstRow) {
+  const Scene s = load_scene_from_string("[mesh]\ntype = \"grid\"\nnx = 6\nny = 3\n", "grid.toml");
+  EXPECT_EQ(s.system->num_pinned(), 2);
+  EXPECT_TRUE(s.system->pinned()[0]);
+  EXPECT_TRUE(s.system->pinned()[5]);
+}
+
+TEST(SceneGrid, AbsurdSizeIsRefusedWithTheMemoryItNeeds) {
+  const InputError e =
+      load_error("[mesh]\ntype = \"grid\"\nnx = 100000000\nny = 100000000\n", "huge.toml");
+  EXPECT_EQ(e.file(), "huge.toml");
+  EXPECT_EQ(e.key(), "mesh.nx");
+  EXPECT_NE(e.reason().find("GiB"), std::string::npos) << e.reason();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Particles builder
+
+TEST(SceneParticles, RestLengthDefaultsToTheInitialDistance) {
+  const Scene s = load_scene_from_string(R"(
+[mesh]
+type = "particles"
+positions = [[0.0, 0.0, 0.0], [3.0, 4.0, 0.0], [0.0, 0.0, 1.0]]
+springs = [[0, 1, 10.0], [1, 2, 10.0, 2.5], [0, 2, 10.0]]
+)",
+                                         "particles.toml");
+  ASSERT_EQ(s.edges.size(), 3u);
+  EXPECT_EQ(s.edges[0], (std::array<int, 2>{0, 1}));
+  EXPECT_DOUBLE_EQ(s.edge_rest[0], 5.0);
+  EXPECT_DOUBLE_EQ(s.edge_rest[1], 2.5);  // given explicitly
+  EXPECT_DOUBLE_EQ(s.edge_rest[2], 1.0);
+  EXPECT_DOUBLE_EQ(s.edge_rest[2], distance(s.initial.x, 0, 2));
+}
+
+TEST(SceneParticles, PinnedParticlesStartAtRest) {
+  const Scene s = load_scene_from_string(R"(
+[mesh]
+type = "particles"
+positions = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]
+velocities = [[1.0, 2.0, 3.0], [0.0, 0.0, 0.5]]
+pinned = [0]
+springs = [[0, 1, 10.0]]
+)",
+                                         "particles.toml");
+  EXPECT_EQ(Vec3(s.initial.v.segment<3>(0)), Vec3::Zero());
+  EXPECT_EQ(Vec3(s.initial.v.segment<3>(3)), Vec3(0.0, 0.0, 0.5));
+}
+
+// ---------------------------------------------------------------------------------------------
+// Overrides, defaults and errors
+
+TEST(SceneOverrides, ChangeValues) {
+  const Scene base = load_scene_from_string(kTwoParticle, "two.toml");
+  const Scene s = load_scene_from_string(
+      kTwoParticle, "two.toml",
+      {"time.dt=0.002", "integrator.method=midpoint", "springs.stiffness=250", "mesh.stretch=0.3",
+       "output.every=7", "forces.gravity=[0.0, -9.81, 0.0]"});
+  EXPECT_EQ(s.time.dt, 0.002);
+  EXPECT_EQ(s.integrator.method, "midpoint");  // unquoted value taken as a string
+  EXPECT_EQ(s.output.every, 7);
+  EXPECT_DOUBLE_EQ(s.initial.x[3], 1.3);
+  EXPECT_EQ(s.resolved["springs"]["stiffness"].value<double>(), 250.0);
+  EXPECT_EQ(s.resolved["integrator"]["method"].value<std::string>(), "midpoint");
+  // A section the scene did not have is created: gravity adds one force.
+  EXPECT_EQ(s.system->forces().size(), base.system->forces().size() + 1);
+
+  const Scene q = load_scene_from_string(kTwoParticle, "two.toml", {"integrator.method=\"trapezoid\""});
+  EXPECT_EQ(q.integrator.method, "trapezoid");
+  // Later overrides win.
+  const Scene r = load_scene_from_string(kTwoParticle, "two.toml", {"time.dt=0.002", "time.dt=0.004"});
+  EXPECT_EQ(r.time.dt, 0.004);
+}
+
+TEST(SceneOverrides, BadPathIsAnInputError) {
+  struct Case {
+    std::string item, file, key;
+  };
+  const std::vector<Case> cases = {
+      {"time.dtt=0.1", "two.toml", "time.dtt"},                // unknown key, found by the scene
+      {"time.dt.x=1", "<command line>", "time.dt.x"},          // dt is a number, not a table
+      {"time.dt", "<command line>", "time.dt"},                // no value
+      {"=3", "<command line>", "=3"},                          // no path
+      {"time..dt=1", "<command line>", "time..dt"},            // empty section name
+      {"time.=1", "<command line>", "time."},                  // empty key name
+      {"time.dt=-0.5", "two.toml", "time.dt"},                 // value out of range
+      {"integrator.method=rk5", "two.toml", "integrator.method"},  // unknown name
+      {"nosection=1", "two.toml", "nosection"},                // unknown top-level key
+  };
+  for (const auto& c : cases) {
+    SCOPED_TRACE(c.item);
+    const InputError e = load_error(kTwoParticle, "two.toml", {c.item});
+    EXPECT_EQ(e.file(), c.file);
+    EXPECT_EQ(e.key(), c.key);
+    EXPECT_FALSE(e.reason().empty());
+  }
+}
+
+TEST(Scene, ResolvedTableHoldsDefaults) {
+  const Scene s = load_scene_from_string("[mesh]\ntype = \"chain\"\n", "chain.toml");
+  const toml::table& r = s.resolved;
+  EXPECT_EQ(r["time"]["dt"].value<double>(), 1e-3);
+  EXPECT_EQ(r["time"]["duration"].value<double>(), 1.0);
+  EXPECT_EQ(r["integrator"]["method"].value<std::string>(), "symplectic-euler");
+  EXPECT_EQ(r["mesh"]["n"].value<int64_t>(), 20);
+  EXPECT_EQ(r["mesh"]["length"].value<double>(), 1.0);
+  EXPECT_EQ(r["springs"]["stiffness"].value<double>(), 1e3);
+  EXPECT_EQ(r["output"]["dir"].value<std::string>(), "out/chain");
+  EXPECT_TRUE(r["output"]["every"].is_integer());
+  EXPECT_EQ(r["output"]["vtk"].value<bool>(), true);
+  EXPECT_EQ(r["run"]["energy_growth_limit"].value<double>(), 10.0);
+  // The settings structs agree with the table.
+  EXPECT_EQ(s.time.dt, 1e-3);
+  EXPECT_EQ(s.system->num_particles(), 20);
+  // Sections the scene does not use are not invented.
+  EXPECT_FALSE(r.contains("forces"));
+  EXPECT_FALSE(r.contains("collision"));
+}
+
+TEST(Scene, UnknownKeyNamesFileAndDottedKey) {
+  const InputError e = load_error(
+      "[mesh]\ntype = \"chain\"\n\n[springs]\nstifness = 500.0\n", "configs/my_chain.toml");
+  EXPECT_EQ(e.file(), "configs/my_chain.toml");
+  EXPECT_EQ(e.key(), "springs.stifness");
+  EXPECT_EQ(std::string(e.what()), "configs/my_chain.toml: springs.stifness: " + e.reason());
+  EXPECT_NE(e.reason().find("unknown key"), std::string::npos);
+  EXPECT_NE(e.reason().find("stiffness"), std::string::npos) << "the known keys are listed";
+
+  const InputError nested = load_error(
+      "[mesh]\ntype = \"chain\"\n\n[collision.sphere]\ncentre = [0.0, 0.0, 0.0]\n", "c.toml");
+  EXPECT_EQ(nested.key(), "collision.sphere.centre");
+  EXPECT_NE(nested.reason().find("center"), std::string::npos);
+
+  // A key read only when present (forces.gravity) is still listed as known.
+  const InputError typo =
+      load_error("[mesh]\ntype = \"chain\"\n\n[forces]\ngravty = [0.0, -9.81, 0.0]\n", "g.toml");
+  EXPECT_EQ(typo.key(), "forces.gravty");
+  EXPECT_NE(typo.reason().find("gravity"), std::string::npos) << typo.reason();
+}
+
+TEST(Scene, SyntaxErrorNamesTheLine) {
+  const InputError e = load_error("[mesh]\ntype = \"chain\"\n\n[time]\ndt = 1e-3\ndt = 2e-3\n", "dup.toml");
+  EXPECT_EQ(e.file(), "dup.toml");
+  EXPECT_EQ(e.key().rfind("line 6", 0), 0u) << e.key();
+}
+
+TEST(Scene, MissingFileIsAnInputError) {
+  try {
+    load_scene("/nonexistent/dir/scene.toml");
+    FAIL() << "expected an InputError";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.file(), "/nonexistent/dir/scene.toml");
+    EXPECT_EQ(e.key(), "file");
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// OBJ meshes
+
+struct ObjCount {
+  size_t vertices = 0;
+  std::set<Edge> edges;    ///< unique triangle edges
+  std::set<Edge> bending;  ///< opposite-vertex pairs across interior edges, not already edges
+};
+
+/// Counts what the OBJ text implies, independently of the builder: triangles only.
+ObjCount count_obj(const std::string& text) {
+  ObjCount c;
+  std::map<Edge, std::vector<int>> opposite;
+  std::istringstream in(text);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream ls(line);
+    std::string tag;
+    ls >> tag;
+    if (tag == "v") ++c.vertices;
+    if (tag != "f") continue;
+    std::vector<int> f;
+    for (int id; ls >> id;) f.push_back(id - 1);
+    EXPECT_EQ(f.size(), 3u) << line;
+    for (int k = 0; k < 3; ++k) {
+      const int a = f[size_t(k)], b = f[size_t((k + 1) % 3)], o = f[size_t((k + 2) % 3)];
+      const Edge e{std::min(a, b), std::max(a, b)};
+      c.edges.insert(e);
+      opposite[e].push_back(o);
+    }
+  }
+  for (const auto& [e, opp] : opposite) {
+    if (opp.size() != 2) continue;  // boundary edge
+    const Edge b{std::min(opp[0], opp[1]), std::max(opp[0], opp[1])};
+    if (!c.edges.count(b)) c.bending.insert(b);
+  }
+  return c;
+}
+
+TEST(SceneObj, OneSpringPerEdgePlusBendingAcrossInteriorEdges) {
+  const fs::path scene_file = scenes_dir() / "obj_cloth.toml";
+  const ObjCount c = count_obj(read_text(scenes_dir() / "meshes" / "square.obj"));
+  // square.obj is a 16 x 16 vertex grid of 15 x 15 split quads.
+  ASSERT_EQ(c.vertices, 256u);
+  ASSERT_EQ(c.edges.size(), 2u * 15 * 16 + 15 * 15);
+
+  const Scene s = load_scene(scene_file.string());
+  EXPECT_EQ(s.system->num_particles(), Index(c.vertices));
+  EXPECT_EQ(s.edges.size(), c.edges.size() + c.bending.size());
+  std::set<Edge> expected = c.edges;
+  expected.insert(c.bending.begin(), c.bending.end());
+  EXPECT_EQ(edge_set(s), expected);
+  for (size_t k = 0; k < s.edges.size(); ++k)
+    EXPECT_DOUBLE_EQ(s.edge_rest[k], distance(s.initial.x, s.edges[k][0], s.edges[k][1]));
+
+  // Without bending stiffness (or damping) only the edges remain.
+  const Scene flat = load_scene(scene_file.string(), {"springs.bend_stiffness=0"});
+  EXPECT_EQ(edge_set(flat), c.edges);
+  EXPECT_EQ(flat.edges.size(), c.edges.size());
+}
+
+TEST(SceneObj, MeshPathIsRelativeToTheSceneFile) {
+  const std::string text = "[mesh]\ntype = \"obj\"\nfile = \"meshes/square.obj\"\n";
+  const Scene s = load_scene_from_string(text, (scenes_dir() / "inline.toml").string());
+  EXPECT_EQ(s.system->num_particles(), 256);
+  const InputError e = load_error(text, "/nonexistent/inline.toml");
+  EXPECT_EQ(e.key(), "mesh.file");
+}
+
+// ---------------------------------------------------------------------------------------------
+// Two-particle exact solution
+
+/// Checks x' = v and M v' = f(x, v) along the exact solution with central differences, and that
+/// it starts at the scene's initial state. Returns the number of times compared.
+int check_exact_solves_ode(const Scene& s) {
+  const MassSpringSystem& sys = *s.system;
+  State st, p, m;
+  s.exact(0.0, st);
+  EXPECT_LT((st.x - s.initial.x).lpNorm<Eigen::Infinity>(), 1e-15);
+  EXPECT_LT((st.v - s.initial.v).lpNorm<Eigen::Infinity>(), 1e-15);
+  const double h = 1e-6;
+  Vec f(sys.dofs());
+  int compared = 0;
+  for (double t : {1e-3, 0.013, 0.1, 0.37, 0.5, 1.0, 2.345}) {
+    SCOPED_TRACE("t = " + std::to_string(t));
+    s.exact(t, st);
+    s.exact(t + h, p);
+    s.exact(t - h, m);
+    const Vec dxdt = (p.x - m.x) / (2 * h);
+    const Vec dvdt = (p.v - m.v) / (2 * h);
+    sys.compute_forces(st.x, st.v, f);
+    const Vec a = f.cwiseProduct(sys.free_inverse_mass());
+    const double vscale = std::max(1.0, st.v.lpNorm<Eigen::Infinity>());
+    const double ascale = std::max(1.0, a.lpNorm<Eigen::Infinity>());
+    EXPECT_LT((dxdt - st.v).lpNorm<Eigen::Infinity>(), 1e-6 * vscale);
+    EXPECT_LT((dvdt - a).lpNorm<Eigen::Infinity>(), 1e-6 * ascale);
+    EXPECT_GT(a.lpNorm<Eigen::Infinity>(), 0.0) << "a trivial comparison";
+    ++compared;
+  }
+  return compared;
+}
+
+TEST(SceneTwoParticle, ExactSolutionSatisfiesTheOde) {
+  const Scene s = load_scene_from_string(kTwoParticle, "two.toml");
+  ASSERT_TRUE(static_cast<bool>(s.exact));
+  EXPECT_EQ(check_exact_solves_ode(s), 7);
+}
+
+TEST(SceneTwoParticle, DampedExactSolutionSatisfiesTheOde) {
+  const Scene s = load_scene_from_string(kTwoParticle, "two.toml", {"springs.damping=3.0"});
+  ASSERT_TRUE(static_cast<bool>(s.exact));
+  EXPECT_EQ(check_exact_solves_ode(s), 7);
+}
+
+TEST(SceneTwoParticle, UndampedExactSolutionConservesEnergy) {
+  const Scene s = load_scene_from_string(kTwoParticle, "two.toml");
+  const MassSpringSystem& sys = *s.system;
+  const double E0 = sys.kinetic_energy(s.initial.v) + sys.potential_energy(s.initial.x);
+  // k s^2 / 2 with s = 0.1 stretch.
+  EXPECT_NEAR(E0, 0.5 * 500.0 * 0.01, 1e-12);
+  State st;
+  int compared = 0;
+  for (int k = 1; k <= 200; ++k) {
+    const double t = 0.0137 * k;
+    s.exact(t, st);
+    const double E = sys.kinetic_energy(st.v) + sys.potential_energy(st.x);
+    EXPECT_NEAR(E, E0, 1e-12 * E0) << "t = " << t;
+    ++compared;
+  }
+  EXPECT_EQ(compared, 200);
+}
+
+TEST(SceneTwoParticle, DampedExactSolutionLosesEnergy) {
+  const Scene s = load_scene_from_string(kTwoParticle, "two.toml", {"springs.damping=3.0"});
+  const MassSpringSystem& sys = *s.system;
+  State st;
+  double previous = sys.kinetic_energy(s.initial.v) + sys.potential_energy(s.initial.x);
+  for (int k = 1; k <= 200; ++k) {
+    s.exact(0.005 * k, st);
+    const double E = sys.kinetic_energy(st.v) + sys.potential_energy(st.x);
+    EXPECT_LE(E, previous * (1 + 1e-14)) << "t = " << 0.005 * k;
+    previous = E;
+  }
+  EXPECT_LT(previous, 0.5 * 500.0 * 0.01 * 0.5);
+}
+
+}  // namespace
+}  // namespace hooke
