@@ -2,15 +2,19 @@
 //   hooke run SCENE.toml [--set section.key=value]... [--out DIR]
 //   hooke scenes
 //   hooke info SCENE.toml [--set ...]
+//   hooke crosscheck SCENE.toml [--methods a,b] [--reference-rtol R] [--set ...] [--out DIR]
 // Exit codes: 0 success, 1 internal or I/O error, 2 bad input (error: FILE: KEY: reason),
 // 3 a run that diverged (the message names step and time; output so far is kept).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <filesystem>
 #include <iostream>
+#include <sstream>
 
+#include "experiments/crosscheck_command.hpp"
 #include "experiments/info_command.hpp"
 #include "experiments/run_command.hpp"
+#include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "hooke_config.hpp"
 
@@ -50,7 +54,7 @@ int main(int argc, char** argv) {
   run->add_option("--set", overrides, "override a scene key: section.key=value (repeatable)");
   run->add_option("--out", out_dir, "output directory (default: [output] dir, or out/<scene>)");
   run->add_flag("--no-progress", no_progress, "never show the progress line");
-  run->footer("Methods: " + hooke::method_names());
+  run->footer("Methods: " + hooke::method_names() + "\nLinear solvers: " + hooke::linear_solver_names());
 
   app.add_subcommand("scenes", "List the shipped scenes");
 
@@ -58,6 +62,18 @@ int main(int argc, char** argv) {
                                           "step-size limits of a scene");
   info->add_option("scene", scene_path, "scene file (or the name of a shipped scene)")->required();
   info->add_option("--set", overrides, "override a scene key: section.key=value (repeatable)");
+
+  hooke::CrosscheckOptions cross;
+  std::string cross_methods;
+  auto* crosscheck = app.add_subcommand(
+      "crosscheck", "Compare methods with a CVODE reference at tight tolerance on one scene; writes "
+                    "crosscheck.csv and crosscheck.md");
+  crosscheck->add_option("scene", scene_path, "scene file (or the name of a shipped scene)")->required();
+  crosscheck->add_option("--set", overrides, "override a scene key: section.key=value (repeatable)");
+  crosscheck->add_option("--methods", cross_methods, "comma-separated methods (default: all)");
+  crosscheck->add_option("--reference-rtol", cross.reference_rtol, "CVODE reference rtol (default 1e-10)");
+  crosscheck->add_option("--samples", cross.samples, "trajectory samples (default 20)");
+  crosscheck->add_option("--out", out_dir, "output directory (default out/crosscheck-<scene>)");
 
   try {
     app.parse(argc, argv);
@@ -83,6 +99,15 @@ int main(int argc, char** argv) {
       return 0;
     }
     hooke::Scene scene = hooke::load_scene(resolve_scene(scene_path), overrides);
+    if (app.got_subcommand("crosscheck")) {
+      std::stringstream ss(cross_methods);
+      for (std::string m; std::getline(ss, m, ',');)
+        if (!m.empty()) cross.methods.push_back(m);
+      if (!(cross.reference_rtol > 0.0))
+        throw hooke::InputError("<command line>", "--reference-rtol", "must be > 0");
+      cross.out_dir = out_dir.empty() ? "out/crosscheck-" + scene.name : out_dir;
+      return hooke::run_crosscheck(scene, cross);
+    }
     if (app.got_subcommand("info")) {
       hooke::print_scene_info(scene, std::cout);
       return 0;

@@ -10,9 +10,9 @@
 #include <iostream>
 #include <memory>
 
+#include "experiments/divergence.hpp"
 #include "experiments/output/png_writer.hpp"
 #include "experiments/output/vtk_writer.hpp"
-#include "hooke/forces/gravity.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
 
@@ -84,22 +84,6 @@ void write_final_csv(const std::string& path, const State& s) {
   fs::rename(path + ".tmp", path);
 }
 
-/// Energy scale of a scene for divergence detection (see RunSettings::energy_growth_limit).
-double energy_scale(const MassSpringSystem& sys, const State& s0) {
-  double scale = sys.energy_scale() + sys.kinetic_energy(s0.v);
-  const Index n = sys.num_particles();
-  Vec3 lo = Vec3::Constant(1e300), hi = Vec3::Constant(-1e300);
-  for (Index i = 0; i < n; ++i) {
-    lo = lo.cwiseMin(Vec3(s0.x.segment<3>(3 * i)));
-    hi = hi.cwiseMax(Vec3(s0.x.segment<3>(3 * i)));
-  }
-  const double extent = n ? (hi - lo).norm() : 0.0;
-  for (const auto& f : sys.forces())
-    if (const auto* g = dynamic_cast<const Gravity*>(f.get()))
-      scale += sys.masses().sum() * g->acceleration().norm() * std::max(extent, 1.0);
-  return scale;
-}
-
 int run_mass_spring(Scene& scene, const std::string& dir, const RunOptions& options) {
   const MassSpringSystem& sys = *scene.system;
   Simulation sim(sys, make_stepper(scene.integrator.method, sys, scene.integrator.options),
@@ -131,7 +115,7 @@ int run_mass_spring(Scene& scene, const std::string& dir, const RunOptions& opti
   int iterations = 0;
   double residual = 0.0;
   const double E0 = sys.kinetic_energy(scene.initial.v) + sys.potential_energy(scene.initial.x);
-  const double scale = std::max({energy_scale(sys, scene.initial), std::abs(E0), 1e-30});
+  const double scale = std::max({divergence_energy_scale(sys, scene.initial), std::abs(E0), 1e-30});
   const double E_limit = E0 + scene.run.energy_growth_limit * scale;
 
   auto log_row = [&](long long step) -> double {
@@ -198,6 +182,8 @@ int run_mass_spring(Scene& scene, const std::string& dir, const RunOptions& opti
     std::fprintf(stderr, "warning: %s: %lld of %lld steps did not converge to the requested tolerance\n",
                  scene.file.c_str(), not_converged, N);
   write_final_csv(dir + "/final.csv", sim.state());
+  if (const std::string r = sim.stepper().report(); !r.empty())
+    std::printf("%s: %s\n", scene.integrator.method.c_str(), r.c_str());
   if (scene.output.png)
     write_png_picture(dir + "/final.png", sim.state(), sys.pinned(), scene.edges, scene.edge_rest);
   std::printf("%s: %lld steps of %s to t = %.6g in %.3f s; wrote %s/{scene.toml,log.csv,final.csv%s%s}\n",

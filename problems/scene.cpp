@@ -1,5 +1,6 @@
 #include "problems/scene.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -165,21 +166,22 @@ void read_run_settings(TableReader& root, Scene& scene) {
       r.fail("method", e.what());
     }
     scene.integrator.method = method;
-    static const char* implicit_keys[] = {"beta", "linear_solver", "newton_iterations", "tolerance",
-                                          "linear_tolerance", "max_linear_iterations",
-                                          "clamp_compressed"};
-    if (kind == MethodKind::Explicit) {
-      for (const char* key : implicit_keys)
-        r.reject_if_present(key, "only implicit methods use it; explicit method '" + method +
-                                     "' would ignore it");
-    } else {
-      MethodOptions& o = scene.integrator.options;
-      if (method == "implicit")
+    // Every option key of any method; each method reads its own and rejects the others.
+    static const std::vector<std::string> all_keys = {
+        "beta", "linear_solver", "newton_iterations", "tolerance", "linear_tolerance",
+        "max_linear_iterations", "clamp_compressed", "rtol", "atol", "max_order", "adams",
+        "preconditioner", "max_steps", "max_iterations"};
+    MethodOptions& o = scene.integrator.options;
+    std::vector<std::string> own;
+    if (kind == MethodKind::Implicit) {
+      own = {"linear_solver", "newton_iterations", "tolerance", "linear_tolerance",
+             "max_linear_iterations", "clamp_compressed"};
+      if (method == "implicit") {
+        own.push_back("beta");
         o.implicit.beta = r.number("beta", 1.0);
-      else
-        r.reject_if_present("beta", "only method 'implicit' has beta; '" + method + "' would ignore it");
-      if (!(o.implicit.beta >= 0.0 && o.implicit.beta <= 1.0))
-        r.fail("beta", "must be in [0, 1], got " + std::to_string(o.implicit.beta));
+        if (!(o.implicit.beta >= 0.0 && o.implicit.beta <= 1.0))
+          r.fail("beta", "must be in [0, 1], got " + std::to_string(o.implicit.beta));
+      }
       o.linear_solver = r.string("linear_solver", default_linear_solver());
       try {
         make_linear_solver(o.linear_solver);  // validates the name (or names the missing package)
@@ -192,7 +194,29 @@ void read_run_settings(TableReader& root, Scene& scene) {
       o.implicit.max_linear_iterations =
           int(r.integer("max_linear_iterations", o.implicit.max_linear_iterations, 1, 1000000000));
       o.implicit.clamp_compressed = r.boolean("clamp_compressed", true);
+    } else if (method == "cvode" || method == "ida") {
+      own = {"rtol", "atol", "max_order", "linear_solver", "preconditioner", "max_steps"};
+      WholeStepOptions& w = o.whole_step;
+      w.rtol = r.positive("rtol", w.rtol);
+      w.atol = r.positive("atol", w.atol);
+      if (method == "cvode") {
+        own.push_back("adams");
+        w.adams = r.boolean("adams", false);
+      }
+      w.max_order = int(r.integer("max_order", w.adams ? 12 : 5, 1, w.adams ? 12 : 5));
+      w.sundials_linear_solver = r.choice("linear_solver", "klu", {"klu", "spgmr"});
+      w.preconditioner = r.string("preconditioner", "");
+      if (w.sundials_linear_solver == "klu" && !w.preconditioner.empty())
+        r.fail("preconditioner", "only linear_solver = \"spgmr\" takes a preconditioner");
+      w.max_steps = long(r.integer("max_steps", w.max_steps, 1, 1000000000000LL));
+    } else if (method == "ceres-implicit") {
+      own = {"max_iterations"};
+      o.whole_step.max_iterations = int(r.integer("max_iterations", 100, 1, 100000000));
     }
+    for (const auto& key : all_keys)
+      if (std::find(own.begin(), own.end(), key) == own.end())
+        r.reject_if_present(key, "method '" + method + "' does not use it" +
+                                     (kind == MethodKind::Explicit ? " (explicit methods take no options)" : ""));
     r.finish();
   }
   {
@@ -263,6 +287,10 @@ Scene load_parsed(toml::table tbl, const std::string& file,
     scene.system->finalize();
   }
   read_run_settings(root, scene);
+  if (scene.system) {
+    const std::string why = method_unsupported(scene.integrator.method, *scene.system);
+    if (!why.empty()) throw InputError(file, "integrator.method", why);
+  }
   root.finish();
   return scene;
 }

@@ -5,6 +5,13 @@
 #include "hooke/integrators/explicit_mass_spring_stepper.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke_config.hpp"
+#if HOOKE_WITH_SUNDIALS
+#include "hooke/backends/cvode_stepper.hpp"
+#include "hooke/backends/ida_stepper.hpp"
+#endif
+#if HOOKE_WITH_CERES
+#include "hooke/backends/ceres_implicit_stepper.hpp"
+#endif
 
 namespace hooke {
 
@@ -51,6 +58,69 @@ const std::vector<ImplicitEntry>& implicit_table() {
   return table;
 }
 
+struct WholeStepEntry {
+  MethodInfo info;
+  std::function<std::unique_ptr<Stepper>(const MassSpringSystem&, const WholeStepOptions&)> make;
+  std::function<std::string(const MassSpringSystem&)> unsupported;
+};
+
+// Whole-step backends, each under its build option.
+const std::vector<WholeStepEntry>& whole_step_table() {
+  static const std::vector<WholeStepEntry> table = {
+#if HOOKE_WITH_SUNDIALS
+      {{"cvode", MethodKind::WholeStep,
+        "SUNDIALS CVODE: adaptive BDF (or Adams) on x' = v, M v' = f, analytic Jacobian"},
+       [](const MassSpringSystem& sys, const WholeStepOptions& w) -> std::unique_ptr<Stepper> {
+         CvodeOptions o;
+         o.rtol = w.rtol;
+         o.atol = w.atol;
+         o.max_order = w.max_order;
+         o.adams = w.adams;
+         o.linear_solver = w.sundials_linear_solver;
+         o.preconditioner = w.preconditioner;
+         o.max_steps = w.max_steps;
+         return std::make_unique<CvodeStepper>(sys, o);
+       },
+       nullptr},
+      {{"ida", MethodKind::WholeStep,
+        "SUNDIALS IDA: adaptive BDF on the residual F(t, y, y') = 0, analytic Jacobian"},
+       [](const MassSpringSystem& sys, const WholeStepOptions& w) -> std::unique_ptr<Stepper> {
+         IdaOptions o;
+         o.rtol = w.rtol;
+         o.atol = w.atol;
+         o.max_order = w.max_order;
+         o.linear_solver = w.sundials_linear_solver;
+         o.preconditioner = w.preconditioner;
+         o.max_steps = w.max_steps;
+         return std::make_unique<IdaStepper>(sys, o);
+       },
+       nullptr},
+#endif
+#if HOOKE_WITH_CERES
+      {{"ceres-implicit", MethodKind::WholeStep,
+        "backward Euler solved exactly as nonlinear least squares with Ceres"},
+       [](const MassSpringSystem& sys, const WholeStepOptions& w) -> std::unique_ptr<Stepper> {
+         CeresImplicitOptions o;
+         o.max_iterations = w.max_iterations;
+         return std::make_unique<CeresImplicitStepper>(sys, o);
+       },
+       [](const MassSpringSystem& sys) { return ceres_implicit_unsupported(sys); }},
+#endif
+  };
+  return table;
+}
+
+/// The build option and Debian package of a known backend this build lacks, or "".
+std::string missing_backend(const std::string& name) {
+  if ((name == "cvode" || name == "ida") && !HOOKE_WITH_SUNDIALS)
+    return "method '" + name + "' is not built: install libsundials-dev and reconfigure with "
+           "-DHOOKE_WITH_SUNDIALS=ON";
+  if (name == "ceres-implicit" && !HOOKE_WITH_CERES)
+    return "method 'ceres-implicit' is not built: install libceres-dev and reconfigure with "
+           "-DHOOKE_WITH_CERES=ON";
+  return "";
+}
+
 }  // namespace
 
 const std::vector<MethodInfo>& methods() {
@@ -58,6 +128,7 @@ const std::vector<MethodInfo>& methods() {
     std::vector<MethodInfo> v;
     for (const auto& e : explicit_table()) v.push_back(e.info);
     for (const auto& e : implicit_table()) v.push_back(e.info);
+    for (const auto& e : whole_step_table()) v.push_back(e.info);
     return v;
   }();
   return all;
@@ -72,6 +143,7 @@ std::string method_names() {
 const MethodInfo& method_info(const std::string& name) {
   for (const auto& m : methods())
     if (name == m.name) return m;
+  if (const std::string missing = missing_backend(name); !missing.empty()) throw UnknownMethod(missing);
   throw UnknownMethod("unknown method '" + name + "'; available: " + method_names());
 }
 
@@ -96,7 +168,21 @@ std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringS
                                                            : options.linear_solver),
           options.implicit);
     }
+  for (const auto& e : whole_step_table())
+    if (name == e.info.name) {
+      if (e.unsupported) {
+        const std::string why = e.unsupported(system);
+        if (!why.empty()) throw std::invalid_argument(why);
+      }
+      return e.make(system, options.whole_step);
+    }
   return std::make_unique<ExplicitMassSpringStepper>(system, make_explicit_stepper(name));
+}
+
+std::string method_unsupported(const std::string& name, const MassSpringSystem& system) {
+  for (const auto& e : whole_step_table())
+    if (name == e.info.name && e.unsupported) return e.unsupported(system);
+  return "";
 }
 
 }  // namespace hooke

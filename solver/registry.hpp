@@ -13,15 +13,30 @@ namespace hooke {
 
 /// Kinds of time-stepping method; scenes use the kind to decide which options apply.
 enum class MethodKind {
-  Explicit,  ///< runs on any OdeSystem; takes no options
-  Implicit,  ///< Newton on a linear backend; takes MethodOptions
+  Explicit,   ///< runs on any OdeSystem; takes no options
+  Implicit,   ///< Newton on a linear backend; takes MethodOptions::implicit and linear_solver
+  WholeStep,  ///< an external solver advances the whole step; takes MethodOptions::whole_step
 };
 
-/// Options of the implicit methods (explicit methods take none).
+/// Options of the whole-step backends (cvode, ida, ceres-implicit); each uses the fields that
+/// apply to it (see its own Options struct, to which these are copied).
+struct WholeStepOptions {
+  double rtol = 1e-8;       ///< relative tolerance (cvode, ida)
+  double atol = 1e-10;      ///< absolute tolerance (cvode, ida), metres and m/s
+  int max_order = 5;        ///< maximum BDF (or Adams) order (cvode, ida)
+  bool adams = false;       ///< Adams-Moulton instead of BDF for non-stiff problems (cvode)
+  std::string sundials_linear_solver = "klu";  ///< "klu" (sparse direct) or "spgmr" (cvode, ida)
+  std::string preconditioner;  ///< linear backend preconditioning spgmr ("" = default; cvode, ida)
+  long max_steps = 100000;  ///< internal steps allowed per hooke step (cvode, ida)
+  int max_iterations = 100; ///< nonlinear least-squares iterations per step (ceres-implicit)
+};
+
+/// Options of the implicit and whole-step methods (explicit methods take none).
 struct MethodOptions {
   /// Linear backend by name (linear_solvers()); "" = the default: cholmod when built, else pcg-block.
   std::string linear_solver;
   ImplicitOptions implicit;
+  WholeStepOptions whole_step;
 };
 
 /// One entry of the method table.
@@ -44,6 +59,8 @@ std::string method_names();
 std::unique_ptr<ExplicitStepper> make_explicit_stepper(const std::string& name);
 /// Name of the default linear backend of implicit methods.
 std::string default_linear_solver();
+/// "" if the method can run this system, else why not (e.g. ceres-implicit and spring dampers).
+std::string method_unsupported(const std::string& name, const MassSpringSystem& system);
 /// A stepper for a finalized mass-spring system (which must outlive it); throws UnknownMethod
 /// (or UnknownName for an unknown linear backend). Explicit methods ignore options.
 std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringSystem& system,

@@ -1,5 +1,7 @@
 #include "hooke/simulation.hpp"
 
+#include <algorithm>
+#include <cmath>
 #include <utility>
 
 namespace hooke {
@@ -15,6 +17,14 @@ Simulation::Simulation(const MassSpringSystem& system, std::unique_ptr<Stepper> 
 StepSummary Simulation::advance(double h) {
   StepSummary s = m_stepper->step(m_state, h, m_next);
   if (s.status != Status::Converged && s.status != Status::NotConverged) return s;
+  // Whole-step backends may stop short of t + h (e.g. CVODE's too-much-work): such a step cannot
+  // be accepted as a step of size h.
+  if (std::abs(m_next.t - (m_state.t + h)) > 1e-12 * std::max(std::abs(m_state.t) + h, 1.0)) {
+    s.status = Status::Fatal;
+    s.message = std::string(m_stepper->name()) + ": stopped at t = " + std::to_string(m_next.t) +
+                " short of t + h = " + std::to_string(m_state.t + h) + ": " + s.message;
+    return s;
+  }
   m_system.apply_constraints(m_state.x, h, m_next.x, m_next.v);
   if (!m_next.is_finite()) {
     s.status = Status::Fatal;

@@ -8,7 +8,8 @@ namespace hooke {
 
 /// One mass-spring run without any I/O: a read-only system, a stepper and the current state.
 /// advance(h) takes one step, applies the system's constraints and checks that the new state is
-/// finite; on any failure the current state is left unchanged and the summary says why.
+/// finite; on any failure the current state is left unchanged and the summary says why. A step
+/// that stops short of t + h (a whole-step backend giving up) is a failure (Status::Fatal).
 class Simulation {
  public:
   Simulation(const MassSpringSystem& system, std::unique_ptr<Stepper> stepper, State initial);

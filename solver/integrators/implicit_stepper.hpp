@@ -50,7 +50,8 @@ struct ImplicitOptions {
 /// the step's start (x0, v0), so newton_iterations = 1 reproduces the classical linearised
 /// formulas exactly. The linear backend analyses A's pattern once (construction) and refactors
 /// per Newton iteration; iterative backends are warm-started from the previous correction.
-/// The damper's non-symmetric df/dx is left out of A for backends that need A SPD.
+/// The damper's non-symmetric df/dx is left out of A (Baraff and Witkin 1998 do the same), so A is
+/// symmetric for every backend; Newton on the exact residual still converges to the same step.
 class ImplicitStepper final : public Stepper {
  public:
   ImplicitStepper(const MassSpringSystem& system, ImplicitScheme scheme,
@@ -61,6 +62,7 @@ class ImplicitStepper final : public Stepper {
   /// Summed linear-backend times of all steps so far (analyze, factor, solve), and assembly time.
   const LinearSummary& linear_totals() const { return m_totals; }
   double assembly_seconds() const { return m_assembly_seconds; }
+  std::string report() const override;
 
  private:
   const MassSpringSystem& m_system;

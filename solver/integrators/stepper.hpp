@@ -26,6 +26,9 @@ class Stepper {
   virtual const char* name() const = 0;
   /// s1 = one step of size h from s0. s1 may not alias s0; its vectors are resized if needed.
   virtual StepSummary step(const State& s0, double h, State& s1) = 0;
+  /// One line of counters accumulated over all steps so far (solver work, times), for logs;
+  /// "" for methods with nothing to report.
+  virtual std::string report() const { return ""; }
 };
 
 }  // namespace hooke

@@ -10,18 +10,13 @@
 
 #include "hooke/constraints/collider.hpp"
 #include "hooke/constraints/strain_limit.hpp"
+#include "support/random.hpp"
 
 namespace {
 
 using hooke::Vec;
 using hooke::Vec3;
-
-Vec random_vec(Eigen::Index size, double lo, double hi, std::mt19937& rng) {
-  std::uniform_real_distribution<double> U(lo, hi);
-  Vec v(size);
-  for (Eigen::Index i = 0; i < size; ++i) v[i] = U(rng);
-  return v;
-}
+using hooke::test::random_vec;
 
 /// A chain of n particles with rest length L, each link stretched by a random factor in
 /// [1.2, 2.0] in a random direction (so the chain is folded in 3D).

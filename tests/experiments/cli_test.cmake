@@ -156,6 +156,20 @@ elseif(CASE STREQUAL "info")
   expect_rc(0)
   expect_contains("${out}" "ODE" "stdout")
 
+elseif(CASE STREQUAL "crosscheck")
+  # A short cross-check against the CVODE reference writes its table; rk4 at a small step must
+  # be close to the reference (the Markdown row has a finite RMS error, not "-").
+  hooke_exec(crosscheck hanging_cloth_16 --methods rk4,implicit --samples 4
+             --set time.duration=0.01 --out "${OUT}")
+  expect_rc(0)
+  expect_file("${OUT}/crosscheck.md")
+  expect_file("${OUT}/crosscheck.csv")
+  expect_contains("${out}" "| rk4 | 0.0005 |" "stdout")
+  expect_contains("${out}" "| implicit | 0.0005 |" "stdout")
+  if(out MATCHES "\\| rk4 \\|[^\n]*\\| - \\|")
+    message(FATAL_ERROR "rk4 has no error against the reference${report}")
+  endif()
+
 elseif(CASE STREQUAL "scenes")
   hooke_exec(scenes)
   expect_rc(0)

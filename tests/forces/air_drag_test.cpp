@@ -5,38 +5,22 @@
 
 #include <Eigen/Dense>
 #include <cmath>
-#include <functional>
 #include <memory>
 #include <random>
 #include <vector>
 
 #include "hooke/forces/air_drag.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "support/finite_differences.hpp"
+#include "support/random.hpp"
 
 namespace {
 
 using hooke::Vec;
 using hooke::Vec3;
+using hooke::test::central_jacobian;
+using hooke::test::random_vec;
 using Dense = Eigen::MatrixXd;
-
-double exact_step(double x, double h) {
-  volatile double t = x + h;
-  return t - x;
-}
-
-Dense central_jacobian(const std::function<Vec(const Vec&)>& g, const Vec& y, double h) {
-  const Vec g0 = g(y);
-  Dense J(g0.size(), y.size());
-  Vec yp = y, ym = y;
-  for (Eigen::Index c = 0; c < y.size(); ++c) {
-    const double hc = exact_step(y[c], h);
-    yp[c] = y[c] + hc;
-    ym[c] = y[c] - hc;
-    J.col(c) = (g(yp) - g(ym)) / (2.0 * hc);
-    yp[c] = ym[c] = y[c];
-  }
-  return J;
-}
 
 /// A finalized system of n particles with AirDrag(c, wind) as its only force.
 std::unique_ptr<hooke::MassSpringSystem> drag_system(int n, double c, const Vec3& wind,
@@ -49,13 +33,6 @@ std::unique_ptr<hooke::MassSpringSystem> drag_system(int n, double c, const Vec3
   return sys;
 }
 
-Vec random_vec(Eigen::Index size, std::mt19937& rng) {
-  std::uniform_real_distribution<double> U(-2.0, 2.0);
-  Vec v(size);
-  for (Eigen::Index i = 0; i < size; ++i) v[i] = U(rng);
-  return v;
-}
-
 }  // namespace
 
 TEST(AirDrag, DampingJacobianMatchesCentralDifferences) {
@@ -64,10 +41,10 @@ TEST(AirDrag, DampingJacobianMatchesCentralDifferences) {
   int compared = 0;
   for (int s = 0; s < 20; ++s) {
     const double c = 0.1 + 0.2 * s;
-    const Vec3 wind = random_vec(3, rng);
+    const Vec3 wind = random_vec(3, -2.0, 2.0, rng);
     const hooke::AirDrag* drag = nullptr;
     auto sys = drag_system(n, c, wind, &drag);
-    const Vec x = random_vec(3 * n, rng), v = random_vec(3 * n, rng);
+    const Vec x = random_vec(3 * n, -2.0, 2.0, rng), v = random_vec(3 * n, -2.0, 2.0, rng);
     hooke::Jacobians J = sys->make_jacobians();
     sys->assemble_jacobians(x, v, J);
     auto force_of_v = [&](const Vec& vv) -> Vec {
@@ -99,7 +76,7 @@ TEST(AirDrag, ForceIsRelativeToWind) {
   const Vec3 wind(2.0, -1.0, 0.5);
   const hooke::AirDrag* drag = nullptr;
   auto sys = drag_system(n, c, wind, &drag);
-  const Vec x = random_vec(3 * n, rng);
+  const Vec x = random_vec(3 * n, -2.0, 2.0, rng);
 
   // At rest, the wind pushes every particle with c w.
   Vec f = Vec::Zero(3 * n);
@@ -113,7 +90,7 @@ TEST(AirDrag, ForceIsRelativeToWind) {
   EXPECT_EQ(f.cwiseAbs().maxCoeff(), 0.0);
 
   // In general f = -c (v - w), added to what f already holds.
-  const Vec v = random_vec(3 * n, rng);
+  const Vec v = random_vec(3 * n, -2.0, 2.0, rng);
   f.setConstant(1.0);
   drag->add_forces(x, v, f);
   for (int i = 0; i < n; ++i)

@@ -10,23 +10,15 @@
 
 #include "hooke/forces/gravity.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "support/finite_differences.hpp"
+#include "support/random.hpp"
 
 namespace {
 
 using hooke::Vec;
 using hooke::Vec3;
-
-double exact_step(double x, double h) {
-  volatile double t = x + h;
-  return t - x;
-}
-
-Vec random_vec(Eigen::Index size, double lo, double hi, std::mt19937& rng) {
-  std::uniform_real_distribution<double> U(lo, hi);
-  Vec v(size);
-  for (Eigen::Index i = 0; i < size; ++i) v[i] = U(rng);
-  return v;
-}
+using hooke::test::central_gradient;
+using hooke::test::random_vec;
 
 }  // namespace
 
@@ -57,15 +49,8 @@ TEST(Gravity, ForceIsMinusEnergyGradient) {
     const Vec x = random_vec(3 * n, -2, 2, rng);
     Vec f = Vec::Zero(3 * n);
     grav.add_forces(x, Vec::Zero(3 * n), f);
-    Vec grad(3 * n);
-    Vec xp = x, xm = x;
-    for (int c = 0; c < 3 * n; ++c) {
-      const double h = exact_step(x[c], 1e-6);
-      xp[c] = x[c] + h;
-      xm[c] = x[c] - h;
-      grad[c] = (grav.potential_energy(xp) - grav.potential_energy(xm)) / (2.0 * h);
-      xp[c] = xm[c] = x[c];
-    }
+    const Vec grad =
+        central_gradient([&](const Vec& y) { return grav.potential_energy(y); }, x, 1e-6);
     const double scale = f.cwiseAbs().maxCoeff();
     EXPECT_LE((f + grad).cwiseAbs().maxCoeff(), 1e-6 * scale) << "sample " << s;
     ++compared;

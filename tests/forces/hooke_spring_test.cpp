@@ -9,19 +9,25 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <memory>
 #include <random>
 #include <vector>
 
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "support/finite_differences.hpp"
+#include "support/random.hpp"
+#include "support/systems.hpp"
 
 namespace {
 
 using hooke::Mat3;
 using hooke::Vec;
 using hooke::Vec3;
+using hooke::test::central_gradient;
+using hooke::test::central_jacobian;
+using hooke::test::near_entrywise;
+using hooke::test::random_unit;
 using Dense = Eigen::MatrixXd;
 
 constexpr double kRelTol = 1e-6;    // relative tolerance of every FD comparison
@@ -31,52 +37,6 @@ constexpr double kFloorRel = 1e-8;  // absolute floor, as a fraction of the matr
 // the round-off eps |g| / h stays far below the tolerance (h = 1e-6 l is too small once springs
 // of very different lengths share the stencil: round-off of the long springs dominates).
 constexpr double kStepRel = 1e-5;
-
-/// A step h' close to h such that (x + h') - x == h' exactly, so that the FD divisor is the step
-/// actually taken (matters when h is far below the magnitude of x).
-double exact_step(double x, double h) {
-  volatile double t = x + h;
-  return t - x;
-}
-
-/// Central-difference Jacobian of g: R^m -> R^p at y (p x m), with step h[c] for coordinate c.
-Dense central_jacobian(const std::function<Vec(const Vec&)>& g, const Vec& y, const Vec& h) {
-  const Vec g0 = g(y);
-  Dense J(g0.size(), y.size());
-  Vec yp = y, ym = y;
-  for (Eigen::Index c = 0; c < y.size(); ++c) {
-    const double hc = exact_step(y[c], h[c]);
-    yp[c] = y[c] + hc;
-    ym[c] = y[c] - hc;
-    J.col(c) = (g(yp) - g(ym)) / (2.0 * hc);
-    yp[c] = ym[c] = y[c];
-  }
-  return J;
-}
-
-/// Entrywise |A - B| <= rel * max(|A|, |B|) + floor, with floor = kFloorRel * max|A|.
-::testing::AssertionResult near_entrywise(const Dense& A, const Dense& B, double rel = kRelTol) {
-  if (A.rows() != B.rows() || A.cols() != B.cols())
-    return ::testing::AssertionFailure() << "shape mismatch";
-  const double floor = kFloorRel * std::max(A.cwiseAbs().maxCoeff(), 1e-300);
-  for (Eigen::Index c = 0; c < A.cols(); ++c)
-    for (Eigen::Index r = 0; r < A.rows(); ++r) {
-      const double a = A(r, c), b = B(r, c);
-      if (std::abs(a - b) > rel * std::max(std::abs(a), std::abs(b)) + floor)
-        return ::testing::AssertionFailure()
-               << "entry (" << r << ", " << c << "): analytic " << a << " vs FD " << b
-               << ", |diff| " << std::abs(a - b) << " > " << rel << " * max + floor " << floor;
-    }
-  return ::testing::AssertionSuccess();
-}
-
-Vec3 random_unit(std::mt19937& rng) {
-  std::normal_distribution<double> g(0.0, 1.0);
-  Vec3 u;
-  do u = Vec3(g(rng), g(rng), g(rng));
-  while (u.norm() < 1e-3);
-  return u.normalized();
-}
 
 /// A finalized system of n unit-mass free particles with one HookeSpring force.
 struct SpringSystem {
@@ -223,7 +183,8 @@ TEST(HookeSpring, KernelJacobianMatchesCentralDifferences) {
     auto fa = [&](const Vec& dd) -> Vec { return hooke::hooke_spring_kernel::force(dd, k, L); };
     const Dense fd = central_jacobian(fa, Vec(d), Vec::Constant(3, h));
     const Dense B = hooke::hooke_spring_kernel::dfdx(d, k, L, false);
-    ASSERT_TRUE(near_entrywise(B, fd)) << "sample " << s << ": k " << k << ", L " << L << ", l " << l;
+    ASSERT_TRUE(near_entrywise(B, fd, kRelTol, kFloorRel))
+        << "sample " << s << ": k " << k << ", L " << L << ", l " << l;
     ++compared;
     compressed += l < L;
     near_zero += l < 1e-2 * L;
@@ -244,7 +205,8 @@ TEST(HookeSpring, AssembledJacobianMatchesCentralDifferences) {
       const Dense fd =
           central_jacobian([&](const Vec& y) { return spring_force(smp.sys, y); }, smp.x, h);
       const Dense K = assembled_K(smp.sys, smp.x);
-      ASSERT_TRUE(near_entrywise(K, fd)) << config_name(kind) << " sample " << s;
+      ASSERT_TRUE(near_entrywise(K, fd, kRelTol, kFloorRel))
+          << config_name(kind) << " sample " << s;
       ++compared;
       const auto& sp = smp.sys.spring->springs();
       for (size_t n = 0; n < sp.size(); ++n)
@@ -263,12 +225,11 @@ TEST(HookeSpring, ForceIsMinusEnergyGradient) {
     for (int s = 0; s < kSamplesPerConfig; ++s) {
       Sample smp = make_sample(kind, rng);
       const Vec h = fd_steps(smp.sys, smp.x);
-      auto energy = [&](const Vec& y) -> Vec {
-        return Vec::Constant(1, smp.sys.spring->potential_energy(y));
-      };
-      const Dense grad = central_jacobian(energy, smp.x, h).transpose();
+      auto energy = [&](const Vec& y) { return smp.sys.spring->potential_energy(y); };
+      const Vec grad = central_gradient(energy, smp.x, h);
       const Dense f = spring_force(smp.sys, smp.x);
-      ASSERT_TRUE(near_entrywise(f, -grad)) << config_name(kind) << " sample " << s;
+      ASSERT_TRUE(near_entrywise(f, -grad, kRelTol, kFloorRel))
+          << config_name(kind) << " sample " << s;
       ++compared;
     }
   }
@@ -281,14 +242,8 @@ TEST(HookeSpring, InternalForcesSumToZero) {
   for (Config kind : kConfigs) {
     for (int s = 0; s < kSamplesPerConfig; ++s) {
       Sample smp = make_sample(kind, rng);
-      const Vec f = spring_force(smp.sys, smp.x);
-      Vec3 total = Vec3::Zero();
-      double scale = 0.0;
-      for (Eigen::Index i = 0; i < f.size() / 3; ++i) {
-        total += f.segment<3>(3 * i);
-        scale = std::max(scale, f.segment<3>(3 * i).norm());
-      }
-      EXPECT_LE(total.norm(), 1e-13 * scale) << config_name(kind) << " sample " << s;
+      const hooke::test::ForceBalance b = hooke::test::force_balance(spring_force(smp.sys, smp.x));
+      EXPECT_LE(b.total.norm(), 1e-13 * b.scale) << config_name(kind) << " sample " << s;
       ++checked;
     }
   }

@@ -7,19 +7,24 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <memory>
 #include <random>
 #include <vector>
 
 #include "hooke/forces/spring_damper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "support/finite_differences.hpp"
+#include "support/random.hpp"
+#include "support/systems.hpp"
 
 namespace {
 
 using hooke::Mat3;
 using hooke::Vec;
 using hooke::Vec3;
+using hooke::test::central_jacobian;
+using hooke::test::near_entrywise;
+using hooke::test::random_unit;
 using Dense = Eigen::MatrixXd;
 
 constexpr double kRelTol = 1e-6;
@@ -27,49 +32,6 @@ constexpr double kFloorRel = 1e-8;
 // FD step of a position coordinate: kStepRel times the shortest damper at that particle, so the
 // truncation error ~(h/l)^2 stays ~1e-10 relative and round-off eps |f| / h well below tolerance.
 constexpr double kStepRel = 1e-5;
-
-double exact_step(double x, double h) {
-  volatile double t = x + h;
-  return t - x;
-}
-
-/// Central-difference Jacobian of g at y with step h[c] for coordinate c.
-Dense central_jacobian(const std::function<Vec(const Vec&)>& g, const Vec& y, const Vec& h) {
-  const Vec g0 = g(y);
-  Dense J(g0.size(), y.size());
-  Vec yp = y, ym = y;
-  for (Eigen::Index c = 0; c < y.size(); ++c) {
-    const double hc = exact_step(y[c], h[c]);
-    yp[c] = y[c] + hc;
-    ym[c] = y[c] - hc;
-    J.col(c) = (g(yp) - g(ym)) / (2.0 * hc);
-    yp[c] = ym[c] = y[c];
-  }
-  return J;
-}
-
-::testing::AssertionResult near_entrywise(const Dense& A, const Dense& B, double rel = kRelTol) {
-  if (A.rows() != B.rows() || A.cols() != B.cols())
-    return ::testing::AssertionFailure() << "shape mismatch";
-  const double floor = kFloorRel * std::max(A.cwiseAbs().maxCoeff(), 1e-300);
-  for (Eigen::Index c = 0; c < A.cols(); ++c)
-    for (Eigen::Index r = 0; r < A.rows(); ++r) {
-      const double a = A(r, c), b = B(r, c);
-      if (std::abs(a - b) > rel * std::max(std::abs(a), std::abs(b)) + floor)
-        return ::testing::AssertionFailure()
-               << "entry (" << r << ", " << c << "): analytic " << a << " vs FD " << b
-               << ", |diff| " << std::abs(a - b) << " > " << rel << " * max + floor " << floor;
-    }
-  return ::testing::AssertionSuccess();
-}
-
-Vec3 random_unit(std::mt19937& rng) {
-  std::normal_distribution<double> g(0.0, 1.0);
-  Vec3 u;
-  do u = Vec3(g(rng), g(rng), g(rng));
-  while (u.norm() < 1e-3);
-  return u.normalized();
-}
 
 /// A finalized system of n free particles with one SpringDamper, plus its positions and
 /// velocities. kind 0: random; 1: near-collinear chain; 2: one damper of length 1e-3.
@@ -148,8 +110,11 @@ TEST(SpringDamper, KernelJacobiansMatchCentralDifferences) {
     const Dense fd_x = central_jacobian(
         [&](const Vec& dd) -> Vec { return hooke::spring_damper_kernel::force(dd, w, c); }, Vec(d),
         Vec::Constant(3, h));
-    ASSERT_TRUE(near_entrywise(hooke::spring_damper_kernel::dfdv(d, c), fd_v)) << "sample " << s;
-    ASSERT_TRUE(near_entrywise(hooke::spring_damper_kernel::dfdx(d, w, c), fd_x)) << "sample " << s;
+    ASSERT_TRUE(near_entrywise(hooke::spring_damper_kernel::dfdv(d, c), fd_v, kRelTol, kFloorRel))
+        << "sample " << s;
+    ASSERT_TRUE(
+        near_entrywise(hooke::spring_damper_kernel::dfdx(d, w, c), fd_x, kRelTol, kFloorRel))
+        << "sample " << s;
     ++compared;
   }
   EXPECT_EQ(compared, samples);
@@ -170,8 +135,10 @@ TEST(SpringDamper, AssembledJacobiansMatchCentralDifferences) {
       const Dense fd_v = central_jacobian(
           [&](const Vec& y) { return damper_force(smp, smp.x, y); }, smp.v,
           Vec::Constant(smp.v.size(), kStepRel));
-      ASSERT_TRUE(near_entrywise(Dense(J.K), fd_x)) << "kind " << kind << " sample " << s;
-      ASSERT_TRUE(near_entrywise(Dense(J.D), fd_v)) << "kind " << kind << " sample " << s;
+      ASSERT_TRUE(near_entrywise(Dense(J.K), fd_x, kRelTol, kFloorRel))
+          << "kind " << kind << " sample " << s;
+      ASSERT_TRUE(near_entrywise(Dense(J.D), fd_v, kRelTol, kFloorRel))
+          << "kind " << kind << " sample " << s;
       ++compared;
     }
   }
@@ -201,14 +168,9 @@ TEST(SpringDamper, InternalForcesSumToZero) {
   for (int kind = 0; kind < kKinds; ++kind) {
     for (int s = 0; s < kSamplesPerKind; ++s) {
       Sample smp = make_sample(kind, rng);
-      const Vec f = damper_force(smp, smp.x, smp.v);
-      Vec3 total = Vec3::Zero();
-      double scale = 0.0;
-      for (Eigen::Index i = 0; i < f.size() / 3; ++i) {
-        total += f.segment<3>(3 * i);
-        scale = std::max(scale, f.segment<3>(3 * i).norm());
-      }
-      EXPECT_LE(total.norm(), 1e-13 * scale) << "kind " << kind << " sample " << s;
+      const hooke::test::ForceBalance b =
+          hooke::test::force_balance(damper_force(smp, smp.x, smp.v));
+      EXPECT_LE(b.total.norm(), 1e-13 * b.scale) << "kind " << kind << " sample " << s;
       ++checked;
     }
   }

@@ -4,15 +4,15 @@
 // textbook one (forward Euler gains energy at the rate (1 + (h w)^2) per step; symplectic Euler
 // keeps it within O(h w) of the initial value without drift).
 //
-// Order measurement: h is halved kHalvings times from h0; the order is the least-squares slope of
-// log(error of the whole state at the final time) against log(h). h0 is chosen per problem (and
-// coarser for fourth order) so that all points are in the asymptotic range and every error stays
-// well above round-off (checked). Final times are generic: at a whole period of an oscillation the
-// phase error cancels to first order and symmetric methods look one order better than they are.
+// Order measurement (tests/support/order.hpp): h is halved kHalvings times from h0; the order is
+// the least-squares slope of log(error of the whole state at the final time) against log(h). h0
+// is chosen per problem (and coarser for fourth order) so that all points are in the asymptotic
+// range and every error stays well above round-off (checked). Final times are generic: at a whole
+// period of an oscillation the phase error cancels to first order and symmetric methods look one
+// order better than they are.
 #include <gtest/gtest.h>
 
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <map>
@@ -24,16 +24,20 @@
 #include "hooke/integrators/explicit_stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/registry.hpp"
+#include "support/order.hpp"
+#include "support/registry.hpp"
+#include "support/systems.hpp"
 
 namespace {
 
 using hooke::Vec;
 using hooke::Vec3;
+using hooke::test::kOrderMargin;
+using hooke::test::kPi;
+using hooke::test::TwoParticleSpring;
 
-constexpr double kPi = 3.14159265358979323846;
-constexpr double kOrderMargin = 0.2;  // |measured - expected| allowed for the fitted order
-constexpr int kHalvings = 4;          // 5 step sizes, 4 halvings
-constexpr double kRoundoffFloor = 1e-11;  // every error used in a fit must exceed this
+/// The two-particle spring of these tests: m = 1, L = 1, k = 1 (w = sqrt(2)).
+constexpr double kSpringStiffness = 1.0;
 
 /// Expected order of each explicit method; a registered method missing here fails the sweep.
 const std::map<std::string, int>& expected_orders() {
@@ -78,23 +82,6 @@ Vec integrate(const std::string& method, hooke::OdeSystem& ode, const Vec& X0, d
   return X;
 }
 
-/// Least-squares slope of log(err) against log(h).
-double fitted_order(const std::vector<double>& h, const std::vector<double>& err) {
-  const size_t n = h.size();
-  double mx = 0, my = 0;
-  for (size_t i = 0; i < n; ++i) {
-    mx += std::log(h[i]) / n;
-    my += std::log(err[i]) / n;
-  }
-  double sxy = 0, sxx = 0;
-  for (size_t i = 0; i < n; ++i) {
-    const double dx = std::log(h[i]) - mx;
-    sxy += dx * (std::log(err[i]) - my);
-    sxx += dx * dx;
-  }
-  return sxy / sxx;
-}
-
 /// Runs the error function for N0, 2 N0, ... (N0 = N0_high for methods of order >= 3) and
 /// checks/prints the fitted order.
 template <class ErrorOf>
@@ -103,83 +90,21 @@ void check_order(const std::string& method, const char* problem, double T, int N
   const auto it = expected_orders().find(method);
   ASSERT_NE(it, expected_orders().end()) << "no expected order listed for method " << method;
   const int N0 = it->second >= 3 ? N0_high : N0_low;
-  std::vector<double> hs, errs;
-  for (int j = 0, N = N0; j <= kHalvings; ++j, N *= 2) {
-    hs.push_back(T / N);
-    errs.push_back(error_of(N));
-  }
-  for (size_t j = 0; j < errs.size(); ++j) {
-    ASSERT_TRUE(std::isfinite(errs[j])) << method << " " << problem << " h " << hs[j];
-    EXPECT_GT(errs[j], kRoundoffFloor) << method << " " << problem << " h " << hs[j]
-                                       << ": error too close to round-off for an order fit";
-    if (j > 0) {
-      EXPECT_LT(errs[j], errs[j - 1]) << method << " " << problem << " h " << hs[j];
-    }
-  }
-  const double p = fitted_order(hs, errs);
+  const hooke::test::OrderMeasurement m =
+      hooke::test::measure_order(method + " " + problem, T, N0, error_of);
+  if (!m.complete) return;
   std::printf("[  order   ] %-16s %-20s measured %.3f (expected %d); errors", method.c_str(),
-              problem, p, it->second);
-  for (double e : errs) std::printf(" %.3e", e);
-  std::printf("\n");
-  ::testing::Test::RecordProperty(std::string(problem) + "-order", std::to_string(p));
-  EXPECT_NEAR(p, it->second, kOrderMargin) << method << " on " << problem;
+              problem, m.order, it->second);
+  hooke::test::print_errors(m);
+  ::testing::Test::RecordProperty(std::string(problem) + "-order", std::to_string(m.order));
+  EXPECT_NEAR(m.order, it->second, kOrderMargin) << method << " on " << problem;
 }
-
-/// Two equal masses m joined by a HookeSpring (k, L) on the x axis, both free.
-struct TwoParticleSpring {
-  double m = 1.0, k = 1.0, L = 1.0;
-  std::unique_ptr<hooke::MassSpringSystem> system;
-  TwoParticleSpring() {
-    system = std::make_unique<hooke::MassSpringSystem>(Vec::Constant(2, m), std::vector<char>(2, 0));
-    auto f = std::make_unique<hooke::HookeSpring>();
-    f->add(0, 1, k, L);
-    system->add_force(std::move(f));
-    system->finalize();
-  }
-  double omega() const { return std::sqrt(2.0 * k / m); }
-  /// Released at rest with the spring stretched by A: the relative coordinate is
-  /// L + A cos(omega t) and the centre of mass stays at (L + A) / 2.
-  hooke::State initial(double A) const {
-    hooke::State s(2);
-    s.x.segment<3>(3) = Vec3(L + A, 0.0, 0.0);
-    return s;
-  }
-  /// Exact positions (first 6 entries) and velocities (last 6) at time t.
-  Vec exact_xv(double A, double t) const {
-    const double c = 0.5 * (L + A), r = L + A * std::cos(omega() * t);
-    const double rdot = -A * omega() * std::sin(omega() * t);
-    Vec xv = Vec::Zero(12);
-    xv[0] = c - 0.5 * r;
-    xv[3] = c + 0.5 * r;
-    xv[6] = -0.5 * rdot;
-    xv[9] = 0.5 * rdot;
-    return xv;
-  }
-  double energy(const hooke::State& s) const {
-    return system->kinetic_energy(s.v) + system->potential_energy(s.x);
-  }
-};
 
 std::vector<std::string> explicit_method_names() {
   std::vector<std::string> names;
   for (const auto& m : hooke::methods())
     if (m.kind == hooke::MethodKind::Explicit) names.push_back(m.name);
   return names;
-}
-
-/// "forward-euler" -> "ForwardEuler" for the test name.
-std::string pascal_case(const std::string& name) {
-  std::string out;
-  bool up = true;
-  for (char c : name) {
-    if (!std::isalnum(static_cast<unsigned char>(c))) {
-      up = true;
-      continue;
-    }
-    out += up ? static_cast<char>(std::toupper(static_cast<unsigned char>(c))) : c;
-    up = false;
-  }
-  return out;
 }
 
 }  // namespace
@@ -208,7 +133,7 @@ TEST_P(ExplicitStepperOrder, CircleFieldConvergesWithStatedOrder) {
 
 TEST_P(ExplicitStepperOrder, TwoParticleSpringConvergesWithStatedOrder) {
   const std::string method = GetParam();
-  TwoParticleSpring sp;
+  TwoParticleSpring sp(kSpringStiffness);
   const double A = 0.1 * sp.L;
   const double T = 1.3 * kPi / sp.omega();  // 0.65 periods: a generic phase
   check_order(method, "two-particle-spring", T, 20, 8, [&](int N) {
@@ -229,7 +154,7 @@ TEST_P(ExplicitStepperOrder, TwoParticleSpringConvergesWithStatedOrder) {
 
 INSTANTIATE_TEST_SUITE_P(, ExplicitStepperOrder, ::testing::ValuesIn(explicit_method_names()),
                          [](const ::testing::TestParamInfo<std::string>& info) {
-                           return pascal_case(info.param);
+                           return hooke::test::pascal_case(info.param);
                          });
 
 TEST(ExplicitStepperRegistry, EveryExplicitMethodHasAnExpectedOrder) {
@@ -239,7 +164,7 @@ TEST(ExplicitStepperRegistry, EveryExplicitMethodHasAnExpectedOrder) {
 }
 
 TEST(ExplicitStepperEnergy, ForwardEulerEnergyGrows) {
-  TwoParticleSpring sp;
+  TwoParticleSpring sp(kSpringStiffness);
   const double A = 0.01 * sp.L, hw = 0.1, h = hw / sp.omega();
   const int steps_per_period = static_cast<int>(std::round(2.0 * kPi / hw));
   const int steps = 10 * steps_per_period;
@@ -262,7 +187,7 @@ TEST(ExplicitStepperEnergy, ForwardEulerEnergyGrows) {
 }
 
 TEST(ExplicitStepperEnergy, SymplecticEulerEnergyStaysBounded) {
-  TwoParticleSpring sp;
+  TwoParticleSpring sp(kSpringStiffness);
   const double A = 0.1 * sp.L, hw = 0.1, h = hw / sp.omega();
   const int steps_per_period = static_cast<int>(std::round(2.0 * kPi / hw));
   const int periods = 100, window = 10 * steps_per_period;

@@ -17,7 +17,6 @@
 #include <Eigen/SparseCholesky>
 #include <unsupported/Eigen/KroneckerProduct>
 #include <algorithm>
-#include <cctype>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -26,14 +25,13 @@
 #include <string>
 #include <vector>
 
-#include "hooke/forces/gravity.hpp"
-#include "hooke/forces/hooke_spring.hpp"
-#include "hooke/forces/spring_damper.hpp"
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/linear/linear_solver.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/registry.hpp"
+#include "support/registry.hpp"
+#include "support/systems.hpp"
 
 namespace {
 
@@ -44,6 +42,10 @@ using hooke::SparseMatrix;
 using hooke::Status;
 using hooke::Vec;
 using hooke::Vec3;
+using hooke::test::Cloth;
+using hooke::test::ClothSpec;
+using hooke::test::has_backend;
+using hooke::test::make_cloth;
 
 constexpr double kSolveTol = 1e-12;    // stopping tolerance of the conformance solves
 constexpr double kMatchTol = 1e-8;     // relative distance to the reference solution
@@ -56,77 +58,15 @@ constexpr int kMaxIterations = 20000;  // Krylov backends need 400-650 here (mea
 // milliseconds each when the machine is oversubscribed.
 constexpr int kStationaryCap = 1000;
 
-/// Backends that may stop short of 1e-12 on the 32x32 cloth within kStationaryCap (the
-/// stationary iterations: their sweep count grows like cond(A)). Every other backend must converge.
-bool may_not_converge(const std::string& name) {
-  return name == "jacobi" || name == "gauss-seidel" || name == "colored-gauss-seidel";
-}
-
 /// Direct backends (no iterations, options ignored).
 bool is_direct(const std::string& name) { return name == "cholmod"; }
 
-/// A square grid cloth: n x n particles hanging in the x-y plane, the two top corners pinned,
-/// structural, shear and flexion (two apart) HookeSprings, a SpringDamper on every spring and
-/// gravity. Rest lengths are rest_scale times the grid distances; positions are jittered by
-/// uniform noise of +-jitter * spacing in every coordinate.
-struct ClothSpec {
-  int n = 32;
-  double spacing = 1.0 / 31.0;  // 1 m wide
-  double mass = 1e-3;           // per particle (1 kg/m^2)
-  double k_structural = 1e4, k_shear = 1e3, k_flexion = 1e2;
-  double damping = 0.1;
-  double rest_scale = 1.0;
-  double jitter = 0.0;
-  unsigned seed = 1;
-};
-
-struct Cloth {
-  std::unique_ptr<hooke::MassSpringSystem> system;
-  Vec x;
-  int stretched = 0, compressed = 0;  // springs longer / shorter than rest at x
-};
-
-Cloth make_cloth(const ClothSpec& spec) {
-  const int n = spec.n, np = n * n;
-  const double s = spec.spacing;
-  std::vector<char> pinned(size_t(np), 0);
-  pinned[size_t((n - 1) * n)] = pinned[size_t(n * n - 1)] = 1;  // top row corners
-  Cloth cloth;
-  cloth.system = std::make_unique<hooke::MassSpringSystem>(Vec::Constant(np, spec.mass), pinned);
-  cloth.x.resize(3 * np);
-  std::mt19937 rng(spec.seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  for (int r = 0; r < n; ++r)
-    for (int c = 0; c < n; ++c) {
-      const Vec3 p(c * s, r * s, 0.0), e(u(rng), u(rng), u(rng));
-      cloth.x.segment<3>(3 * (r * n + c)) = p + spec.jitter * s * e;
-    }
-  auto springs = std::make_unique<hooke::HookeSpring>();
-  auto dampers = std::make_unique<hooke::SpringDamper>();
-  auto add = [&](int a, int b, double k, double grid_length) {
-    const double L = spec.rest_scale * grid_length;
-    springs->add(a, b, k, L);
-    dampers->add(a, b, spec.damping);
-    const double l = (cloth.x.segment<3>(3 * a) - cloth.x.segment<3>(3 * b)).norm();
-    cloth.stretched += l > L;
-    cloth.compressed += l < L;
-  };
-  for (int r = 0; r < n; ++r)
-    for (int c = 0; c < n; ++c) {
-      const int i = r * n + c;
-      if (c + 1 < n) add(i, i + 1, spec.k_structural, s);
-      if (r + 1 < n) add(i, i + n, spec.k_structural, s);
-      if (c + 1 < n && r + 1 < n) add(i, i + n + 1, spec.k_shear, s * std::sqrt(2.0));
-      if (c > 0 && r + 1 < n) add(i, i + n - 1, spec.k_shear, s * std::sqrt(2.0));
-      if (c + 2 < n) add(i, i + 2, spec.k_flexion, 2 * s);
-      if (r + 2 < n) add(i, i + 2 * n, spec.k_flexion, 2 * s);
-    }
-  cloth.system->add_force(std::move(springs));
-  cloth.system->add_force(std::move(dampers));
-  cloth.system->add_force(
-      std::make_unique<hooke::Gravity>(Vec::Constant(np, spec.mass), Vec3(0.0, -9.81, 0.0)));
-  cloth.system->finalize();
-  return cloth;
+/// The cloths of these tests (tests/support/systems.hpp) draw position noise only, no velocities:
+/// the measured numbers below (cond(A), iteration counts) are for the positions this gives.
+ClothSpec cloth_spec() {
+  ClothSpec spec;
+  spec.draw_velocities = false;
+  return spec;
 }
 
 /// The implicit-step matrix M - h D - h^2 K of a cloth on its free DOFs, with the compressed
@@ -145,7 +85,7 @@ std::unique_ptr<StepMatrix> make_step_matrix(const ClothSpec& spec, double h, bo
   hooke::JacobianOptions opt;
   opt.clamp_compressed = clamp;
   opt.damping_position_terms = false;
-  sys.assemble_jacobians(m->cloth.x, Vec::Zero(sys.dofs()), J, opt);
+  sys.assemble_jacobians(m->cloth.state.x, Vec::Zero(sys.dofs()), J, opt);
   m->reduced = std::make_unique<hooke::ReducedMatrix>(sys);
   m->reduced->assemble(J, h, h * h);
   return m;
@@ -155,7 +95,7 @@ std::unique_ptr<StepMatrix> make_step_matrix(const ClothSpec& spec, double h, bo
 /// h = 1e-2), positions jittered by 30% of the spacing. Built once.
 const StepMatrix& cloth_problem() {
   static const std::unique_ptr<StepMatrix> m = [] {
-    ClothSpec spec;
+    ClothSpec spec = cloth_spec();
     spec.jitter = 0.3;
     return make_step_matrix(spec, 1e-2, true);
   }();
@@ -171,12 +111,6 @@ Vec random_vector(Index n, unsigned seed) {
 }
 
 double relative_distance(const Vec& a, const Vec& ref) { return (a - ref).norm() / ref.norm(); }
-
-bool has_backend(const std::string& name) {
-  for (const auto& info : hooke::linear_solvers())
-    if (name == info.name) return true;
-  return false;
-}
 
 std::string describe(const LinearSummary& s) {
   char buf[256];
@@ -279,21 +213,6 @@ std::vector<std::string> backend_names() {
   return names;
 }
 
-/// "colored-gauss-seidel" -> "ColoredGaussSeidel" for the test name.
-std::string pascal_case(const std::string& name) {
-  std::string out;
-  bool up = true;
-  for (char c : name) {
-    if (!std::isalnum(static_cast<unsigned char>(c))) {
-      up = true;
-      continue;
-    }
-    out += up ? static_cast<char>(std::toupper(static_cast<unsigned char>(c))) : c;
-    up = false;
-  }
-  return out;
-}
-
 }  // namespace
 
 // ---- Conformance sweep over the registry ----
@@ -317,7 +236,9 @@ TEST_P(LinearBackend, SolvesClothStepMatrixLikeReference) {
   ASSERT_STREQ(solver->name(), name.c_str());
   const LinearSummary f = setup(*solver, A);
   ASSERT_EQ(f.status, Status::Converged) << name << ": factor: " << describe(f);
-  const bool stationary = may_not_converge(name);
+  // The stationary backends may stop short of 1e-12 within kStationaryCap (their sweep count
+  // grows like cond(A)); every other backend must converge.
+  const bool stationary = hooke::test::is_stationary_backend(name);
   Vec x = Vec::Constant(A.rows(), 123.0);  // ignored: cold start
   const LinearSummary s =
       solver->solve(b, x, cold(kSolveTol, stationary ? kStationaryCap : kMaxIterations));
@@ -403,7 +324,7 @@ TEST_P(LinearBackend, SolvesDiagonalSystem) {
 TEST_P(LinearBackend, RefactorsOnSamePatternWithNewValues) {
   // factor() after a value change (same pattern) gives the new solution, not the old one.
   const std::string name = GetParam();
-  ClothSpec spec;
+  ClothSpec spec = cloth_spec();
   spec.n = 6;
   spec.spacing = 0.2;
   spec.mass = 1.0;  // heavy: A is diagonally dominant, so even Jacobi converges
@@ -428,7 +349,7 @@ TEST_P(LinearBackend, RefactorsOnSamePatternWithNewValues) {
 
 INSTANTIATE_TEST_SUITE_P(, LinearBackend, ::testing::ValuesIn(backend_names()),
                          [](const ::testing::TestParamInfo<std::string>& info) {
-                           return pascal_case(info.param);
+                           return hooke::test::pascal_case(info.param);
                          });
 
 // ---- The conformance problem's premises ----
@@ -612,7 +533,7 @@ TEST(ConjugateGradient, CompressedClothWithoutClampNeverReportsConverged) {
   // strongly indefinite. With a generic b, the SPD backends must not report Converged: CG meets
   // negative curvature (BrokeDown), or runs out of iterations (NotConverged); the preconditioned
   // ones see negative diagonal entries/blocks already in factor().
-  ClothSpec spec;
+  ClothSpec spec = cloth_spec();
   spec.n = 16;
   spec.spacing = 1.0 / 15.0;
   spec.rest_scale = 2.0;
@@ -695,7 +616,7 @@ TEST(LinearRegistry, UnknownNameThrowsListingNames) {
       EXPECT_NE(msg.find(info.name), std::string::npos) << info.name << " missing from: " << msg;
   }
   // Through make_stepper as well.
-  ClothSpec spec;
+  ClothSpec spec = cloth_spec();
   spec.n = 3;
   const Cloth cloth = make_cloth(spec);
   hooke::MethodOptions opt;

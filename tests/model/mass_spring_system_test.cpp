@@ -7,7 +7,6 @@
 #include <Eigen/Dense>
 #include <algorithm>
 #include <cmath>
-#include <functional>
 #include <memory>
 #include <random>
 #include <vector>
@@ -18,50 +17,20 @@
 #include "hooke/forces/spring_damper.hpp"
 #include "hooke/model/mass_spring_ode.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "support/finite_differences.hpp"
+#include "support/random.hpp"
 
 namespace {
 
 using hooke::Vec;
 using hooke::Vec3;
+using hooke::test::central_jacobian;
+using hooke::test::near_entrywise;
+using hooke::test::random_vec;
 using Dense = Eigen::MatrixXd;
 
-double exact_step(double x, double h) {
-  volatile double t = x + h;
-  return t - x;
-}
-
-Dense central_jacobian(const std::function<Vec(const Vec&)>& g, const Vec& y, double h) {
-  const Vec g0 = g(y);
-  Dense J(g0.size(), y.size());
-  Vec yp = y, ym = y;
-  for (Eigen::Index c = 0; c < y.size(); ++c) {
-    const double hc = exact_step(y[c], h);
-    yp[c] = y[c] + hc;
-    ym[c] = y[c] - hc;
-    J.col(c) = (g(yp) - g(ym)) / (2.0 * hc);
-    yp[c] = ym[c] = y[c];
-  }
-  return J;
-}
-
-::testing::AssertionResult near_entrywise(const Dense& A, const Dense& B, double rel = 1e-6) {
-  const double floor = 1e-8 * std::max(A.cwiseAbs().maxCoeff(), 1e-300);
-  for (Eigen::Index c = 0; c < A.cols(); ++c)
-    for (Eigen::Index r = 0; r < A.rows(); ++r) {
-      const double a = A(r, c), b = B(r, c);
-      if (std::abs(a - b) > rel * std::max(std::abs(a), std::abs(b)) + floor)
-        return ::testing::AssertionFailure()
-               << "entry (" << r << ", " << c << "): analytic " << a << " vs FD " << b;
-    }
-  return ::testing::AssertionSuccess();
-}
-
-Vec random_vec(Eigen::Index size, double lo, double hi, std::mt19937& rng) {
-  std::uniform_real_distribution<double> U(lo, hi);
-  Vec v(size);
-  for (Eigen::Index i = 0; i < size; ++i) v[i] = U(rng);
-  return v;
-}
+constexpr double kRelTol = 1e-6;    // relative tolerance of the FD comparisons
+constexpr double kFloorRel = 1e-8;  // absolute floor, as a fraction of the matrix's largest entry
 
 /// A 3 x 3 grid cloth (spacing 1) with structural and shear HookeSprings and SpringDampers,
 /// gravity and air drag with wind; particle 0 (and 2 if pin_two) pinned. Rest lengths are
@@ -188,9 +157,11 @@ TEST(MassSpringSystem, AssembledJacobiansMatchCentralDifferences) {
       sys->compute_forces(x, y, f);
       return f;
     };
-    ASSERT_TRUE(near_entrywise(Dense(J.K), central_jacobian(f_of_x, x, 1e-5 * lmin)))
+    ASSERT_TRUE(
+        near_entrywise(Dense(J.K), central_jacobian(f_of_x, x, 1e-5 * lmin), kRelTol, kFloorRel))
         << "sample " << s;
-    ASSERT_TRUE(near_entrywise(Dense(J.D), central_jacobian(f_of_v, v, 1e-5))) << "sample " << s;
+    ASSERT_TRUE(near_entrywise(Dense(J.D), central_jacobian(f_of_v, v, 1e-5), kRelTol, kFloorRel))
+        << "sample " << s;
     // Re-assembling into the same storage overwrites rather than accumulates.
     const Dense K1(J.K);
     sys->assemble_jacobians(x, v, J);

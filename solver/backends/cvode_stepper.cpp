@@ -1,0 +1,377 @@
+#include "hooke/backends/cvode_stepper.hpp"
+
+#include <cvode/cvode.h>
+#include <cvode/cvode_ls.h>
+#include <nvector/nvector_serial.h>
+#include <sundials/sundials_context.h>
+#include <sunlinsol/sunlinsol_klu.h>
+#include <sunlinsol/sunlinsol_spgmr.h>
+#include <sunmatrix/sunmatrix_sparse.h>
+#include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdlib>
+#include <iomanip>
+#include <sstream>
+#include <stdexcept>
+#include <type_traits>
+
+#include "hooke/model/mass_spring_ode.hpp"
+
+namespace hooke {
+
+static_assert(std::is_same_v<sunindextype, std::int64_t>,
+              "FirstOrderMatrix stores 64-bit indices: SUNDIALS must be built with them");
+static_assert(std::is_same_v<realtype, double>, "SUNDIALS must be built in double precision");
+
+std::string CvodeOptions::validate() const {
+  std::string err = validate_sundials_options("cvode", rtol, atol, linear_solver, preconditioner,
+                                              preconditioner_tolerance, max_steps);
+  if (!err.empty()) return err;
+  std::ostringstream os;
+  const int max_allowed = adams ? 12 : 5;
+  if (max_order < 1 || max_order > max_allowed) {
+    os << "cvode: max_order = " << max_order << " must be in 1.." << max_allowed << " for "
+       << (adams ? "Adams" : "BDF");
+    return os.str();
+  }
+  if (nonlinear_solver != "newton" && nonlinear_solver != "fixed-point") {
+    os << "cvode: nonlinear_solver = '" << nonlinear_solver
+       << "' is unknown; available: newton, fixed-point";
+    return os.str();
+  }
+  if (nonlinear_solver == "fixed-point" && !adams) {
+    os << "cvode: nonlinear_solver = 'fixed-point' needs adams = true (functional iteration on "
+          "BDF cannot follow stiff springs); use 'newton'";
+    return os.str();
+  }
+  if (nonlinear_solver == "fixed-point" && (linear_solver != "klu" || !preconditioner.empty())) {
+    os << "cvode: linear_solver = '" << linear_solver << "' / preconditioner = '" << preconditioner
+       << "' are unused with nonlinear_solver = 'fixed-point'; leave them at their defaults";
+    return os.str();
+  }
+  return "";
+}
+
+namespace {
+
+void free_context(SUNContext c) { SUNContext_Free(&c); }
+void free_vector(N_Vector v) { N_VDestroy(v); }
+void free_matrix(SUNMatrix A) { SUNMatDestroy(A); }
+void free_linear_solver(SUNLinearSolver s) { SUNLinSolFree(s); }
+void free_nonlinear_solver(SUNNonlinearSolver s) { SUNNonlinSolFree(s); }
+void free_cvode(void* mem) { CVodeFree(&mem); }
+
+void check(int flag, const char* call) {
+  if (flag < 0)
+    throw std::runtime_error(std::string("cvode: ") + call + " failed with flag " +
+                             std::to_string(flag));
+}
+
+template <class P>
+P check_created(P p, const char* call) {
+  if (p == nullptr) throw std::runtime_error(std::string("cvode: ") + call + " returned NULL");
+  return p;
+}
+
+/// Writes J = df/dy into the SUNDIALS CSC matrix: SUNDIALS zeroes its whole structure
+/// (SUNMatZero) before calling the Jacobian function, so the pattern is copied in each time.
+void write_matrix(const FirstOrderMatrix& m, SUNMatrix J) {
+  HOOKE_ASSERT(SUNSparseMatrix_NNZ(J) >= m.nonzeros() && SUNSparseMatrix_Columns(J) == m.size(),
+               "SUNDIALS matrix too small for the first-order pattern");
+  m.write(0.0, SUNSparseMatrix_IndexPointers(J), SUNSparseMatrix_IndexValues(J),
+          SUNSparseMatrix_Data(J));
+}
+
+}  // namespace
+
+struct CvodeStepper::Impl {
+  const MassSpringSystem& system;
+  CvodeOptions options;
+  Index n3;
+  MassSpringOde ode;     // f(y) = [P v; P M^-1 f(x, v)], shared with the explicit steppers
+  FirstOrderMatrix jac;  // J = df/dy (Kind::Ode)
+  std::unique_ptr<SchurPreconditioner> prec;  // spgmr only
+  SundialsErrorLog log;
+  State last;           // the state step() returned last
+  bool restart = true;  // re-initialise at the next step whatever s0 is
+  long restarts = 0;
+  SundialsCounters before;  // totals of the runs before the current (re)initialisation
+  SundialsCounters counters;
+  // SUNDIALS objects, freed in reverse order: the CVODE memory first, the context last.
+  SunPtr<SUNContext> ctx{nullptr, free_context};
+  SunPtr<N_Vector> y{nullptr, free_vector};
+  SunPtr<SUNMatrix> A{nullptr, free_matrix};
+  SunPtr<SUNLinearSolver> ls{nullptr, free_linear_solver};
+  SunPtr<SUNNonlinearSolver> nls{nullptr, free_nonlinear_solver};
+  SunPtr<void*> mem{nullptr, free_cvode};
+
+  Impl(const MassSpringSystem& sys, CvodeOptions opt);
+  Eigen::Map<Vec> y_map() { return Eigen::Map<Vec>(N_VGetArrayPointer(y.get()), 2 * n3); }
+  void read_counters();
+  long linearizations() const { return jac.linearizations() + (prec ? prec->linearizations() : 0); }
+
+  // ---- callbacks (user_data = this); no allocation; exceptions become an unrecoverable flag ----
+  static Eigen::Map<const Vec> view(N_Vector v, Index size) {
+    return Eigen::Map<const Vec>(N_VGetArrayPointer(v), size);
+  }
+  static Eigen::Map<Vec> view_mut(N_Vector v, Index size) {
+    return Eigen::Map<Vec>(N_VGetArrayPointer(v), size);
+  }
+  static int rhs(realtype t, N_Vector y, N_Vector ydot, void* data) {
+    Impl& m = *static_cast<Impl*>(data);
+    try {
+      Eigen::Map<Vec> F = view_mut(ydot, 2 * m.n3);
+      m.ode.rhs(t, view(y, 2 * m.n3), F);
+      return F.allFinite() ? 0 : 1;  // recoverable: CVODE retries with a smaller step
+    } catch (const std::exception& e) {
+      m.log.record(-1, "hooke", "rhs", e.what());
+      return -1;
+    }
+  }
+  static int jacobian(realtype, N_Vector y, N_Vector, SUNMatrix J, void* data, N_Vector, N_Vector,
+                      N_Vector) {
+    Impl& m = *static_cast<Impl*>(data);
+    try {
+      const Eigen::Map<const Vec> Y = view(y, 2 * m.n3);
+      m.jac.linearize(Y.head(m.n3), Y.tail(m.n3));
+      write_matrix(m.jac, J);
+      return 0;
+    } catch (const std::exception& e) {
+      m.log.record(-1, "hooke", "jacobian", e.what());
+      return -1;
+    }
+  }
+  static int jtimes_setup(realtype, N_Vector y, N_Vector, void* data) {
+    Impl& m = *static_cast<Impl*>(data);
+    try {
+      const Eigen::Map<const Vec> Y = view(y, 2 * m.n3);
+      m.jac.linearize(Y.head(m.n3), Y.tail(m.n3));
+      return 0;
+    } catch (const std::exception& e) {
+      m.log.record(-1, "hooke", "jtimes_setup", e.what());
+      return -1;
+    }
+  }
+  static int jtimes(N_Vector v, N_Vector Jv, realtype, N_Vector, N_Vector, void* data, N_Vector) {
+    Impl& m = *static_cast<Impl*>(data);
+    try {
+      m.jac.multiply(0.0, view(v, 2 * m.n3), view_mut(Jv, 2 * m.n3));
+      return 0;
+    } catch (const std::exception& e) {
+      m.log.record(-1, "hooke", "jtimes", e.what());
+      return -1;
+    }
+  }
+  static int prec_setup(realtype, N_Vector y, N_Vector, booleantype jok, booleantype* jcur,
+                        realtype gamma, void* data) {
+    Impl& m = *static_cast<Impl*>(data);
+    try {
+      const Eigen::Map<const Vec> Y = view(y, 2 * m.n3);
+      const LinearSummary s = m.prec->setup(Y.head(m.n3), Y.tail(m.n3), gamma, jok != SUNFALSE);
+      *jcur = jok ? SUNFALSE : SUNTRUE;
+      return s.status == Status::Converged ? 0 : 1;  // recoverable: smaller step, new setup
+    } catch (const std::exception& e) {
+      m.log.record(-1, "hooke", "prec_setup", e.what());
+      return -1;
+    }
+  }
+  static int prec_solve(realtype, N_Vector, N_Vector, N_Vector r, N_Vector z, realtype, realtype,
+                        int, void* data) {
+    Impl& m = *static_cast<Impl*>(data);
+    try {
+      const LinearSummary s = m.prec->solve(view(r, 2 * m.n3), view_mut(z, 2 * m.n3));
+      return s.status == Status::Converged ? 0 : 1;
+    } catch (const std::exception& e) {
+      m.log.record(-1, "hooke", "prec_solve", e.what());
+      return -1;
+    }
+  }
+  static void error_handler(int code, const char* module, const char* function, char* msg,
+                            void* data) {
+    static_cast<SundialsErrorLog*>(data)->record(code, module, function, msg);
+  }
+};
+
+CvodeStepper::Impl::Impl(const MassSpringSystem& sys, CvodeOptions opt)
+    : system(sys),
+      options(std::move(opt)),
+      n3(sys.dofs()),
+      ode(sys),
+      jac(sys, FirstOrderMatrix::Kind::Ode),
+      last(sys.num_particles()) {
+  SUNContext c = nullptr;
+  check(SUNContext_Create(nullptr, &c), "SUNContext_Create");
+  ctx.reset(check_created(c, "SUNContext_Create"));
+  const sunindextype N = sunindextype(2 * n3);
+  y.reset(check_created(N_VNew_Serial(N, ctx.get()), "N_VNew_Serial"));
+  N_VConst(0.0, y.get());
+  mem.reset(
+      check_created(CVodeCreate(options.adams ? CV_ADAMS : CV_BDF, ctx.get()), "CVodeCreate"));
+  void* cv = mem.get();
+  check(CVodeSetErrHandlerFn(cv, error_handler, &log), "CVodeSetErrHandlerFn");
+  check(CVodeInit(cv, rhs, 0.0, y.get()), "CVodeInit");
+  check(CVodeSetUserData(cv, this), "CVodeSetUserData");
+  check(CVodeSStolerances(cv, options.rtol, options.atol), "CVodeSStolerances");
+  check(CVodeSetMaxOrd(cv, options.max_order), "CVodeSetMaxOrd");
+  check(CVodeSetMaxNumSteps(cv, options.max_steps), "CVodeSetMaxNumSteps");
+  if (options.nonlinear_solver == "fixed-point") {
+    nls.reset(
+        check_created(SUNNonlinSol_FixedPoint(y.get(), 0, ctx.get()), "SUNNonlinSol_FixedPoint"));
+    check(CVodeSetNonlinearSolver(cv, nls.get()), "CVodeSetNonlinearSolver");
+  } else if (options.linear_solver == "klu") {
+    A.reset(check_created(SUNSparseMatrix(N, N, sunindextype(jac.nonzeros()), CSC_MAT, ctx.get()),
+                          "SUNSparseMatrix"));
+    ls.reset(check_created(SUNLinSol_KLU(y.get(), A.get(), ctx.get()), "SUNLinSol_KLU"));
+    check(CVodeSetLinearSolver(cv, ls.get(), A.get()), "CVodeSetLinearSolver");
+    check(CVodeSetJacFn(cv, jacobian), "CVodeSetJacFn");
+  } else {
+    prec =
+        make_schur_preconditioner(system, options.preconditioner, options.preconditioner_tolerance);
+    ls.reset(
+        check_created(SUNLinSol_SPGMR(y.get(), prec ? SUN_PREC_LEFT : SUN_PREC_NONE, 0, ctx.get()),
+                      "SUNLinSol_SPGMR"));
+    check(CVodeSetLinearSolver(cv, ls.get(), nullptr), "CVodeSetLinearSolver");
+    check(CVodeSetJacTimes(cv, jtimes_setup, jtimes), "CVodeSetJacTimes");
+    if (prec) check(CVodeSetPreconditioner(cv, prec_setup, prec_solve), "CVodeSetPreconditioner");
+  }
+}
+
+void CvodeStepper::Impl::read_counters() {
+  void* cv = mem.get();
+  SundialsCounters c;
+  CVodeGetNumSteps(cv, &c.steps);
+  CVodeGetNumRhsEvals(cv, &c.rhs_evals);
+  CVodeGetNumLinSolvSetups(cv, &c.linear_setups);
+  CVodeGetNumErrTestFails(cv, &c.error_test_fails);
+  CVodeGetNonlinSolvStats(cv, &c.nonlinear_iterations, &c.nonlinear_conv_fails);
+  if (ls) CVodeGetNumLinIters(cv, &c.linear_iterations);
+  counters = before;
+  counters.add_totals(c);
+  counters.jacobian_evals = linearizations();
+  counters.restarts = restarts;
+  CVodeGetLastStep(cv, &counters.last_step);
+  CVodeGetCurrentOrder(cv, &counters.order);
+}
+
+CvodeStepper::CvodeStepper(const MassSpringSystem& system, CvodeOptions options) {
+  const std::string err = options.validate();
+  if (!err.empty()) throw std::invalid_argument(err);
+  m_impl = std::make_unique<Impl>(system, std::move(options));
+}
+
+CvodeStepper::~CvodeStepper() = default;
+
+const CvodeOptions& CvodeStepper::options() const { return m_impl->options; }
+const CvodeCounters& CvodeStepper::counters() const { return m_impl->counters; }
+std::string CvodeStepper::counters_line() const { return m_impl->counters.line(); }
+
+void CvodeStepper::rhs(ConstRef y, VecRef ydot) {
+  HOOKE_ASSERT(y.size() == 2 * m_impl->n3 && ydot.size() == y.size(), "cvode rhs: sizes");
+  m_impl->ode.rhs(0.0, y, ydot);
+}
+
+SparseMatrix CvodeStepper::jacobian(ConstRef y) {
+  const Index n3 = m_impl->n3;
+  HOOKE_ASSERT(y.size() == 2 * n3,
+               "cvode jacobian: y has " << y.size() << " entries, not " << 2 * n3);
+  m_impl->jac.linearize(y.head(n3), y.tail(n3));
+  return m_impl->jac.to_sparse(0.0);
+}
+
+StepSummary CvodeStepper::step(const State& s0, double h, State& s1) {
+  Impl& m = *m_impl;
+  const Index n3 = m.n3;
+  HOOKE_ASSERT(s0.x.size() == n3 && s0.v.size() == n3,
+               "cvode: s0 has " << s0.x.size() << " positions for " << n3 << " dofs");
+  HOOKE_ASSERT(&s0 != &s1, "cvode: s1 may not alias s0");
+  StepSummary out;
+  const double t1 = s0.t + h;
+  if (!(h > 0.0) || !std::isfinite(h) || !std::isfinite(s0.t) || !(t1 > s0.t)) {
+    out.status = Status::Fatal;
+    std::ostringstream os;
+    os << std::setprecision(10) << "cvode: cannot step from t = " << s0.t << " by h = " << h
+       << ": h must be positive, finite and above the round-off of t";
+    out.message = os.str();
+    return out;
+  }
+  if (!s0.is_finite()) {
+    out.status = Status::Fatal;
+    out.message = "cvode: the start state is not finite";
+    return out;
+  }
+  void* cv = m.mem.get();
+  Eigen::Map<Vec> Y = m.y_map();
+  // Continue CVODE's history only from exactly the state it returned last.
+  if (m.restart || s0.t != m.last.t || s0.x != m.last.x || s0.v != m.last.v) {
+    m.before = m.counters;
+    Y.head(n3) = s0.x;
+    Y.tail(n3) = s0.v;
+    const int flag = CVodeReInit(cv, s0.t, m.y.get());
+    if (flag < 0) {
+      out.status = Status::Fatal;
+      out.message = "cvode: CVodeReInit failed with flag " + std::to_string(flag);
+      return out;
+    }
+    ++m.restarts;
+    m.restart = false;
+  }
+  m.log.clear();
+  if (CVodeSetStopTime(cv, t1) < 0) {
+    m.restart = true;
+    out.status = Status::Fatal;
+    out.message = std::string("cvode: CVodeSetStopTime failed: ") + m.log.text;
+    return out;
+  }
+  const long newton0 = m.counters.nonlinear_iterations;
+  const long linear0 = m.counters.linear_iterations;
+  realtype t_reached = s0.t;
+  const int flag = CVode(cv, t1, m.y.get(), &t_reached, CV_NORMAL);
+  m.read_counters();
+  out.newton_iterations = int(m.counters.nonlinear_iterations - newton0);
+  out.iterations = int(m.counters.linear_iterations - linear0);
+
+  s1.x.resize(n3);
+  s1.v.resize(n3);
+  s1.x = Y.head(n3);
+  s1.v = Y.tail(n3);
+  s1.t = flag >= 0 ? t1 : t_reached;
+  m.last.x = s1.x;
+  m.last.v = s1.v;
+  m.last.t = s1.t;
+  if (flag >= 0 && s1.is_finite()) return out;  // CV_SUCCESS or CV_TSTOP_RETURN at t1
+
+  m.restart = true;
+  if (flag >= 0) {
+    out.status = Status::Fatal;
+    out.message = "cvode: the state became non-finite at t = " + std::to_string(t1) + "; " +
+                  m.counters.line();
+    return out;
+  }
+  switch (flag) {
+    case CV_TOO_MUCH_WORK:
+    case CV_TOO_MUCH_ACC:
+    case CV_ERR_FAILURE:
+    case CV_CONV_FAILURE:
+      out.status = Status::NotConverged;
+      break;
+    case CV_LSETUP_FAIL:
+    case CV_LSOLVE_FAIL:
+      out.status = Status::BrokeDown;
+      break;
+    default:
+      out.status = Status::Fatal;
+  }
+  char* flag_name = CVodeGetReturnFlagName(flag);  // malloc'ed by SUNDIALS
+  std::ostringstream os;
+  os << std::setprecision(10) << "cvode: " << (flag_name ? flag_name : "unknown flag") << " ("
+     << flag << ") at t = " << t_reached << " on the step from t = " << s0.t << " to " << t1;
+  std::free(flag_name);
+  if (m.log.text[0]) os << ": " << m.log.text;
+  os << "; " << m.counters.line();
+  out.message = os.str();
+  return out;
+}
+
+}  // namespace hooke
