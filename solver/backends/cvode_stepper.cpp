@@ -2,11 +2,6 @@
 
 #include <cvode/cvode.h>
 #include <cvode/cvode_ls.h>
-#include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_klu.h>
-#include <sunlinsol/sunlinsol_spgmr.h>
-#include <sunmatrix/sunmatrix_sparse.h>
 #include <sunnonlinsol/sunnonlinsol_fixedpoint.h>
 
 #include <algorithm>
@@ -17,13 +12,10 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "hooke/backends/sundials_detail.hpp"
 #include "hooke/model/mass_spring_ode.hpp"
 
 namespace hooke {
-
-static_assert(std::is_same_v<sunindextype, std::int64_t>,
-              "FirstOrderMatrix stores 64-bit indices: SUNDIALS must be built with them");
-static_assert(std::is_same_v<realtype, double>, "SUNDIALS must be built in double precision");
 
 std::string CvodeOptions::validate() const {
   std::string err = validate_sundials_options("cvode", rtol, atol, linear_solver, preconditioner,
@@ -56,32 +48,20 @@ std::string CvodeOptions::validate() const {
 
 namespace {
 
-void free_context(SUNContext c) { SUNContext_Free(&c); }
-void free_vector(N_Vector v) { N_VDestroy(v); }
-void free_matrix(SUNMatrix A) { SUNMatDestroy(A); }
-void free_linear_solver(SUNLinearSolver s) { SUNLinSolFree(s); }
+using sundials_detail::error_handler;
+using sundials_detail::free_context;
+using sundials_detail::free_linear_solver;
+using sundials_detail::free_matrix;
+using sundials_detail::free_vector;
+using sundials_detail::view;
+using sundials_detail::view_mut;
 void free_nonlinear_solver(SUNNonlinearSolver s) { SUNNonlinSolFree(s); }
 void free_cvode(void* mem) { CVodeFree(&mem); }
 
-void check(int flag, const char* call) {
-  if (flag < 0)
-    throw std::runtime_error(std::string("cvode: ") + call + " failed with flag " +
-                             std::to_string(flag));
-}
-
+void check(int flag, const char* call) { sundials_detail::check("cvode", flag, call); }
 template <class P>
 P check_created(P p, const char* call) {
-  if (p == nullptr) throw std::runtime_error(std::string("cvode: ") + call + " returned NULL");
-  return p;
-}
-
-/// Writes J = df/dy into the SUNDIALS CSC matrix: SUNDIALS zeroes its whole structure
-/// (SUNMatZero) before calling the Jacobian function, so the pattern is copied in each time.
-void write_matrix(const FirstOrderMatrix& m, SUNMatrix J) {
-  HOOKE_ASSERT(SUNSparseMatrix_NNZ(J) >= m.nonzeros() && SUNSparseMatrix_Columns(J) == m.size(),
-               "SUNDIALS matrix too small for the first-order pattern");
-  m.write(0.0, SUNSparseMatrix_IndexPointers(J), SUNSparseMatrix_IndexValues(J),
-          SUNSparseMatrix_Data(J));
+  return sundials_detail::check_created("cvode", p, call);
 }
 
 }  // namespace
@@ -113,12 +93,6 @@ struct CvodeStepper::Impl {
   long linearizations() const { return jac.linearizations() + (prec ? prec->linearizations() : 0); }
 
   // ---- callbacks (user_data = this); no allocation; exceptions become an unrecoverable flag ----
-  static Eigen::Map<const Vec> view(N_Vector v, Index size) {
-    return Eigen::Map<const Vec>(N_VGetArrayPointer(v), size);
-  }
-  static Eigen::Map<Vec> view_mut(N_Vector v, Index size) {
-    return Eigen::Map<Vec>(N_VGetArrayPointer(v), size);
-  }
   static int rhs(realtype t, N_Vector y, N_Vector ydot, void* data) {
     Impl& m = *static_cast<Impl*>(data);
     try {
@@ -136,7 +110,7 @@ struct CvodeStepper::Impl {
     try {
       const Eigen::Map<const Vec> Y = view(y, 2 * m.n3);
       m.jac.linearize(Y.head(m.n3), Y.tail(m.n3));
-      write_matrix(m.jac, J);
+      sundials_detail::write_matrix(m.jac, 0.0, J);
       return 0;
     } catch (const std::exception& e) {
       m.log.record(-1, "hooke", "jacobian", e.what());
@@ -188,10 +162,6 @@ struct CvodeStepper::Impl {
       return -1;
     }
   }
-  static void error_handler(int code, const char* module, const char* function, char* msg,
-                            void* data) {
-    static_cast<SundialsErrorLog*>(data)->record(code, module, function, msg);
-  }
 };
 
 CvodeStepper::Impl::Impl(const MassSpringSystem& sys, CvodeOptions opt)
@@ -201,12 +171,9 @@ CvodeStepper::Impl::Impl(const MassSpringSystem& sys, CvodeOptions opt)
       ode(sys),
       jac(sys, FirstOrderMatrix::Kind::Ode),
       last(sys.num_particles()) {
-  SUNContext c = nullptr;
-  check(SUNContext_Create(nullptr, &c), "SUNContext_Create");
-  ctx.reset(check_created(c, "SUNContext_Create"));
-  const sunindextype N = sunindextype(2 * n3);
-  y.reset(check_created(N_VNew_Serial(N, ctx.get()), "N_VNew_Serial"));
-  N_VConst(0.0, y.get());
+  sundials_detail::ContextAndVector base("cvode", 2 * n3);
+  ctx = std::move(base.ctx);
+  y = std::move(base.y);
   mem.reset(
       check_created(CVodeCreate(options.adams ? CV_ADAMS : CV_BDF, ctx.get()), "CVodeCreate"));
   void* cv = mem.get();
@@ -220,21 +187,21 @@ CvodeStepper::Impl::Impl(const MassSpringSystem& sys, CvodeOptions opt)
     nls.reset(
         check_created(SUNNonlinSol_FixedPoint(y.get(), 0, ctx.get()), "SUNNonlinSol_FixedPoint"));
     check(CVodeSetNonlinearSolver(cv, nls.get()), "CVodeSetNonlinearSolver");
-  } else if (options.linear_solver == "klu") {
-    A.reset(check_created(SUNSparseMatrix(N, N, sunindextype(jac.nonzeros()), CSC_MAT, ctx.get()),
-                          "SUNSparseMatrix"));
-    ls.reset(check_created(SUNLinSol_KLU(y.get(), A.get(), ctx.get()), "SUNLinSol_KLU"));
-    check(CVodeSetLinearSolver(cv, ls.get(), A.get()), "CVodeSetLinearSolver");
-    check(CVodeSetJacFn(cv, jacobian), "CVodeSetJacFn");
   } else {
-    prec =
-        make_schur_preconditioner(system, options.preconditioner, options.preconditioner_tolerance);
-    ls.reset(
-        check_created(SUNLinSol_SPGMR(y.get(), prec ? SUN_PREC_LEFT : SUN_PREC_NONE, 0, ctx.get()),
-                      "SUNLinSol_SPGMR"));
-    check(CVodeSetLinearSolver(cv, ls.get(), nullptr), "CVodeSetLinearSolver");
-    check(CVodeSetJacTimes(cv, jtimes_setup, jtimes), "CVodeSetJacTimes");
-    if (prec) check(CVodeSetPreconditioner(cv, prec_setup, prec_solve), "CVodeSetPreconditioner");
+    if (options.linear_solver != "klu")
+      prec = make_schur_preconditioner(system, options.preconditioner,
+                                       options.preconditioner_tolerance);
+    auto lin = sundials_detail::make_linear_system("cvode", options.linear_solver, y.get(),
+                                                   jac.nonzeros(), prec != nullptr, ctx.get());
+    A = std::move(lin.A);
+    ls = std::move(lin.ls);
+    check(CVodeSetLinearSolver(cv, ls.get(), A.get()), "CVodeSetLinearSolver");
+    if (A) {
+      check(CVodeSetJacFn(cv, jacobian), "CVodeSetJacFn");
+    } else {
+      check(CVodeSetJacTimes(cv, jtimes_setup, jtimes), "CVodeSetJacTimes");
+      if (prec) check(CVodeSetPreconditioner(cv, prec_setup, prec_solve), "CVodeSetPreconditioner");
+    }
   }
 }
 

@@ -2,11 +2,6 @@
 
 #include <ida/ida.h>
 #include <ida/ida_ls.h>
-#include <nvector/nvector_serial.h>
-#include <sundials/sundials_context.h>
-#include <sunlinsol/sunlinsol_klu.h>
-#include <sunlinsol/sunlinsol_spgmr.h>
-#include <sunmatrix/sunmatrix_sparse.h>
 
 #include <cmath>
 #include <cstdlib>
@@ -15,13 +10,10 @@
 #include <stdexcept>
 #include <type_traits>
 
+#include "hooke/backends/sundials_detail.hpp"
 #include "hooke/model/mass_spring_ode.hpp"
 
 namespace hooke {
-
-static_assert(std::is_same_v<sunindextype, std::int64_t>,
-              "FirstOrderMatrix stores 64-bit indices: SUNDIALS must be built with them");
-static_assert(std::is_same_v<realtype, double>, "SUNDIALS must be built in double precision");
 
 std::string IdaOptions::validate() const {
   std::string err = validate_sundials_options("ida", rtol, atol, linear_solver, preconditioner,
@@ -34,22 +26,19 @@ std::string IdaOptions::validate() const {
 
 namespace {
 
-void free_context(SUNContext c) { SUNContext_Free(&c); }
-void free_vector(N_Vector v) { N_VDestroy(v); }
-void free_matrix(SUNMatrix A) { SUNMatDestroy(A); }
-void free_linear_solver(SUNLinearSolver s) { SUNLinSolFree(s); }
+using sundials_detail::error_handler;
+using sundials_detail::free_context;
+using sundials_detail::free_linear_solver;
+using sundials_detail::free_matrix;
+using sundials_detail::free_vector;
+using sundials_detail::view;
+using sundials_detail::view_mut;
 void free_ida(void* mem) { IDAFree(&mem); }
 
-void check(int flag, const char* call) {
-  if (flag < 0)
-    throw std::runtime_error(std::string("ida: ") + call + " failed with flag " +
-                             std::to_string(flag));
-}
-
+void check(int flag, const char* call) { sundials_detail::check("ida", flag, call); }
 template <class P>
 P check_created(P p, const char* call) {
-  if (p == nullptr) throw std::runtime_error(std::string("ida: ") + call + " returned NULL");
-  return p;
+  return sundials_detail::check_created("ida", p, call);
 }
 
 }  // namespace
@@ -89,12 +78,6 @@ struct IdaStepper::Impl {
   }
 
   // ---- callbacks (user_data = this); no allocation; exceptions become an unrecoverable flag ----
-  static Eigen::Map<const Vec> view(N_Vector v, Index size) {
-    return Eigen::Map<const Vec>(N_VGetArrayPointer(v), size);
-  }
-  static Eigen::Map<Vec> view_mut(N_Vector v, Index size) {
-    return Eigen::Map<Vec>(N_VGetArrayPointer(v), size);
-  }
   static int res(realtype, N_Vector yy, N_Vector ypp, N_Vector rr, void* data) {
     Impl& m = *static_cast<Impl*>(data);
     try {
@@ -110,12 +93,9 @@ struct IdaStepper::Impl {
                       void* data, N_Vector, N_Vector, N_Vector) {
     Impl& m = *static_cast<Impl*>(data);
     try {
-      HOOKE_ASSERT(SUNSparseMatrix_NNZ(J) >= m.jac.nonzeros(), "SUNDIALS matrix too small");
       const Eigen::Map<const Vec> Y = view(yy, 2 * m.n3);
       m.jac.linearize(Y.head(m.n3), Y.tail(m.n3));
-      // IDA zeroes J's structure (SUNMatZero) before this call: rewrite pattern and values.
-      m.jac.write(cj, SUNSparseMatrix_IndexPointers(J), SUNSparseMatrix_IndexValues(J),
-                  SUNSparseMatrix_Data(J));
+      sundials_detail::write_matrix(m.jac, cj, J);
       return 0;
     } catch (const std::exception& e) {
       m.log.record(-1, "hooke", "jacobian", e.what());
@@ -170,10 +150,6 @@ struct IdaStepper::Impl {
       return -1;
     }
   }
-  static void error_handler(int code, const char* module, const char* function, char* msg,
-                            void* data) {
-    static_cast<SundialsErrorLog*>(data)->record(code, module, function, msg);
-  }
 };
 
 IdaStepper::Impl::Impl(const MassSpringSystem& sys, IdaOptions opt)
@@ -185,13 +161,10 @@ IdaStepper::Impl::Impl(const MassSpringSystem& sys, IdaOptions opt)
       f(Vec::Zero(sys.dofs())),
       scaled(Vec::Zero(2 * sys.dofs())),
       last(sys.num_particles()) {
-  SUNContext c = nullptr;
-  check(SUNContext_Create(nullptr, &c), "SUNContext_Create");
-  ctx.reset(check_created(c, "SUNContext_Create"));
-  const sunindextype N = sunindextype(2 * n3);
-  y.reset(check_created(N_VNew_Serial(N, ctx.get()), "N_VNew_Serial"));
-  yp.reset(check_created(N_VNew_Serial(N, ctx.get()), "N_VNew_Serial"));
-  N_VConst(0.0, y.get());
+  sundials_detail::ContextAndVector base("ida", 2 * n3);
+  ctx = std::move(base.ctx);
+  y = std::move(base.y);
+  yp.reset(check_created(N_VNew_Serial(N_VGetLength(y.get()), ctx.get()), "N_VNew_Serial"));
   N_VConst(0.0, yp.get());
   mem.reset(check_created(IDACreate(ctx.get()), "IDACreate"));
   void* ida = mem.get();
@@ -201,19 +174,17 @@ IdaStepper::Impl::Impl(const MassSpringSystem& sys, IdaOptions opt)
   check(IDASStolerances(ida, options.rtol, options.atol), "IDASStolerances");
   check(IDASetMaxOrd(ida, options.max_order), "IDASetMaxOrd");
   check(IDASetMaxNumSteps(ida, options.max_steps), "IDASetMaxNumSteps");
-  if (options.linear_solver == "klu") {
-    A.reset(check_created(SUNSparseMatrix(N, N, sunindextype(jac.nonzeros()), CSC_MAT, ctx.get()),
-                          "SUNSparseMatrix"));
-    ls.reset(check_created(SUNLinSol_KLU(y.get(), A.get(), ctx.get()), "SUNLinSol_KLU"));
-    check(IDASetLinearSolver(ida, ls.get(), A.get()), "IDASetLinearSolver");
-    check(IDASetJacFn(ida, jacobian), "IDASetJacFn");
-  } else {
+  if (options.linear_solver != "klu")
     prec =
         make_schur_preconditioner(system, options.preconditioner, options.preconditioner_tolerance);
-    ls.reset(
-        check_created(SUNLinSol_SPGMR(y.get(), prec ? SUN_PREC_LEFT : SUN_PREC_NONE, 0, ctx.get()),
-                      "SUNLinSol_SPGMR"));
-    check(IDASetLinearSolver(ida, ls.get(), nullptr), "IDASetLinearSolver");
+  auto lin = sundials_detail::make_linear_system("ida", options.linear_solver, y.get(),
+                                                 jac.nonzeros(), prec != nullptr, ctx.get());
+  A = std::move(lin.A);
+  ls = std::move(lin.ls);
+  check(IDASetLinearSolver(ida, ls.get(), A.get()), "IDASetLinearSolver");
+  if (A) {
+    check(IDASetJacFn(ida, jacobian), "IDASetJacFn");
+  } else {
     check(IDASetJacTimes(ida, jtimes_setup, jtimes), "IDASetJacTimes");
     if (prec) check(IDASetPreconditioner(ida, prec_setup, prec_solve), "IDASetPreconditioner");
   }

@@ -91,12 +91,7 @@ void JacobiSolver::sweep(ConstRef /*b*/, VecRef x) {
 LinearSummary GaussSeidelSolver::analyze(const SparseMatrix& A) {
   const auto t0 = Clock::now();
   m_csr.build(A);
-  m_diag_slot.assign(size_t(A.rows()), -1);
-  for (int r = 0; r < A.rows(); ++r)
-    for (int k = m_csr.row_start[size_t(r)]; k < m_csr.row_start[size_t(r) + 1]; ++k)
-      if (m_csr.col[size_t(k)] == r) m_diag_slot[size_t(r)] = k;
-  for (size_t r = 0; r < m_diag_slot.size(); ++r)
-    HOOKE_ASSERT(m_diag_slot[r] >= 0, "gauss-seidel: diagonal entry " << r << " not stored");
+  m_diag_pos = linear_detail::diagonal_positions(A);
   m_r.setZero(A.rows());
   LinearSummary s;
   s.analyze_seconds = seconds_since(t0);
@@ -108,8 +103,8 @@ LinearSummary GaussSeidelSolver::factor(const SparseMatrix& A) {
   LinearSummary s;
   m_A = &A;
   m_csr.refresh(A);
-  for (size_t r = 0; r < m_diag_slot.size(); ++r) {
-    const double d = m_csr.value[size_t(m_diag_slot[r])];
+  for (size_t r = 0; r < m_diag_pos.size(); ++r) {
+    const double d = A.valuePtr()[m_diag_pos[r]];
     if (d == 0.0 || !std::isfinite(d)) {
       s.status = Status::BrokeDown;
       s.message = "gauss-seidel: diagonal entry " + std::to_string(r) + " is " + std::to_string(d);
@@ -126,7 +121,7 @@ void GaussSeidelSolver::sweep(ConstRef b, VecRef x) {
     double sum = b[r];
     for (int k = m_csr.row_start[size_t(r)]; k < m_csr.row_start[size_t(r) + 1]; ++k)
       sum -= m_csr.value[size_t(k)] * x[m_csr.col[size_t(k)]];
-    const double d = m_csr.value[size_t(m_diag_slot[size_t(r)])];
+    const double d = m_A->valuePtr()[m_diag_pos[size_t(r)]];
     x[r] += sum / d;  // sum included the diagonal term d * x_r
   }
 }

@@ -55,7 +55,7 @@ class GaussSeidelSolver final : public StationarySolver {
 
  private:
   linear_detail::CsrMirror m_csr;
-  std::vector<int> m_diag_slot;  // CSR slot of each diagonal entry
+  std::vector<int> m_diag_pos;  // position of each diagonal entry in A's values
 };
 
 /// Multicolour block Gauss-Seidel: particles (3x3 block rows) are greedily coloured so that no two
