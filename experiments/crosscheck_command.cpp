@@ -63,7 +63,9 @@ Trajectory run_method(const Scene& scene, const std::string& method, const Metho
   for (long long target : sample_steps) {
     while (step < target) {
       const long long next = step_between_samples ? target : step + 1;
-      const StepSummary s = sim.advance(time_of(next) - sim.state().t);
+      const double t = sim.state().t;
+      const StepSummary s =
+          sim.advance(step_between_samples ? time_of(next) - t : scene.time.step_size(next, t));
       if (s.status == Status::BrokeDown || s.status == Status::Fatal) {
         std::ostringstream os;
         os << "failed at t = " << sim.state().t << ": " << s.message;

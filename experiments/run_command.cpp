@@ -135,9 +135,9 @@ int run_mass_spring(Scene& scene, const std::string& dir, const RunOptions& opti
   frame(0);
   Progress progress(options.progress, N);
   for (long long step = 1; step <= N; ++step) {
-    const double t_next = step == N ? scene.time.duration : double(step) * scene.time.dt;
+    const double t_next = sim.state().t + scene.time.step_size(step, sim.state().t);
     const auto t0 = Clock::now();
-    const StepSummary sum = sim.advance(t_next - sim.state().t);
+    const StepSummary sum = sim.advance(scene.time.step_size(step, sim.state().t));
     wall += std::chrono::duration<double>(Clock::now() - t0).count();
     iterations = sum.iterations;
     residual = sum.residual;
@@ -213,7 +213,7 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
   row(0);
   Progress progress(options.progress, N);
   for (long long step = 1; step <= N; ++step) {
-    const double t_next = step == N ? scene.time.duration : double(step) * scene.time.dt;
+    const double t_next = t + scene.time.step_size(step, t);
     method->step(ode, t, t_next - t, X, X1);
     X.swap(X1);
     t = t_next;

@@ -170,7 +170,8 @@ void read_run_settings(TableReader& root, Scene& scene) {
     static const std::vector<std::string> all_keys = {
         "beta", "linear_solver", "newton_iterations", "tolerance", "linear_tolerance",
         "max_linear_iterations", "clamp_compressed", "rtol", "atol", "max_order", "adams",
-        "preconditioner", "max_steps", "max_iterations"};
+        "preconditioner", "max_steps", "max_iterations", "iterations", "warm_start", "acceleration",
+        "chebyshev_rho", "chebyshev_delay", "lbfgs_history", "substeps"};
     MethodOptions& o = scene.integrator.options;
     std::vector<std::string> own;
     if (kind == MethodKind::Implicit) {
@@ -209,6 +210,26 @@ void read_run_settings(TableReader& root, Scene& scene) {
       if (w.sundials_linear_solver == "klu" && !w.preconditioner.empty())
         r.fail("preconditioner", "only linear_solver = \"spgmr\" takes a preconditioner");
       w.max_steps = long(r.integer("max_steps", w.max_steps, 1, 1000000000000LL));
+    } else if (method == "fast-mass-spring") {
+      own = {"iterations", "tolerance", "warm_start", "acceleration", "chebyshev_rho",
+             "chebyshev_delay", "lbfgs_history"};
+      FastMassSpringOptions& f = o.fast_mass_spring;
+      f.iterations = int(r.integer("iterations", f.iterations, 1, 100000000));
+      f.tolerance = r.non_negative("tolerance", f.tolerance);
+      if (f.tolerance >= 1.0) r.fail("tolerance", "must be < 1 (a relative objective decrease), got " +
+                                                      std::to_string(f.tolerance));
+      f.warm_start = r.choice("warm_start", f.warm_start, {"inertial", "previous"});
+      f.acceleration = r.choice("acceleration", f.acceleration, {"none", "chebyshev", "lbfgs"});
+      f.chebyshev_rho = r.non_negative("chebyshev_rho", f.chebyshev_rho);
+      if (f.chebyshev_rho >= 1.0)
+        r.fail("chebyshev_rho", "must be in [0, 1) (0 = estimate), got " + std::to_string(f.chebyshev_rho));
+      f.chebyshev_delay = int(r.integer("chebyshev_delay", f.chebyshev_delay,
+                                        f.chebyshev_rho == 0.0 ? 2 : 0, 100000000));
+      f.lbfgs_history = int(r.integer("lbfgs_history", f.lbfgs_history, 1, 1000));
+    } else if (method == "xpbd") {
+      own = {"substeps", "iterations"};
+      o.xpbd.substeps = int(r.integer("substeps", o.xpbd.substeps, 1, 100000000));
+      o.xpbd.iterations = int(r.integer("iterations", o.xpbd.iterations, 1, 100000000));
     } else if (method == "ceres-implicit") {
       own = {"max_iterations"};
       o.whole_step.max_iterations = int(r.integer("max_iterations", 100, 1, 100000000));

@@ -27,6 +27,10 @@ struct TimeSettings {
   double duration = 1.0;  ///< simulated time (s), >= 0; the last step is shortened to land on it
   /// Number of steps needed to reach duration with steps of at most dt.
   long long steps() const;
+  /// Size of step `step` (1-based) starting at time t: exactly dt, except the last step, which
+  /// lands on duration. Every other step has the same h bit for bit, so methods that cache
+  /// h-dependent work (factorizations, BDF history) never see rounding-level changes of h.
+  double step_size(long long step, double t) const { return step == steps() ? duration - t : dt; }
 };
 
 /// [output]: where and how often to write.

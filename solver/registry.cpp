@@ -60,7 +60,7 @@ const std::vector<ImplicitEntry>& implicit_table() {
 
 struct WholeStepEntry {
   MethodInfo info;
-  std::function<std::unique_ptr<Stepper>(const MassSpringSystem&, const WholeStepOptions&)> make;
+  std::function<std::unique_ptr<Stepper>(const MassSpringSystem&, const MethodOptions&)> make;
   std::function<std::string(const MassSpringSystem&)> unsupported;
 };
 
@@ -70,7 +70,8 @@ const std::vector<WholeStepEntry>& whole_step_table() {
 #if HOOKE_WITH_SUNDIALS
       {{"cvode", MethodKind::WholeStep,
         "SUNDIALS CVODE: adaptive BDF (or Adams) on x' = v, M v' = f, analytic Jacobian"},
-       [](const MassSpringSystem& sys, const WholeStepOptions& w) -> std::unique_ptr<Stepper> {
+       [](const MassSpringSystem& sys, const MethodOptions& m) -> std::unique_ptr<Stepper> {
+         const WholeStepOptions& w = m.whole_step;
          CvodeOptions o;
          o.rtol = w.rtol;
          o.atol = w.atol;
@@ -84,7 +85,8 @@ const std::vector<WholeStepEntry>& whole_step_table() {
        nullptr},
       {{"ida", MethodKind::WholeStep,
         "SUNDIALS IDA: adaptive BDF on the residual F(t, y, y') = 0, analytic Jacobian"},
-       [](const MassSpringSystem& sys, const WholeStepOptions& w) -> std::unique_ptr<Stepper> {
+       [](const MassSpringSystem& sys, const MethodOptions& m) -> std::unique_ptr<Stepper> {
+         const WholeStepOptions& w = m.whole_step;
          IdaOptions o;
          o.rtol = w.rtol;
          o.atol = w.atol;
@@ -99,13 +101,28 @@ const std::vector<WholeStepEntry>& whole_step_table() {
 #if HOOKE_WITH_CERES
       {{"ceres-implicit", MethodKind::WholeStep,
         "backward Euler solved exactly as nonlinear least squares with Ceres"},
-       [](const MassSpringSystem& sys, const WholeStepOptions& w) -> std::unique_ptr<Stepper> {
+       [](const MassSpringSystem& sys, const MethodOptions& m) -> std::unique_ptr<Stepper> {
          CeresImplicitOptions o;
-         o.max_iterations = w.max_iterations;
+         o.max_iterations = m.whole_step.max_iterations;
          return std::make_unique<CeresImplicitStepper>(sys, o);
        },
        [](const MassSpringSystem& sys) { return ceres_implicit_unsupported(sys); }},
 #endif
+#if HOOKE_WITH_CHOLMOD
+      {{"fast-mass-spring", MethodKind::WholeStep,
+        "Liu et al. 2013 local/global backward Euler on a prefactored CHOLMOD matrix "
+        "(Chebyshev or L-BFGS acceleration)"},
+       [](const MassSpringSystem& sys, const MethodOptions& m) -> std::unique_ptr<Stepper> {
+         return std::make_unique<FastMassSpringStepper>(sys, m.fast_mass_spring);
+       },
+       [](const MassSpringSystem& sys) { return fast_mass_spring_unsupported(sys); }},
+#endif
+      {{"xpbd", MethodKind::WholeStep,
+        "extended position-based dynamics with substeps (Macklin et al. 2019), compliance 1/k"},
+       [](const MassSpringSystem& sys, const MethodOptions& m) -> std::unique_ptr<Stepper> {
+         return std::make_unique<XpbdStepper>(sys, m.xpbd);
+       },
+       [](const MassSpringSystem& sys) { return xpbd_unsupported(sys); }},
   };
   return table;
 }
@@ -115,6 +132,9 @@ std::string missing_backend(const std::string& name) {
   if ((name == "cvode" || name == "ida") && !HOOKE_WITH_SUNDIALS)
     return "method '" + name + "' is not built: install libsundials-dev and reconfigure with "
            "-DHOOKE_WITH_SUNDIALS=ON";
+  if (name == "fast-mass-spring" && !HOOKE_WITH_CHOLMOD)
+    return "method 'fast-mass-spring' is not built: install libsuitesparse-dev and reconfigure "
+           "with -DHOOKE_WITH_CHOLMOD=ON";
   if (name == "ceres-implicit" && !HOOKE_WITH_CERES)
     return "method 'ceres-implicit' is not built: install libceres-dev and reconfigure with "
            "-DHOOKE_WITH_CERES=ON";
@@ -174,7 +194,7 @@ std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringS
         const std::string why = e.unsupported(system);
         if (!why.empty()) throw std::invalid_argument(why);
       }
-      return e.make(system, options.whole_step);
+      return e.make(system, options);
     }
   return std::make_unique<ExplicitMassSpringStepper>(system, make_explicit_stepper(name));
 }

@@ -4,6 +4,8 @@
 #include <string>
 #include <vector>
 
+#include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/backends/xpbd.hpp"
 #include "hooke/integrators/explicit_stepper.hpp"
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/integrators/stepper.hpp"
@@ -15,7 +17,7 @@ namespace hooke {
 enum class MethodKind {
   Explicit,   ///< runs on any OdeSystem; takes no options
   Implicit,   ///< Newton on a linear backend; takes MethodOptions::implicit and linear_solver
-  WholeStep,  ///< an external solver advances the whole step; takes MethodOptions::whole_step
+  WholeStep,  ///< a solver of its own advances the whole step; takes its own MethodOptions field
 };
 
 /// Options of the whole-step backends (cvode, ida, ceres-implicit); each uses the fields that
@@ -37,6 +39,8 @@ struct MethodOptions {
   std::string linear_solver;
   ImplicitOptions implicit;
   WholeStepOptions whole_step;
+  FastMassSpringOptions fast_mass_spring;  ///< fast-mass-spring only
+  XpbdOptions xpbd;                        ///< xpbd only
 };
 
 /// One entry of the method table.

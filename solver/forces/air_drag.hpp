@@ -13,6 +13,10 @@ class AirDrag final : public Force {
   AirDrag(Index num_particles, double c, const Vec3& wind = Vec3::Zero())
       : m_n(num_particles), m_c(c), m_wind(wind) {}
 
+  /// Drag coefficient c (kg/s per particle) and wind velocity w (m/s).
+  double coefficient() const { return m_c; }
+  const Vec3& wind() const { return m_wind; }
+
   const char* name() const override { return "air-drag"; }
   void add_forces(ConstRef x, ConstRef v, VecRef f) const override;
   void bind(const BlockPattern& p) override;

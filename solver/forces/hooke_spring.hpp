@@ -36,6 +36,12 @@ class HookeSpring final : public Force {
   void add(int a, int b, double k, double L) { m_springs.add(a, b, k, L); }
   size_t size() const { return m_springs.size(); }
   const SpringSet& springs() const { return m_springs; }
+  /// Multiplies every stiffness by factor >= 0 (a stiffness continuation between steps; call it
+  /// through MassSpringSystem::mutable_force so steppers see the change).
+  void scale_stiffness(double factor) {
+    HOOKE_ASSERT(factor >= 0.0, "scale_stiffness: factor " << factor << " < 0");
+    for (double& k : m_springs.coeff) k *= factor;
+  }
 
   const char* name() const override { return "hooke-spring"; }
   void add_forces(ConstRef x, ConstRef v, VecRef f) const override;

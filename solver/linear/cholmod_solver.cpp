@@ -26,6 +26,8 @@ struct CholmodSolver::Impl {
   std::vector<SuiteSparse_long> p, i; // long-index copies of the pattern (made once)
   cholmod_dense B{};                  // header over the right-hand side
   cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve2 workspace, reused
+  cholmod_dense Bk{};                                      // header over a block of columns
+  cholmod_dense *Xk = nullptr, *Yk = nullptr, *Ek = nullptr;  // its workspace
   Index n = 0;
   bool factored = false;
 };
@@ -51,6 +53,8 @@ CholmodSolver::~CholmodSolver() {
   if (m->X) cholmod_l_free_dense(&m->X, &m->c);
   if (m->Y) cholmod_l_free_dense(&m->Y, &m->c);
   if (m->E) cholmod_l_free_dense(&m->E, &m->c);
+  for (cholmod_dense** d : {&m->Xk, &m->Yk, &m->Ek})
+    if (*d) cholmod_l_free_dense(d, &m->c);
   cholmod_l_finish(&m->c);
 }
 
@@ -129,6 +133,33 @@ LinearSummary CholmodSolver::solve(ConstRef b, VecRef x, const LinearSolveOption
     return s;
   }
   x = Eigen::Map<const Vec>(static_cast<const double*>(m->X->x), m->n);
+  s.solve_seconds = since(t0);
+  return s;
+}
+
+LinearSummary CholmodSolver::solve_columns(const Eigen::Ref<const Eigen::MatrixXd>& B,
+                                           Eigen::Ref<Eigen::MatrixXd> X) {
+  const auto t0 = Clock::now();
+  LinearSummary s;
+  HOOKE_ASSERT(m->factored, "cholmod: solve without a successful factor");
+  HOOKE_ASSERT(B.rows() == m->n && X.rows() == m->n && X.cols() == B.cols(),
+               "cholmod: solve_columns sizes " << B.rows() << "x" << B.cols() << " and " << X.rows()
+                                               << "x" << X.cols() << " for n = " << m->n);
+  cholmod_dense& H = m->Bk;
+  H.nrow = size_t(m->n);
+  H.ncol = size_t(B.cols());
+  H.d = size_t(B.outerStride());
+  H.nzmax = H.d * H.ncol;
+  H.xtype = CHOLMOD_REAL;
+  H.dtype = CHOLMOD_DOUBLE;
+  H.x = const_cast<double*>(B.data());
+  if (!cholmod_l_solve2(CHOLMOD_A, m->L, &H, nullptr, &m->Xk, nullptr, &m->Yk, &m->Ek, &m->c)) {
+    s.status = Status::Fatal;
+    s.message = "cholmod: solve failed with CHOLMOD status " + std::to_string(m->c.status);
+    return s;
+  }
+  X = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(
+      static_cast<const double*>(m->Xk->x), m->n, B.cols(), Eigen::OuterStride<>(Index(m->Xk->d)));
   s.solve_seconds = since(t0);
   return s;
 }

@@ -34,6 +34,12 @@ class CholmodSolver final : public LinearSolver {
   LinearSummary analyze(const SparseMatrix& A) override;
   LinearSummary factor(const SparseMatrix& A) override;
   LinearSummary solve(ConstRef b, VecRef x, const LinearSolveOptions& options) override;
+  /// Solves A X = B for an n x k block of right-hand sides in one cholmod_l_solve2 call, so the
+  /// supernodal triangular solves run as BLAS-3 on all k columns at once (the x, y and z columns of
+  /// the Liu et al. 2013 global step). B and X are n x k, column-major; X may not alias B. Keeps
+  /// its own workspace for the last k used, so repeated calls with the same k do not allocate.
+  LinearSummary solve_columns(const Eigen::Ref<const Eigen::MatrixXd>& B,
+                              Eigen::Ref<Eigen::MatrixXd> X);
   /// Nonzeros of the factor L (after factor()).
   double factor_nonzeros() const;
 

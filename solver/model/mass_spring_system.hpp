@@ -48,6 +48,15 @@ class MassSpringSystem {
   const std::vector<std::unique_ptr<Force>>& forces() const { return m_forces; }
   const std::vector<std::unique_ptr<Constraint>>& constraints() const { return m_constraints; }
   const BlockPattern& pattern() const { return m_pattern; }
+  /// Force i for editing its parameters between steps (e.g. HookeSpring::scale_stiffness). Bumps
+  /// revision(), so steppers that cache anything derived from parameters (a prefactored matrix)
+  /// know to rebuild it. Topology, masses and pins never change after finalize().
+  Force& mutable_force(size_t i) {
+    ++m_revision;
+    return *m_forces.at(i);
+  }
+  /// Incremented by every mutable_force() call; starts at 0.
+  unsigned long long revision() const { return m_revision; }
 
   /// f = sum of all forces at (x, v); f is overwritten (3n).
   void compute_forces(ConstRef x, ConstRef v, VecRef f) const;
@@ -75,6 +84,7 @@ class MassSpringSystem {
   std::vector<std::unique_ptr<Constraint>> m_constraints;
   BlockPattern m_pattern;
   bool m_finalized = false;
+  unsigned long long m_revision = 0;
 };
 
 }  // namespace hooke

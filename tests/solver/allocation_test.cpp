@@ -147,7 +147,7 @@ constexpr int kW = 5;  // kW x kW grid
 /// A kW x kW cloth hanging in the x-y plane (spacing 0.1 m, 0.02 kg per particle), top corners
 /// pinned, with structural + shear springs and dampers, gravity, air drag with wind, strain
 /// limiting on the structural springs and a ground plane that the lowest row starts below.
-std::unique_ptr<hooke::MassSpringSystem> make_cloth() {
+std::unique_ptr<hooke::MassSpringSystem> make_cloth(bool with_dampers = true) {
   const int n = kW * kW;
   const double s = 0.1, m = 0.02;
   std::vector<char> pinned(n, 0);
@@ -173,7 +173,7 @@ std::unique_ptr<hooke::MassSpringSystem> make_cloth() {
       if (c > 0 && r + 1 < kW) springs->add(i, i + kW - 1, 20.0, s * std::sqrt(2.0));
     }
   sys->add_force(std::move(springs));
-  sys->add_force(std::move(dampers));
+  if (with_dampers) sys->add_force(std::move(dampers));
   sys->add_force(std::make_unique<hooke::Gravity>(Vec::Constant(n, m), Vec3(0.0, -9.81, 0.0)));
   sys->add_force(std::make_unique<hooke::AirDrag>(n, 0.002, Vec3(0.5, 0.0, 0.2)));
   sys->add_constraint(std::move(limit));
@@ -379,4 +379,39 @@ TEST(Allocation, CholmodAllocatesOnlyInFactor) {
     EXPECT_EQ(factor_counts[size_t(k)], factor_counts[0]) << "factor call " << k;
   }
   EXPECT_GT(factor_counts[0], 0);  // if this ever becomes 0, tighten ImplicitStepsDoNotAllocate
+}
+
+// The same claim for the local/global and XPBD steppers, on the cloth without spring dampers
+// (which they refuse): after 2 warm-up steps (the first one factors the global matrix once), 50
+// steps of every fast-mass-spring variant, with fixed iterations and with the tolerance stop, and
+// of XPBD allocate nothing.
+TEST(Allocation, LocalGlobalAndXpbdStepsDoNotAllocate) {
+  auto sys = make_cloth(false);
+  const double h = 1e-3;
+  std::vector<std::pair<std::string, hooke::MethodOptions>> runs;
+  for (const char* a : {"none", "chebyshev", "lbfgs"})
+    for (double tol : {0.0, 1e-6}) {
+      hooke::MethodOptions o;
+      o.fast_mass_spring.acceleration = a;
+      o.fast_mass_spring.tolerance = tol;
+      o.fast_mass_spring.iterations = 20;
+      o.fast_mass_spring.chebyshev_delay = 4;
+      if (hooke::method_unsupported("fast-mass-spring", *sys).empty() &&
+          std::string(hooke::method_names()).find("fast-mass-spring") != std::string::npos)
+        runs.emplace_back("fast-mass-spring", o);
+    }
+  runs.emplace_back("xpbd", hooke::MethodOptions{});
+  for (const auto& [name, opt] : runs) {
+    const std::string label = name + " / " + opt.fast_mass_spring.acceleration + " / tol " +
+                              std::to_string(opt.fast_mass_spring.tolerance);
+    hooke::Simulation sim(*sys, hooke::make_stepper(name, *sys, opt), cloth_state());
+    for (int k = 0; k < 2; ++k) ASSERT_NE(sim.advance(h).status, hooke::Status::Fatal) << label;
+    const long before = g_allocations.load();
+    int failures = 0;
+    for (int k = 0; k < 50; ++k) failures += sim.advance(h).status == hooke::Status::Fatal;
+    EXPECT_EQ(g_allocations.load() - before, 0) << label << ": heap allocations in 50 steps";
+    EXPECT_EQ(failures, 0) << label;
+    EXPECT_TRUE(sim.state().is_finite()) << label;
+  }
+  EXPECT_GE(runs.size(), 1u);
 }

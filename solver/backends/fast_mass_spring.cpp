@@ -1,0 +1,466 @@
+#include "hooke/backends/fast_mass_spring.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+#include "hooke/backends/spring_potential_forces.hpp"
+#include "hooke/linear/cholmod_solver.hpp"
+
+namespace hooke {
+
+namespace {
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// <A, B> of two equally sized matrices.
+double inner(const Eigen::MatrixXd& A, const Eigen::MatrixXd& B) { return A.cwiseProduct(B).sum(); }
+}  // namespace
+
+std::string FastMassSpringOptions::validate() const {
+  std::ostringstream e;
+  if (iterations < 1) e << "iterations = " << iterations << ": must be >= 1";
+  else if (!(tolerance >= 0.0 && tolerance < 1.0)) e << "tolerance = " << tolerance << ": must be in [0, 1)";
+  else if (warm_start != "inertial" && warm_start != "previous")
+    e << "warm_start = '" << warm_start << "': must be inertial or previous";
+  else if (acceleration != "none" && acceleration != "chebyshev" && acceleration != "lbfgs")
+    e << "acceleration = '" << acceleration << "': must be one of none, chebyshev, lbfgs";
+  else if (!(chebyshev_rho >= 0.0 && chebyshev_rho < 1.0))
+    e << "chebyshev_rho = " << chebyshev_rho << ": must be in [0, 1) (0 = estimate)";
+  else if (chebyshev_delay < (chebyshev_rho == 0.0 ? 2 : 0))
+    e << "chebyshev_delay = " << chebyshev_delay << ": must be >= 2 when rho is estimated";
+  else if (lbfgs_history < 1) e << "lbfgs_history = " << lbfgs_history << ": must be >= 1";
+  return e.str();
+}
+
+std::string fast_mass_spring_unsupported(const MassSpringSystem& system) {
+  return SpringPotentialForces::unsupported(system, "fast-mass-spring",
+                                             "the local/global split needs each force to be a spring potential, a constant or quadratic in x; spring dampers are not");
+}
+
+FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
+                                             FastMassSpringOptions options)
+    : m_sys(system), m_opt(std::move(options)) {
+  if (const std::string err = m_opt.validate(); !err.empty())
+    throw std::invalid_argument("fast-mass-spring: " + err);
+  if (const std::string why = fast_mass_spring_unsupported(system); !why.empty())
+    throw std::invalid_argument("fast-mass-spring: " + why);
+  const SpringPotentialForces forces(system);
+  m_sets = forces.springs;
+  m_g = forces.gravity;
+  m_drag = forces.drag;
+  m_wind = forces.wind;
+
+  const Index n = system.num_particles();
+  m_row.assign(size_t(n), -1);
+  for (Index p = 0; p < n; ++p)
+    if (!system.pinned()[size_t(p)]) {
+      m_row[size_t(p)] = Index(m_free.size());
+      m_free.push_back(p);
+    }
+  const Index nf = Index(m_free.size());
+
+  // Pattern of the free x free global matrix: the diagonal plus both triangles of every spring
+  // joining two free particles (set-up only; steps just rewrite values).
+  std::vector<Eigen::Triplet<double, int>> t;
+  for (Index r = 0; r < nf; ++r) t.emplace_back(int(r), int(r), 0.0);
+  for (const SpringSet* s : m_sets)
+    for (size_t k = 0; k < s->size(); ++k) {
+      const Index ri = m_row[size_t(s->i[k])], rj = m_row[size_t(s->j[k])];
+      if (ri >= 0 && rj >= 0) {
+        t.emplace_back(int(ri), int(rj), 0.0);
+        t.emplace_back(int(rj), int(ri), 0.0);
+      }
+    }
+  m_A.resize(nf, nf);
+  m_A.setFromTriplets(t.begin(), t.end());
+  m_A.makeCompressed();
+  auto position = [&](Index r, Index c) -> Index {
+    const int* begin = m_A.innerIndexPtr() + m_A.outerIndexPtr()[c];
+    const int* end = m_A.innerIndexPtr() + m_A.outerIndexPtr()[c + 1];
+    const int* it = std::lower_bound(begin, end, int(r));
+    HOOKE_ASSERT(it != end && *it == r, "fast-mass-spring: entry missing from the pattern");
+    return Index(it - m_A.innerIndexPtr());
+  };
+  m_diag.resize(size_t(nf));
+  for (Index r = 0; r < nf; ++r) m_diag[size_t(r)] = position(r, r);
+  m_slots.resize(m_sets.size());
+  for (size_t si = 0; si < m_sets.size(); ++si) {
+    const SpringSet& s = *m_sets[si];
+    m_slots[si].resize(s.size());
+    for (size_t k = 0; k < s.size(); ++k) {
+      const Index ri = m_row[size_t(s.i[k])], rj = m_row[size_t(s.j[k])];
+      auto& slot = m_slots[si][k];
+      slot = {ri >= 0 ? m_diag[size_t(ri)] : -1, rj >= 0 ? m_diag[size_t(rj)] : -1,
+              ri >= 0 && rj >= 0 ? position(ri, rj) : -1, ri >= 0 && rj >= 0 ? position(rj, ri) : -1};
+      if (ri >= 0 && rj < 0) m_pin_links.push_back({ri, Index(s.j[k]), si, k});
+      if (rj >= 0 && ri < 0) m_pin_links.push_back({rj, Index(s.i[k]), si, k});
+    }
+  }
+
+  m_chol = std::make_unique<CholmodSolver>();
+  if (nf > 0) {
+    const LinearSummary a = m_chol->analyze(m_A);
+    if (a.status != Status::Converged) throw std::runtime_error("fast-mass-spring: " + a.message);
+  }
+
+  const Index dofs = 3 * n;
+  for (Vec* v : {&m_y, &m_acc, &m_x, &m_xprev, &m_xhat}) v->setZero(dofs);
+  for (Eigen::MatrixXd* M : {&m_const, &m_B, &m_X, &m_G, &m_Gnew, &m_D, &m_Xtrial})
+    M->setZero(nf, 3);
+  if (m_opt.acceleration == "lbfgs") {
+    m_s.assign(size_t(m_opt.lbfgs_history), Eigen::MatrixXd::Zero(nf, 3));
+    m_t = m_s;
+    m_rho_lbfgs.assign(size_t(m_opt.lbfgs_history), 0.0);
+    m_alpha.assign(size_t(m_opt.lbfgs_history), 0.0);
+  }
+  size_t groups = 0;
+  for (const SpringSet* s : m_sets) groups = std::max(groups, s->group_start.size());
+  m_group_energy.assign(groups + 1, 0.0);
+}
+
+FastMassSpringStepper::~FastMassSpringStepper() = default;
+
+double FastMassSpringStepper::factor_nonzeros() const { return m_chol->factor_nonzeros(); }
+
+void FastMassSpringStepper::prepare(double h) {
+  if (h == m_factored_h && m_sys.revision() == m_factored_revision) return;
+  const auto t0 = Clock::now();
+  double* a = m_A.valuePtr();
+  std::fill(a, a + m_A.nonZeros(), 0.0);
+  for (size_t si = 0; si < m_sets.size(); ++si) {
+    const SpringSet& s = *m_sets[si];
+    for (size_t k = 0; k < s.size(); ++k) {
+      const auto& slot = m_slots[si][k];
+      const double c = s.coeff[k];
+      if (slot[0] >= 0) a[slot[0]] += c;
+      if (slot[1] >= 0) a[slot[1]] += c;
+      if (slot[2] >= 0) a[slot[2]] -= c;
+      if (slot[3] >= 0) a[slot[3]] -= c;
+    }
+  }
+  const Vec& m = m_sys.masses();
+  for (size_t r = 0; r < m_free.size(); ++r) a[m_diag[r]] += m[m_free[r]] / (h * h) + m_drag / h;
+  if (!m_free.empty()) {
+    const LinearSummary f = m_chol->factor(m_A);
+    // M/h^2 > 0 on the diagonal and a spring Laplacian make A symmetric positive definite, so a
+    // failure here is a broken invariant (or a non-finite h), not a recoverable outcome.
+    if (f.status != Status::Converged) throw std::runtime_error("fast-mass-spring: " + f.message);
+  }
+  m_factored_h = h;
+  m_factored_revision = m_sys.revision();
+  ++m_factorizations;
+  m_last_factor_seconds = since(t0);
+  m_factor_seconds += m_last_factor_seconds;
+}
+
+void FastMassSpringStepper::begin_step(const State& s0, double h) {
+  m_h = h;
+  m_s0 = &s0;
+  m_y.noalias() = s0.x + h * s0.v;
+  const Vec& m = m_sys.masses();
+  for (size_t r = 0; r < m_free.size(); ++r) {
+    const Index p = m_free[r];
+    const Vec3 b = m[p] / (h * h) * m_y.segment<3>(3 * p) + m[p] * m_g +
+                   (m_drag / h) * (s0.x.segment<3>(3 * p) + h * m_wind);
+    m_const.row(Index(r)) = b.transpose();
+  }
+  for (const PinLink& l : m_pin_links)
+    m_const.row(l.r) += m_sets[l.set]->coeff[l.spring] * m_y.segment<3>(3 * l.q).transpose();
+}
+
+double FastMassSpringStepper::local_step(ConstRef x) {
+  const auto t0 = Clock::now();
+  m_acc.setZero();
+  double energy = 0.0;
+  for (const SpringSet* sp : m_sets) {
+    const SpringSet& s = *sp;
+    // Each spring's best direction d = L (x_i - x_j) / |x_i - x_j| enters b as +k d at i and -k d
+    // at j. Particle ranges run in parallel (SpringSet's partition: no two threads write one
+    // particle), energies are summed per range and then in range order: deterministic.
+    auto body = [&](size_t k) {
+      const int i = s.i[k], j = s.j[k];
+      const Vec3 e = x.segment<3>(3 * i) - x.segment<3>(3 * j);
+      const double l = e.norm(), L = s.rest_length[k], c = s.coeff[k];
+      // At l = 0 every direction is optimal (the energy is c L^2 / 2 for all of them): take x.
+      const Vec3 d = l > 0.0 ? Vec3((L / l) * e) : Vec3(L, 0.0, 0.0);
+      m_acc.segment<3>(3 * i) += c * d;
+      m_acc.segment<3>(3 * j) -= c * d;
+      return 0.5 * c * (l - L) * (l - L);
+    };
+    const long long groups = s.group_start.empty() ? 0 : (long long)s.group_start.size() - 1;
+    if (run_parallel(groups, 2)) {
+#pragma omp parallel for schedule(dynamic, 1)
+      for (long long g = 0; g < groups; ++g) {
+        double e = 0.0;
+        for (size_t k = s.group_start[size_t(g)]; k < s.group_start[size_t(g) + 1]; ++k) e += body(k);
+        m_group_energy[size_t(g)] = e;
+      }
+      for (long long g = 0; g < groups; ++g) energy += m_group_energy[size_t(g)];
+      for (size_t k = s.group_start.back(); k < s.size(); ++k) energy += body(k);
+    } else {
+      for (size_t k = 0; k < s.size(); ++k) energy += body(k);
+    }
+  }
+  for (size_t r = 0; r < m_free.size(); ++r)
+    m_B.row(Index(r)) = m_const.row(Index(r)) + m_acc.segment<3>(3 * m_free[r]).transpose();
+  m_local_seconds += since(t0);
+  return energy;
+}
+
+double FastMassSpringStepper::quadratic_terms(ConstRef x) const {
+  const Vec& m = m_sys.masses();
+  const State& s0 = *m_s0;
+  const double h = m_h;
+  double q = 0.0;
+  for (const Index p : m_free) {
+    const Vec3 xp = x.segment<3>(3 * p);
+    // Gravity's term is taken relative to y (a constant shift of g): its absolute value would
+    // dwarf the differences between iterates and cost digits in every comparison of g.
+    const Vec3 dy = xp - m_y.segment<3>(3 * p);
+    q += m[p] / (2 * h * h) * dy.squaredNorm() - m[p] * m_g.dot(dy);
+    if (m_drag > 0.0)
+      q += m_drag / (2 * h) * (xp - s0.x.segment<3>(3 * p) - h * m_wind).squaredNorm();
+  }
+  return q;
+}
+
+double FastMassSpringStepper::objective(const State& s0, double h, ConstRef x) const {
+  // A const evaluation: the same terms as the solver's, summed serially in spring order.
+  const Vec y = s0.x + h * s0.v;
+  const Vec& m = m_sys.masses();
+  double g = 0.0;
+  for (const Index p : m_free) {
+    const Vec3 xp = x.segment<3>(3 * p);
+    const Vec3 dy = xp - y.segment<3>(3 * p);
+    g += m[p] / (2 * h * h) * dy.squaredNorm() - m[p] * m_g.dot(dy);
+    if (m_drag > 0.0) g += m_drag / (2 * h) * (xp - s0.x.segment<3>(3 * p) - h * m_wind).squaredNorm();
+  }
+  for (const SpringSet* sp : m_sets)
+    for (size_t k = 0; k < sp->size(); ++k) {
+      const double l = (x.segment<3>(3 * sp->i[k]) - x.segment<3>(3 * sp->j[k])).norm();
+      g += 0.5 * sp->coeff[k] * (l - sp->rest_length[k]) * (l - sp->rest_length[k]);
+    }
+  return g;
+}
+
+void FastMassSpringStepper::gather(ConstRef x, Eigen::MatrixXd& X) const {
+  for (size_t r = 0; r < m_free.size(); ++r) X.row(Index(r)) = x.segment<3>(3 * m_free[r]).transpose();
+}
+
+void FastMassSpringStepper::scatter(const Eigen::MatrixXd& X, VecRef x) const {
+  for (size_t r = 0; r < m_free.size(); ++r) x.segment<3>(3 * m_free[r]) = X.row(Index(r)).transpose();
+}
+
+Status FastMassSpringStepper::global_solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& X,
+                                           std::string& message) {
+  const auto t0 = Clock::now();
+  const LinearSummary s = m_chol->solve_columns(B, X);
+  m_global_seconds += since(t0);
+  if (s.status != Status::Converged) message = "fast-mass-spring: " + s.message;
+  return s.status;
+}
+
+StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
+  StepSummary out;
+  prepare(h);
+  begin_step(s0, h);
+  m_x = m_opt.warm_start == "inertial" ? m_y : s0.x;
+  for (Index p = 0; p < m_sys.num_particles(); ++p)  // pinned particles sit at their end position
+    if (m_row[size_t(p)] < 0) m_x.segment<3>(3 * p) = m_y.segment<3>(3 * p);
+  m_xprev = m_x;
+
+  const bool lbfgs = m_opt.acceleration == "lbfgs", chebyshev = m_opt.acceleration == "chebyshev";
+  const bool want_objective = m_opt.tolerance > 0.0 || lbfgs || chebyshev;
+  const int N = m_opt.iterations;
+  double g_start = 0.0, g_prev = 0.0, g = 0.0;
+  bool converged = m_opt.tolerance == 0.0 || m_free.empty();
+  int it = 0;
+  // Chebyshev state (Wang 2015, eq. 11 with gamma = 1): x_{k+1} = x_{k-1} + omega (xhat - x_{k-1}),
+  // with omega = 1 for the first S - 1 iterations after a (re)start, 2 / (2 - rho^2) at the S-th
+  // and 4 / (4 - rho^2 omega) after it. j counts the iterations since the last (re)start.
+  double omega = 1.0, rho = m_opt.chebyshev_rho, prev_update = 0.0;
+  int j = 0;
+
+  if (!m_free.empty() && !lbfgs) {
+    for (int k = 0;; ++k) {
+      // Local step at the current iterate x_k (its objective comes for free with it).
+      if (k == N && !want_objective) break;
+      const double E = local_step(m_x);
+      if (want_objective) {
+        g = quadratic_terms(m_x) + E;
+        if (k == 0) {
+          g_start = g;
+        } else {
+          if (chebyshev && omega != 1.0 && g > g_prev) {
+            // The semi-iteration overshot (rho too large for this stage of a nonlinear
+            // iteration): restart it from x_k with plain iterations, as on entry.
+            j = 0;
+            omega = 1.0;
+            ++m_chebyshev_restarts;
+          }
+          out.residual = (g_start - g) > 0.0 ? (g_prev - g) / (g_start - g) : 0.0;
+          if (m_opt.tolerance > 0.0 && g_prev - g <= m_opt.tolerance * (g_start - g)) {
+            converged = true;
+            break;
+          }
+        }
+        g_prev = g;
+      }
+      if (k == N) break;
+      // Global step: xhat = A^{-1} b(d(x_k)).
+      if (global_solve(m_B, m_X, out.message) != Status::Converged) {
+        out.status = Status::Fatal;
+        return out;
+      }
+      ++it;
+      if (!chebyshev) {
+        scatter(m_X, m_x);
+      } else {
+        m_xhat = m_x;
+        scatter(m_X, m_xhat);
+        const double update = (m_xhat - m_x).norm();
+        const int S = m_opt.chebyshev_delay;
+        ++j;
+        if (j == S) {
+          if (m_opt.chebyshev_rho == 0.0) rho = prev_update > 0.0 ? std::min(update / prev_update, 0.9999) : 0.0;
+          omega = rho > 0.0 ? 2.0 / (2.0 - rho * rho) : 1.0;
+        } else if (j > S) {
+          omega = 4.0 / (4.0 - rho * rho * omega);
+        }
+        prev_update = update;
+        if (omega != 1.0) {
+          // x_{k+1} = x_{k-1} + omega (xhat - x_{k-1}); m_xprev holds x_{k-1}.
+          m_xprev = m_xprev + omega * (m_xhat - m_xprev);
+          m_x.swap(m_xprev);  // now m_x = x_{k+1} and m_xprev = x_k
+        } else {
+          m_xprev.swap(m_x);  // m_xprev = x_k
+          m_x = m_xhat;
+        }
+      }
+      if (m_opt.on_iteration) m_opt.on_iteration(it, m_x);
+    }
+  } else if (!m_free.empty()) {
+    // L-BFGS on g (Liu, Bouaziz and Kavan 2017, Algorithm 1): grad g = A x - b(d(x)), initial
+    // inverse Hessian A^{-1} (the prefactored matrix), Armijo backtracking from alpha = 1.
+    gather(m_x, m_X);
+    g = quadratic_terms(m_x) + local_step(m_x);
+    g_start = g;
+    m_G.noalias() = m_A * m_X;
+    m_G -= m_B;
+    const int H = m_opt.lbfgs_history;
+    int stored = 0, newest = -1;
+    for (int k = 0; k < N; ++k) {
+      // Two-loop recursion: D = -H G with H0 = A^{-1}.
+      m_D = m_G;
+      for (int c = 0; c < stored; ++c) {
+        const int i = (newest - c + H) % H;
+        m_alpha[size_t(i)] = m_rho_lbfgs[size_t(i)] * inner(m_s[size_t(i)], m_D);
+        m_D -= m_alpha[size_t(i)] * m_t[size_t(i)];
+      }
+      if (global_solve(m_D, m_Xtrial, out.message) != Status::Converged) {
+        out.status = Status::Fatal;
+        return out;
+      }
+      m_D = m_Xtrial;
+      for (int c = stored - 1; c >= 0; --c) {
+        const int i = (newest - c + H) % H;
+        const double beta = m_rho_lbfgs[size_t(i)] * inner(m_t[size_t(i)], m_D);
+        m_D += (m_alpha[size_t(i)] - beta) * m_s[size_t(i)];
+      }
+      m_D = -m_D;
+      double slope = inner(m_G, m_D);
+      if (!(slope < 0.0)) {  // not a descent direction: drop the history, take the plain step
+        stored = 0;
+        if (global_solve(m_G, m_D, out.message) != Status::Converged) {
+          out.status = Status::Fatal;
+          return out;
+        }
+        m_D = -m_D;
+        slope = inner(m_G, m_D);
+      }
+      ++it;
+      double alpha = 1.0, g_trial = g;
+      bool accepted = false;
+      for (int trial = 0; trial < 30; ++trial) {
+        m_Xtrial = m_X + alpha * m_D;
+        scatter(m_Xtrial, m_x);
+        g_trial = quadratic_terms(m_x) + local_step(m_x);
+        ++m_line_search_trials;
+        m_Gnew.noalias() = m_A * m_Xtrial;
+        m_Gnew -= m_B;
+        if (g_trial <= g + 1e-4 * alpha * slope) {
+          accepted = true;
+          break;
+        }
+        // Near the minimum the predicted decrease sinks below the round-off of g itself (about
+        // 1e-16 |g| per term): there the gradient, which has no such cancellation, decides.
+        if (-alpha * slope <= 1e-12 * (std::abs(g) + std::abs(g_start - g)) &&
+            m_Gnew.squaredNorm() < m_G.squaredNorm()) {
+          accepted = true;
+          break;
+        }
+        alpha *= 0.5;
+      }
+      if (!accepted) {  // no decrease of g or of its gradient is measurable any more
+        scatter(m_X, m_x);
+        converged = true;
+        break;
+      }
+      // History pair s = x_{k+1} - x_k, t = grad_{k+1} - grad_k (skipped unless curvature > 0).
+      const int slot = (newest + 1) % H;
+      m_s[size_t(slot)] = m_Xtrial - m_X;
+      m_t[size_t(slot)] = m_Gnew - m_G;
+      const double st = inner(m_s[size_t(slot)], m_t[size_t(slot)]);
+      if (st > 0.0) {
+        m_rho_lbfgs[size_t(slot)] = 1.0 / st;
+        newest = slot;
+        stored = std::min(stored + 1, H);
+      }
+      m_X.swap(m_Xtrial);
+      m_G.swap(m_Gnew);
+      g_prev = g;
+      g = g_trial;
+      if (m_opt.on_iteration) m_opt.on_iteration(it, m_x);
+      out.residual = (g_start - g) > 0.0 ? (g_prev - g) / (g_start - g) : 0.0;
+      if (m_opt.tolerance > 0.0 && g_prev - g <= m_opt.tolerance * (g_start - g)) {
+        converged = true;
+        break;
+      }
+    }
+  }
+
+  s1.t = s0.t + h;
+  s1.x = m_x;
+  s1.v.resize(s0.v.size());
+  for (Index p = 0; p < m_sys.num_particles(); ++p)
+    s1.v.segment<3>(3 * p) = m_row[size_t(p)] >= 0
+                                 ? Vec3((s1.x.segment<3>(3 * p) - s0.x.segment<3>(3 * p)) / h)
+                                 : Vec3(s0.v.segment<3>(3 * p));
+  out.iterations = it;
+  m_iterations += it;
+  ++m_steps;
+  if (!converged) {
+    out.status = Status::NotConverged;
+    std::ostringstream msg;
+    msg << "fast-mass-spring: objective decrease " << out.residual << " of the step's total still > tolerance "
+        << m_opt.tolerance << " after " << it << " iterations (raise [integrator] iterations)";
+    out.message = msg.str();
+  }
+  return out;
+}
+
+std::string FastMassSpringStepper::report() const {
+  std::ostringstream r;
+  r << "fast-mass-spring (" << m_opt.acceleration << "): " << m_steps << " steps, " << m_iterations
+    << " iterations (" << (m_steps ? double(m_iterations) / double(m_steps) : 0.0) << " per step), "
+    << m_factorizations << " factorizations (" << m_factor_seconds << " s), local steps "
+    << m_local_seconds << " s, global solves " << m_global_seconds << " s";
+  if (m_opt.acceleration == "lbfgs") r << ", " << m_line_search_trials << " line-search evaluations";
+  if (m_opt.acceleration == "chebyshev") r << ", " << m_chebyshev_restarts << " Chebyshev restarts";
+  return r.str();
+}
+
+}  // namespace hooke

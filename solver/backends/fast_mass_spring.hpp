@@ -1,0 +1,135 @@
+#pragma once
+#include <array>
+#include <functional>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "hooke/forces/spring_set.hpp"
+#include "hooke/integrators/stepper.hpp"
+#include "hooke/model/mass_spring_system.hpp"
+
+namespace hooke {
+
+class CholmodSolver;
+
+/// Options of FastMassSpringStepper fixed for its lifetime.
+struct FastMassSpringOptions {
+  /// Iterations per step: exactly this many when tolerance = 0 (Liu et al. 2013 use 10), at most
+  /// this many otherwise.
+  int iterations = 10;
+  /// Stop early once an iteration lowers the objective g by at most tolerance * (g(x_start) - g),
+  /// i.e. relative to the decrease achieved so far in this step. 0 = fixed iteration count.
+  /// Evaluating g costs one extra pass over the springs per step.
+  double tolerance = 0.0;
+  /// Start of the iteration: "inertial" (y = x0 + h v0, the paper's choice) or "previous" (x0).
+  std::string warm_start = "inertial";
+  /// "none" (plain local/global, Liu et al. 2013), "chebyshev" (Wang 2015 semi-iterative
+  /// acceleration) or "lbfgs" (Liu, Bouaziz and Kavan 2017: L-BFGS whose initial inverse Hessian is
+  /// the prefactored global matrix, with an Armijo backtracking line search).
+  std::string acceleration = "none";
+  /// Chebyshev: spectral radius rho of the plain iteration in (0, 1); 0 = estimate it in every step
+  /// from the ratio of the last two plain update norms before Chebyshev starts.
+  double chebyshev_rho = 0.0;
+  /// Chebyshev: plain iterations before acceleration starts (Wang's S), >= 2 when rho is estimated.
+  int chebyshev_delay = 10;
+  /// L-BFGS: number of (s, t) pairs kept, >= 1.
+  int lbfgs_history = 5;
+  /// Called after every iteration with the iteration number (1-based) and the current positions
+  /// (3n vector, pinned particles included). For convergence studies; empty = none. Its time is
+  /// not counted in report().
+  std::function<void(int, ConstRef)> on_iteration;
+  /// "" if valid, else a message naming the field, its value and the rule it breaks.
+  std::string validate() const;
+};
+
+/// "" if FastMassSpringStepper can run the system exactly, else why not. It accepts Hooke springs,
+/// gravity and air drag (with wind); spring dampers and other forces are refused, because the
+/// local/global split needs each force to be a spring potential, a constant or a quadratic in x.
+std::string fast_mass_spring_unsupported(const MassSpringSystem& system);
+
+/// Backward Euler posed as an energy minimisation and solved by local/global iterations
+/// (Liu, Bargteil, O'Brien and Kavan 2013, "Fast Simulation of Mass-Spring Systems", eq. 9-14):
+///
+///   x1 = argmin g(x),  g(x) = 1/(2h^2) (x - y)^T M (x - y) + sum_s k_s/2 (|x_i - x_j| - L_s)^2
+///                             - f_g^T x + sum_p c/(2h) |x_p - x0_p - h w|^2,   y = x0 + h v0,
+///   v1 = (x1 - x0) / h.
+///
+/// grad g = 0 is exactly the backward-Euler step M (v1 - v0) = h f(x1, v1): gravity f_g is
+/// constant and linear drag -c (v - w) with v = (x - x0)/h is the gradient of the last term, so
+/// both are implicit and exact. The local step picks each spring's best direction
+/// d_s = L_s (x_i - x_j) / |x_i - x_j| (in parallel over particle ranges, deterministic); the global
+/// step solves (M/h^2 + C/h + L) x = M y / h^2 + f_g + C (x0 + h w)/h + J d for the free particles,
+/// with x, y and z as three right-hand sides of one n x n CHOLMOD factorization. Pinned particles
+/// are eliminated and move with their velocity (x1 = x0 + h v0, v1 = v0).
+///
+/// The matrix is analysed once (its pattern never changes) and factored again only when h or the
+/// system's revision() (a stiffness change) differs from the factored one.
+class FastMassSpringStepper final : public Stepper {
+ public:
+  /// system must be finalized, outlive the stepper, and pass fast_mass_spring_unsupported().
+  FastMassSpringStepper(const MassSpringSystem& system, FastMassSpringOptions options = {});
+  ~FastMassSpringStepper() override;
+
+  const char* name() const override { return "fast-mass-spring"; }
+  /// iterations = local/global iterations; residual = last relative objective decrease (when the
+  /// objective is evaluated) else 0; NotConverged if tolerance > 0 and was not met.
+  StepSummary step(const State& s0, double h, State& s1) override;
+  std::string report() const override;
+
+  /// The objective g(x) of the step from s0 with size h (J, up to a constant), x a 3n vector.
+  double objective(const State& s0, double h, ConstRef x) const;
+  /// Numeric factorizations so far (one per distinct h or stiffness revision in a row).
+  int factorizations() const { return m_factorizations; }
+  /// Seconds spent in the last factorization.
+  double last_factor_seconds() const { return m_last_factor_seconds; }
+  /// Nonzeros of the Cholesky factor of the global matrix.
+  double factor_nonzeros() const;
+
+ private:
+  void prepare(double h);
+  void begin_step(const State& s0, double h);
+  double local_step(ConstRef x);
+  double quadratic_terms(ConstRef x) const;
+  void gather(ConstRef x, Eigen::MatrixXd& X) const;
+  void scatter(const Eigen::MatrixXd& X, VecRef x) const;
+  Status global_solve(const Eigen::MatrixXd& B, Eigen::MatrixXd& X, std::string& message);
+
+  const MassSpringSystem& m_sys;
+  FastMassSpringOptions m_opt;
+  std::vector<const SpringSet*> m_sets;  // the springs of every HookeSpring force
+  Vec3 m_g = Vec3::Zero();               // gravity acceleration (0 if none)
+  double m_drag = 0.0;                   // total air-drag coefficient c (kg/s per particle)
+  Vec3 m_wind = Vec3::Zero();            // c-weighted wind velocity
+  std::vector<Index> m_free;             // free particle ids, by row of the global system
+  std::vector<Index> m_row;              // row of each particle, -1 if pinned
+
+  SparseMatrix m_A;                      // global matrix, free x free, both triangles
+  std::vector<Index> m_diag;             // value index of each row's diagonal entry
+  std::vector<std::vector<std::array<Index, 4>>> m_slots;  // per set and spring: ii, jj, ij, ji (-1 if pinned)
+  struct PinLink {  // a spring from free row r to pinned particle q: b_r += k y_q
+    Index r, q;
+    size_t set, spring;
+  };
+  std::vector<PinLink> m_pin_links;
+  std::unique_ptr<CholmodSolver> m_chol;
+  double m_factored_h = 0.0;
+  unsigned long long m_factored_revision = ~0ULL;
+  int m_factorizations = 0;
+  double m_last_factor_seconds = 0.0;
+
+  // Per-step scratch (sized once).
+  Vec m_y, m_acc, m_x, m_xprev, m_xhat;  // 3n vectors, particle-major
+  Eigen::MatrixXd m_const, m_B, m_X, m_G, m_Gnew, m_D, m_Xtrial;  // free x 3
+  std::vector<Eigen::MatrixXd> m_s, m_t;  // L-BFGS history
+  std::vector<double> m_rho_lbfgs, m_alpha;
+  std::vector<double> m_group_energy;
+  double m_h = 0.0;
+  const State* m_s0 = nullptr;
+
+  // Counters for report().
+  long long m_steps = 0, m_iterations = 0, m_line_search_trials = 0, m_chebyshev_restarts = 0;
+  double m_local_seconds = 0.0, m_global_seconds = 0.0, m_factor_seconds = 0.0;
+};
+
+}  // namespace hooke

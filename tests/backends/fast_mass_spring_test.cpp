@@ -1,0 +1,255 @@
+// Claims of solver/backends/fast_mass_spring.*: the objective's gradient is the backward-Euler
+// residual (central differences); with enough iterations every variant (plain local/global,
+// Chebyshev, L-BFGS) converges to the exact backward-Euler step computed by hooke's Newton
+// iteration and, when built, by Ceres; plain local/global lowers the objective at every iteration;
+// the matrix is refactored when h or the stiffness changes and not otherwise; pinned particles move
+// with their velocity; the tolerance stop reports convergence or its failure; unsupported forces
+// and bad options are refused with a message.
+#include "hooke_config.hpp"
+
+#if HOOKE_WITH_CHOLMOD
+
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <memory>
+#include <random>
+#include <string>
+#include <vector>
+
+#include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/forces/hooke_spring.hpp"
+#include "hooke/forces/spring_damper.hpp"
+#include "hooke/registry.hpp"
+#include "support/backend_scenes.hpp"
+#include "support/finite_differences.hpp"
+#include "support/random.hpp"
+#include "support/systems.hpp"
+#if HOOKE_WITH_CERES
+#include "hooke/backends/ceres_implicit_stepper.hpp"
+#endif
+
+namespace hooke {
+namespace {
+
+using test::hanging_cloth;
+using test::Scene;
+
+/// The scene after `steps` steps of hooke's Newton backward Euler from rest, so that the step under
+/// test starts from a moving, folded cloth rather than the flat rest state.
+State moving_state(const Scene& scene, double h, int steps) {
+  auto newton = test::newton_backward_euler(*scene.system);
+  State s = scene.state, s1;
+  for (int k = 0; k < steps; ++k) {
+    const StepSummary r = newton->step(s, h, s1);
+    EXPECT_EQ(r.status, Status::Converged) << r.message;
+    s = s1;
+  }
+  return s;
+}
+
+FastMassSpringOptions with(const std::string& acceleration, int iterations, double tolerance = 0.0) {
+  FastMassSpringOptions o;
+  o.acceleration = acceleration;
+  o.chebyshev_delay = 10;
+  o.iterations = iterations;
+  o.tolerance = tolerance;
+  return o;
+}
+
+/// ||a - b||_inf / ||scale||_inf.
+double relative(const Vec& a, const Vec& b, const Vec& scale) {
+  return (a - b).lpNorm<Eigen::Infinity>() / scale.lpNorm<Eigen::Infinity>();
+}
+
+TEST(FastMassSpring, ObjectiveGradientIsTheBackwardEulerResidual) {
+  // grad g(x) = M (x - y) / h^2 - f(x, (x - x0) / h) at the free DOFs: the minimiser of g is the
+  // backward-Euler step. Checked by central differences at random x near the start of the step.
+  const Scene scene = hanging_cloth(4, 0.05, 1.05);
+  const double h = 1e-2;
+  FastMassSpringStepper fms(*scene.system);
+  std::mt19937 rng(7);
+  State s0 = scene.state;
+  s0.v = test::random_vec(s0.v.size(), -0.3, 0.3, rng);
+  for (Index p = 0; p < scene.system->num_particles(); ++p)
+    if (scene.system->pinned()[size_t(p)]) s0.v.segment<3>(3 * p).setZero();
+  const Vec y = s0.x + h * s0.v;
+  const Vec& M = scene.system->mass_diagonal();
+  int compared = 0;
+  for (int sample = 0; sample < 5; ++sample) {
+    Vec x = y + test::random_vec(y.size(), -0.02, 0.02, rng);
+    for (Index p = 0; p < scene.system->num_particles(); ++p)
+      if (scene.system->pinned()[size_t(p)]) x.segment<3>(3 * p) = y.segment<3>(3 * p);
+    const Vec fd = test::central_gradient([&](const Vec& z) { return fms.objective(s0, h, z); }, x, 1e-6);
+    Vec f(x.size());
+    const Vec v1 = (x - s0.x) / h;
+    scene.system->compute_forces(x, v1, f);
+    const Vec residual = M.cwiseProduct(x - y) / (h * h) - f;
+    for (Index p = 0; p < scene.system->num_particles(); ++p) {
+      if (scene.system->pinned()[size_t(p)]) continue;
+      for (int c = 0; c < 3; ++c) {
+        const Index d = 3 * p + c;
+        EXPECT_NEAR(fd[d], residual[d], 1e-6 * std::max(1.0, std::abs(residual[d]))) << "dof " << d;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 5 * 3 * 14);
+}
+
+struct Variant {
+  const char* acceleration;
+  int iterations;  // enough for 1e-8 on this scene (measured: see the test's output)
+};
+
+void PrintTo(const Variant& v, std::ostream* os) { *os << v.acceleration << " x " << v.iterations; }
+
+class FastMassSpringConvergence : public ::testing::TestWithParam<Variant> {};
+
+TEST_P(FastMassSpringConvergence, ConvergesToTheExactBackwardEulerStep) {
+  // A 6x6 cloth at a tenth of the default stiffness (k h^2 / m = 3.6 for the structural springs),
+  // folded by 5 steps, with drag and wind: every supported term is in play.
+  const Variant variant = GetParam();
+  const Scene scene = hanging_cloth(6, 0.05, 1.0, 0.1);
+  const double h = 1e-2;
+  const State s0 = moving_state(scene, h, 5);
+  State exact, s1;
+  auto newton = test::newton_backward_euler(*scene.system);
+  ASSERT_EQ(newton->step(s0, h, exact).status, Status::Converged);
+  FastMassSpringStepper fms(*scene.system, with(variant.acceleration, variant.iterations));
+  const StepSummary r = fms.step(s0, h, s1);
+  ASSERT_EQ(r.status, Status::Converged) << r.message;
+  EXPECT_EQ(r.iterations, variant.iterations);
+  const double ex = relative(s1.x, exact.x, exact.x - s0.x), ev = relative(s1.v, exact.v, exact.v);
+  std::printf("[ fms      ] %-9s %5d iterations: x %.2e, v %.2e relative to Newton\n",
+              variant.acceleration, variant.iterations, ex, ev);
+  EXPECT_LT(ex, 1e-8);
+  EXPECT_LT(ev, 1e-8);
+  EXPECT_DOUBLE_EQ(s1.t, s0.t + h);
+#if HOOKE_WITH_CERES
+  CeresImplicitStepper ceres(*scene.system);
+  State c1;
+  ASSERT_EQ(ceres.step(s0, h, c1).status, Status::Converged);
+  EXPECT_LT(relative(s1.x, c1.x, c1.x - s0.x), 1e-8);
+  EXPECT_LT(relative(s1.v, c1.v, c1.v), 1e-8);
+#endif
+}
+
+INSTANTIATE_TEST_SUITE_P(Accelerations, FastMassSpringConvergence,
+                         ::testing::Values(Variant{"none", 600}, Variant{"chebyshev", 250},
+                                           Variant{"lbfgs", 60}),
+                         [](const auto& info) { return std::string(info.param.acceleration); });
+
+TEST(FastMassSpring, PlainIterationsLowerTheObjectiveEveryTime) {
+  // Local and global steps each minimise g exactly over their own variables (the directions, then
+  // the positions), so g cannot rise (Liu et al. 2013, section 4). A stiff cloth converges slowly,
+  // so all 60 decreases stay far above round-off.
+  const Scene scene = hanging_cloth(8, 0.02, 1.0, 100.0);
+  const double h = 1e-2;
+  const State s0 = moving_state(scene, h, 3);
+  FastMassSpringOptions o = with("none", 60);
+  std::vector<double> g;
+  FastMassSpringStepper* self = nullptr;
+  o.on_iteration = [&](int, ConstRef x) { g.push_back(self->objective(s0, h, x)); };
+  FastMassSpringStepper fms(*scene.system, o);
+  self = &fms;
+  const Vec y = s0.x + h * s0.v;
+  const double g_start = fms.objective(s0, h, y);  // the inertial warm start
+  State s1;
+  ASSERT_EQ(fms.step(s0, h, s1).status, Status::Converged);
+  ASSERT_EQ(g.size(), 60u);
+  EXPECT_LT(g[0], g_start);
+  int decreases = 0;
+  for (size_t k = 1; k < g.size(); ++k) {
+    EXPECT_LT(g[k], g[k - 1]) << "iteration " << k + 1;
+    decreases += g[k] < g[k - 1];
+  }
+  EXPECT_EQ(decreases, 59);
+  EXPECT_EQ(fms.objective(s0, h, s1.x), g.back());
+}
+
+TEST(FastMassSpring, RefactorsWhenStepOrStiffnessChangesOnly) {
+  Scene scene = hanging_cloth(5, 0.0);
+  const double h = 1e-2;
+  FastMassSpringStepper fms(*scene.system);
+  State s = scene.state, s1;
+  auto step = [&](double hh) {
+    ASSERT_EQ(fms.step(s, hh, s1).status, Status::Converged);
+    s = s1;
+  };
+  step(h);
+  step(h);
+  step(h);
+  EXPECT_EQ(fms.factorizations(), 1);
+  step(h / 2);
+  EXPECT_EQ(fms.factorizations(), 2);
+  step(h / 2);
+  EXPECT_EQ(fms.factorizations(), 2);
+  // A stiffness change between steps (through mutable_force) must refactor: the result then equals,
+  // bit for bit, a fresh stepper's on the changed system.
+  static_cast<HookeSpring&>(scene.system->mutable_force(0)).scale_stiffness(3.0);
+  State before = s;
+  step(h / 2);
+  EXPECT_EQ(fms.factorizations(), 3);
+  FastMassSpringStepper fresh(*scene.system);
+  State f1;
+  ASSERT_EQ(fresh.step(before, h / 2, f1).status, Status::Converged);
+  EXPECT_EQ((f1.x - s.x).lpNorm<Eigen::Infinity>(), 0.0);
+  step(h / 2);
+  EXPECT_EQ(fms.factorizations(), 3);
+}
+
+TEST(FastMassSpring, PinnedParticlesMoveWithTheirVelocity) {
+  const Scene scene = hanging_cloth(4, 0.0);
+  State s0 = scene.state, s1;
+  const Vec3 w(0.1, -0.2, 0.3);
+  s0.v.segment<3>(0) = w;  // particle 0 is pinned
+  FastMassSpringStepper fms(*scene.system);
+  ASSERT_EQ(fms.step(s0, 1e-2, s1).status, Status::Converged);
+  EXPECT_EQ(s1.v.segment<3>(0), w);
+  EXPECT_NEAR((s1.x.segment<3>(0) - s0.x.segment<3>(0) - 1e-2 * w).norm(), 0.0, 1e-16);
+}
+
+TEST(FastMassSpring, ToleranceStopsEarlyOrSaysItDidNot) {
+  const Scene scene = hanging_cloth(6, 0.05);
+  const double h = 1e-2;
+  const State s0 = moving_state(scene, h, 2);
+  State s1;
+  for (const char* a : {"none", "chebyshev", "lbfgs"}) {
+    FastMassSpringStepper loose(*scene.system, with(a, 5000, 1e-6));
+    const StepSummary r = loose.step(s0, h, s1);
+    EXPECT_EQ(r.status, Status::Converged) << a << ": " << r.message;
+    EXPECT_GT(r.iterations, 1) << a;
+    EXPECT_LT(r.iterations, 5000) << a;
+    EXPECT_LE(r.residual, 1e-6) << a;
+    FastMassSpringStepper capped(*scene.system, with(a, 2, 1e-12));
+    const StepSummary c = capped.step(s0, h, s1);
+    EXPECT_EQ(c.status, Status::NotConverged) << a;
+    EXPECT_NE(c.message.find("iterations"), std::string::npos) << c.message;
+    EXPECT_TRUE(s1.is_finite()) << a;
+  }
+}
+
+TEST(FastMassSpring, RefusesDampersAndBadOptions) {
+  test::ClothSpec spec;
+  spec.n = 4;
+  const test::Cloth cloth = test::make_cloth(spec);  // has a SpringDamper
+  const std::string why = fast_mass_spring_unsupported(*cloth.system);
+  EXPECT_NE(why.find("spring-damper"), std::string::npos) << why;
+  EXPECT_EQ(method_unsupported("fast-mass-spring", *cloth.system), why);
+  EXPECT_THROW(make_stepper("fast-mass-spring", *cloth.system), std::invalid_argument);
+  const Scene scene = hanging_cloth(3, 0.0);
+  EXPECT_EQ(fast_mass_spring_unsupported(*scene.system), "");
+  for (auto bad : {with("none", 0), with("newton", 10), with("none", 10, 1.5)}) {
+    EXPECT_NE(bad.validate(), "");
+    EXPECT_THROW(FastMassSpringStepper(*scene.system, bad), std::invalid_argument);
+  }
+  FastMassSpringOptions rho;
+  rho.chebyshev_rho = 1.0;
+  EXPECT_NE(rho.validate().find("chebyshev_rho"), std::string::npos);
+}
+
+}  // namespace
+}  // namespace hooke
+
+#endif  // HOOKE_WITH_CHOLMOD
