@@ -14,6 +14,7 @@
 #include "experiments/crosscheck_command.hpp"
 #include "experiments/info_command.hpp"
 #include "experiments/run_command.hpp"
+#include "experiments/step_convergence_command.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "hooke_config.hpp"
@@ -75,6 +76,15 @@ int main(int argc, char** argv) {
   crosscheck->add_option("--samples", cross.samples, "trajectory samples (default 20)");
   crosscheck->add_option("--out", out_dir, "output directory (default out/crosscheck-<scene>)");
 
+  hooke::StepConvergenceOptions conv;
+  auto* convergence = app.add_subcommand(
+      "step-convergence", "Objective error against iterations and wall time of one backward-Euler "
+                          "step: local/global (+ Chebyshev, L-BFGS), Newton, XPBD, vs Ceres");
+  std::string conv_scene = "hanging_cloth_16";
+  convergence->add_option("scene", conv_scene, "cloth scene (default hanging_cloth_16)");
+  convergence->add_flag("--full", conv.full, "the paper's size: k = 1e2..1e6, h = 1e-3, 1e-2, 1/30");
+  convergence->add_option("--out", out_dir, "output directory (default out/step-convergence)");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -97,6 +107,10 @@ int main(int argc, char** argv) {
       }
       std::cout << "(in " << scenes_dir().string() << "; run one with: hooke run NAME)\n";
       return 0;
+    }
+    if (app.got_subcommand("step-convergence")) {
+      conv.out_dir = out_dir.empty() ? "out/step-convergence" : out_dir;
+      return hooke::run_step_convergence(resolve_scene(conv_scene), conv);
     }
     hooke::Scene scene = hooke::load_scene(resolve_scene(scene_path), overrides);
     if (app.got_subcommand("crosscheck")) {
