@@ -16,12 +16,13 @@ inline long long side_for_springs(long long springs) {
 }
 
 /// The cloth with about `springs` springs; `extra` is appended to the scene text (TOML).
-inline Scene make_cloth(long long springs, const std::string& extra = "") {
+/// damping = 0 leaves out the spring dampers (fast-mass-spring and xpbd refuse them).
+inline Scene make_cloth(long long springs, const std::string& extra = "", double damping = 0.1) {
   const long long side = side_for_springs(springs);
   const std::string text = "[mesh]\ntype = \"grid\"\nnx = " + std::to_string(side) +
                            "\nny = " + std::to_string(side) +
                            "\n[springs]\nstructural_stiffness = 1e4\nshear_stiffness = 1e3\n"
-                           "flexion_stiffness = 1e2\ndamping = 0.1\n"
+                           "flexion_stiffness = 1e2\ndamping = " + std::to_string(damping) + "\n"
                            "[forces]\ngravity = [0.0, -9.81, 0.0]\n" + extra;
   return load_scene_from_string(text, "bench-cloth-" + std::to_string(side));
 }

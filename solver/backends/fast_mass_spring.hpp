@@ -83,6 +83,13 @@ class FastMassSpringStepper final : public Stepper {
   int factorizations() const { return m_factorizations; }
   /// Seconds spent in the last factorization.
   double last_factor_seconds() const { return m_last_factor_seconds; }
+  /// Seconds spent so far in local steps (spring directions and right-hand sides) and in global
+  /// solves (the triangular solves with three right-hand sides).
+  double local_seconds() const { return m_local_seconds; }
+  double global_seconds() const { return m_global_seconds; }
+  /// The global matrix M/h^2 + C/h + L of the free particles (free x free, both triangles), with
+  /// the values of the last factorization.
+  const SparseMatrix& global_matrix() const { return m_A; }
   /// Nonzeros of the Cholesky factor of the global matrix.
   double factor_nonzeros() const;
 

@@ -1,0 +1,132 @@
+// The local/global solver of Liu et al. 2013 (fast-mass-spring) on the undamped benchmark cloth
+// (cloth_fixture.hpp with damping = 0) of about 10k, 100k and 1M springs, h = 1/60:
+//  - Setup: the one-off symbolic analysis (stepper construction) and numeric factorization of the
+//    n x n matrix M/h^2 + L (counters analyze_s, factor_s, factor_nnz);
+//  - Iteration: one plain local/global iteration, i.e. a local step (all spring directions and the
+//    right-hand side) plus a global step (forward and back substitution with 3 right-hand sides),
+//    timed over steps of 10 iterations after a warm-up step (counters local_ms, global_ms);
+//  - Solve3: one CHOLMOD solve with three right-hand sides on the same factor, for the ratio of an
+//    iteration to the solve it contains (counter iter_over_solve3 on the Iteration case).
+// Prints OPENBLAS_CORETYPE and OPENBLAS_NUM_THREADS, which change the solve times.
+//   build/bench/hooke_bench_fast_mass_spring --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <map>
+#include <utility>
+#include <memory>
+
+#include "bench/cloth_fixture.hpp"
+#include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/linear/cholmod_solver.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+constexpr double kH = 1.0 / 60.0;
+
+/// Seconds of one solve_columns with 3 right-hand sides per cloth size, measured by BM_Solve3 and
+/// read by BM_Iteration (registered after it) for the ratio.
+std::map<long long, double>& solve3_seconds() {
+  static std::map<long long, double> m;
+  return m;
+}
+
+void BM_Setup(benchmark::State& state) {
+  const hooke::Scene scene = hooke::bench::make_cloth(state.range(0), "", 0.0);
+  hooke::FastMassSpringOptions o;
+  o.iterations = 1;
+  double analyze = 0.0, factor = 0.0, nnz = 0.0;
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    hooke::FastMassSpringStepper fms(*scene.system, o);
+    const double a = std::chrono::duration<double>(Clock::now() - t0).count();
+    hooke::State s1;
+    fms.step(scene.initial, kH, s1);
+    analyze = a;
+    factor = fms.last_factor_seconds();
+    nnz = fms.factor_nonzeros();
+    state.SetIterationTime(a + factor);
+  }
+  state.counters["springs"] = double(scene.edges.size());
+  state.counters["analyze_s"] = analyze;
+  state.counters["factor_s"] = factor;
+  state.counters["factor_nnz"] = nnz;
+}
+
+void BM_Solve3(benchmark::State& state) {
+  const hooke::Scene scene = hooke::bench::make_cloth(state.range(0), "", 0.0);
+  hooke::FastMassSpringStepper fms(*scene.system);
+  hooke::State s1;
+  fms.step(scene.initial, kH, s1);  // fills the global matrix
+  hooke::CholmodSolver chol;
+  chol.analyze(fms.global_matrix());
+  chol.factor(fms.global_matrix());
+  const Eigen::Index n = fms.global_matrix().rows();
+  const Eigen::MatrixXd B = Eigen::MatrixXd::Random(n, 3);
+  Eigen::MatrixXd X(n, 3);
+  chol.solve_columns(B, X);  // warm-up (workspace)
+  double total = 0.0;
+  long long count = 0;
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    chol.solve_columns(B, X);
+    total += std::chrono::duration<double>(Clock::now() - t0).count();
+    ++count;
+    benchmark::DoNotOptimize(X.data());
+  }
+  solve3_seconds()[state.range(0)] = total / double(count);
+  state.counters["springs"] = double(scene.edges.size());
+  state.counters["n"] = double(n);
+}
+
+void BM_Iteration(benchmark::State& state) {
+  const hooke::Scene scene = hooke::bench::make_cloth(state.range(0), "", 0.0);
+  hooke::FastMassSpringOptions o;
+  o.iterations = 10;
+  hooke::FastMassSpringStepper fms(*scene.system, o);
+  hooke::State s0 = scene.initial, s1;
+  fms.step(s0, kH, s1);  // warm-up: factors
+  s0 = s1;
+  const double local0 = fms.local_seconds(), global0 = fms.global_seconds();
+  long long iterations = 0;
+  for (auto _ : state) {
+    const auto t0 = Clock::now();
+    fms.step(s0, kH, s1);
+    state.SetIterationTime(std::chrono::duration<double>(Clock::now() - t0).count() / o.iterations);
+    iterations += o.iterations;
+    std::swap(s0, s1);
+  }
+  const double it = double(std::max(1LL, iterations));
+  const double local = (fms.local_seconds() - local0) / it, global = (fms.global_seconds() - global0) / it;
+  state.counters["springs"] = double(scene.edges.size());
+  state.counters["local_ms"] = 1e3 * local;
+  state.counters["global_ms"] = 1e3 * global;
+  const auto s3 = solve3_seconds().find(state.range(0));
+  if (s3 != solve3_seconds().end()) state.counters["iter_over_solve3"] = (local + global) / s3->second;
+}
+
+const int registered = [] {
+  const char* core = std::getenv("OPENBLAS_CORETYPE");
+  const char* threads = std::getenv("OPENBLAS_NUM_THREADS");
+  benchmark::AddCustomContext("OPENBLAS_CORETYPE", core ? core : "(unset)");
+  benchmark::AddCustomContext("OPENBLAS_NUM_THREADS", threads ? threads : "(unset)");
+  for (long long springs : {10000LL, 100000LL, 1000000LL}) {
+    const bool big = springs >= 1000000;
+    auto* s = benchmark::RegisterBenchmark("LocalGlobal/Setup", BM_Setup)->Arg(springs)->UseManualTime()
+                  ->Unit(benchmark::kMillisecond);
+    if (big) s->Iterations(1);
+    auto* v = benchmark::RegisterBenchmark("LocalGlobal/Solve3", BM_Solve3)->Arg(springs)->UseRealTime()
+                  ->Unit(benchmark::kMillisecond);
+    if (big) v->Iterations(10);
+    auto* i = benchmark::RegisterBenchmark("LocalGlobal/Iteration", BM_Iteration)->Arg(springs)
+                  ->UseManualTime()->Unit(benchmark::kMillisecond);
+    if (big) i->Iterations(3);
+  }
+  return 0;
+}();
+
+}  // namespace
+
+BENCHMARK_MAIN();
