@@ -15,15 +15,28 @@ def main(out_dir):
     rows = read_csv(os.path.join(out_dir, "resolution.csv"))
     variants = list(dict.fromkeys(r["variant"] for r in rows))
     fig, axes = plt.subplots(1, 2, figsize=(10, 4.2))
-    for v in variants:
+    # Line style and marker size differ per variant so that coinciding curves (unscaled and
+    # membrane have the same static sag) both stay visible.
+    looks = [("-", 11, "none"), ("--", 6, None), (":", 6, None)]
+    for i, v in enumerate(variants):
         pts = [r for r in rows if r["variant"] == v]
         n = [num(r["n"]) for r in pts]
         st = style(v, variants)
-        axes[0].plot(n, [num(r["sag_com_m"]) for r in pts], "-", label=v, **st)
-        axes[1].plot(n, [num(r["period_s"]) for r in pts], "-", label=v, **st)
+        ls, ms, mfc = looks[i % len(looks)]
+        kw = dict(label=v, ms=ms, lw=1.6, **st)
+        if mfc:
+            kw["mfc"] = mfc
+        axes[0].plot(n, [num(r["sag_com_m"]) for r in pts], ls, **kw)
+        axes[1].plot(n, [num(r["period_s"]) for r in pts], ls, **kw)
+        missing = [r["n"] for r in pts if not num(r["period_s"]) > 0]
+        if missing:
+            axes[1].text(0.02, 0.02 + 0.06 * i, f"{v}: no swing found at n = {', '.join(missing)} (over-damped)",
+                         transform=axes[1].transAxes, fontsize=7)
     for ax, ylabel, title in ((axes[0], "static sag of the centre of mass (m)", "Static sag"),
                               (axes[1], "first swing period (s)", "First swing period")):
         ax.set_xscale("log", base=2)
+        ax.set_xticks(sorted({num(r["n"]) for r in rows}))
+        ax.get_xaxis().set_major_formatter(plt.matplotlib.ticker.ScalarFormatter())
         ax.set_xlabel("grid size n (n x n particles)")
         ax.set_ylabel(ylabel)
         ax.set_title(title + " against resolution")
