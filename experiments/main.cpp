@@ -131,7 +131,7 @@ int main(int argc, char** argv) {
       "workprecision", "Work-precision: error against a CVODE reference versus wall time for every "
                        "method over a range of h (rtol for cvode/ida); writes workprecision.csv, "
                        "reference.csv and workprecision_<case>.png");
-  workprecision->add_flag("--full", wp.full, "paper size: 16 x 16 cloths, 7 step sizes 1e-2..1e-5, longer runs");
+  workprecision->add_flag("--full", wp.full, "paper size: 16 x 16 cloths, 6 step sizes 1e-2..3e-5, longer runs");
   workprecision->add_option("--cases", wp_cases, "comma-separated: chain,hanging_cloth,stiff_cloth (default: all)");
   workprecision->add_option("--methods", wp_methods, "comma-separated study labels or method names (default: all)");
   workprecision->add_option("--rtols", wp_rtols, "comma-separated tolerances of cvode/ida (default 1e-3,1e-5,1e-7)");

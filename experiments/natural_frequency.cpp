@@ -1,8 +1,9 @@
 #include "experiments/natural_frequency.hpp"
 
-#include <Eigen/Eigenvalues>
 #include <Spectra/MatOp/SparseSymMatProd.h>
 #include <Spectra/SymEigsSolver.h>
+
+#include <Eigen/Eigenvalues>
 #include <cmath>
 #include <vector>
 

@@ -14,7 +14,8 @@ int run_plot_script(const std::string& script, const std::string& out_dir) {
     std::cerr << "warning: plot script " << path << " not found (set HOOKE_PLOT_DIR); no figures\n";
     return 1;
   }
-  const std::string python = std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
+  const std::string python =
+      std::filesystem::exists("/usr/bin/python3") ? "/usr/bin/python3" : "python3";
   const std::string cmd = python + " -B '" + path + "' '" + out_dir + "'";
   const int rc = std::system(cmd.c_str());
   if (rc != 0)

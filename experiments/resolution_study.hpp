@@ -6,7 +6,7 @@ namespace hooke {
 
 /// One way of choosing per-spring and per-particle parameters as the grid is refined.
 struct ResolutionVariant {
-  std::string name;         ///< "unscaled", "membrane", "1d-rule"
+  std::string name;  ///< "unscaled", "membrane", "1d-rule"
   /// Exponent of the spring stiffness factor (a_ref / a)^p with a the grid spacing: 0 keeps k,
   /// 1 is k proportional to 1 / rest length (the 1D rule k = EA / L).
   double stiffness_power = 0.0;
@@ -21,9 +21,9 @@ std::vector<ResolutionVariant> resolution_variants();
 
 /// Options of `hooke resolution`.
 struct ResolutionOptions {
-  std::vector<int> n;           ///< grid sizes n x n (empty: 8, 16, 32; full: 8..256 by doubling)
-  double h = 5e-3;              ///< step of the dynamic run (s)
-  double duration = 4.0;        ///< simulated time of the dynamic run (s)
+  std::vector<int> n;     ///< grid sizes n x n (empty: 8, 16, 32; full: 8..256 by doubling)
+  double h = 5e-3;        ///< step of the dynamic run (s)
+  double duration = 4.0;  ///< simulated time of the dynamic run (s)
   /// Multiplies the scene's stiffnesses (1000, 200, 20 N/m at 16 x 16): 0.1 makes the cloth soft
   /// enough (strains near 0.3) that its sag measures its stiffness, not only its geometry.
   double stiffness_scale = 0.1;

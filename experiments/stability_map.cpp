@@ -41,42 +41,44 @@
 
 namespace hooke {
 
-namespace {
-
-std::string number(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
-}  // namespace
-
 std::vector<StabilityCase> stability_cases(bool full, const std::string& scenes_dir) {
   const std::string cloth_n = full ? "16" : "8";
   const std::vector<std::string> cloth_sets = {"mesh.nx=" + cloth_n, "mesh.ny=" + cloth_n};
   std::vector<StabilityCase> cases(3);
-  cases[0] = {"two_particle", scenes_dir + "/two_particle.toml", {}, {{"springs.stiffness", 1.0}}, 1.0,
-              1.0, "two 1 kg particles on one spring, stretched 10% and released (omega = sqrt(2k/m))"};
-  cases[1] = {"hanging_cloth", scenes_dir + "/hanging_cloth_16.toml", cloth_sets,
-              {{"springs.structural_stiffness", 1.0}, {"springs.shear_stiffness", 0.2},
+  cases[0] = {"two_particle",
+              scenes_dir + "/two_particle.toml",
+              {},
+              {{"springs.stiffness", 1.0}},
+              1.0,
+              1.0,
+              "two 1 kg particles on one spring, stretched 10% and released (omega = sqrt(2k/m))"};
+  cases[1] = {"hanging_cloth",
+              scenes_dir + "/hanging_cloth_16.toml",
+              cloth_sets,
+              {{"springs.structural_stiffness", 1.0},
+               {"springs.shear_stiffness", 0.2},
                {"springs.flexion_stiffness", 0.02}},
-              full ? 0.5 : 0.2, 0.0,
+              full ? 0.5 : 0.2,
+              0.0,
               "1 kg cloth, 1 m x 1 m, " + cloth_n + " x " + cloth_n +
-                  " particles, two corners pinned, gravity and drag; structural k, shear k/5, flexion k/50"};
+                  " particles, two corners pinned, gravity and drag; structural k, shear k/5, "
+                  "flexion k/50"};
   cases[2] = cases[1];
   cases[2].name = "stiff_flexion";
   cases[2].stiffness[2].second = 1.0;
-  cases[2].description = "the hanging cloth with flexion springs as stiff as the structural ones (k, k/5, k)";
+  cases[2].description =
+      "the hanging cloth with flexion springs as stiff as the structural ones (k, k/5, k)";
   return cases;
 }
 
-Scene load_stability_scene(const StabilityCase& c, const StudyMethod& m, double k, double h, double duration) {
+Scene load_stability_scene(const StabilityCase& c, const StudyMethod& m, double k, double h,
+                           double duration) {
   std::vector<std::string> sets = c.sets;
-  for (const auto& [key, ratio] : c.stiffness) sets.push_back(key + "=" + number(ratio * k));
+  for (const auto& [key, ratio] : c.stiffness) sets.push_back(key + "=" + exact_number(ratio * k));
   sets.push_back("integrator.method=" + m.method);
   sets.insert(sets.end(), m.sets.begin(), m.sets.end());
-  sets.push_back("time.dt=" + number(h));
-  sets.push_back("time.duration=" + number(duration));
+  sets.push_back("time.dt=" + exact_number(h));
+  sets.push_back("time.duration=" + exact_number(duration));
   return load_scene(c.scene, sets);
 }
 
@@ -84,7 +86,9 @@ Verdict classify_run(const StabilityCase& c, const StudyMethod& m, double k, dou
                      const StabilitySettings& settings) {
   // Adaptive whole-step backends choose their own internal steps: h is only their output
   // interval, so their runs keep the case's T.
-  const double T = m.sweep == Sweep::Tolerance ? c.duration : std::max(c.duration, double(settings.min_steps) * h);
+  const double T = m.sweep == Sweep::Tolerance
+                       ? c.duration
+                       : std::max(c.duration, double(settings.min_steps) * h);
   const Scene scene = load_stability_scene(c, m, k, h, T);
   const MassSpringSystem& sys = *scene.system;
   RunLimits limits;
@@ -92,8 +96,8 @@ Verdict classify_run(const StabilityCase& c, const StudyMethod& m, double k, dou
   limits.max_strain = c.strain_bound > 0.0 ? c.strain_bound : settings.strain_bound;
   limits.check_every = settings.check_every;
   const long long N = scene.time.steps();
-  const Trajectory tr = run_trajectory(scene, scene.integrator.method, scene.integrator.options, {N},
-                                       false, limits);
+  const Trajectory tr =
+      run_trajectory(scene, scene.integrator.method, scene.integrator.options, {N}, false, limits);
   if (!tr.complete && !tr.diverged) throw InputError(c.scene, "integrator.method", tr.status);
   Verdict v;
   v.stable = tr.complete;
@@ -138,15 +142,10 @@ int run_stability(const StabilityOptions& options, const std::string& scenes_dir
   namespace fs = std::filesystem;
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
-  std::vector<StabilityCase> cases;
-  for (auto& c : stability_cases(options.full, scenes_dir))
-    if (options.cases.empty() || std::find(options.cases.begin(), options.cases.end(), c.name) != options.cases.end())
-      cases.push_back(c);
-  for (const auto& name : options.cases)
-    if (std::none_of(cases.begin(), cases.end(), [&](const StabilityCase& c) { return c.name == name; }))
-      throw InputError("<command line>", "--cases", "unknown case '" + name +
-                                                        "' (cases: two_particle, hanging_cloth, stiff_flexion)");
-  const std::vector<StudyMethod> study = available_study_methods(study_methods(), options.methods, std::cerr);
+  const std::vector<StabilityCase> cases =
+      select_cases(stability_cases(options.full, scenes_dir), options.cases);
+  const std::vector<StudyMethod> study =
+      available_study_methods(study_methods(), options.methods, std::cerr);
   std::vector<double> ks = options.k;
   if (ks.empty())
     for (int e = 2; e <= 14; e += options.full ? 1 : 2) ks.push_back(std::pow(10.0, 0.5 * e));
@@ -155,12 +154,14 @@ int run_stability(const StabilityOptions& options, const std::string& scenes_dir
   const std::string csv_path = options.out_dir + "/stability.csv";
   FILE* csv = std::fopen(csv_path.c_str(), "w");
   if (!csv) throw std::runtime_error("cannot write " + csv_path);
-  std::fprintf(csv, "case,label,method,k,omega_max,h_theory,h_stable,h_unstable,bound,runs,wall_s,reason\n");
+  std::fprintf(
+      csv, "case,label,method,k,omega_max,h_theory,h_stable,h_unstable,bound,runs,wall_s,reason\n");
   const StabilitySettings& s = options.settings;
   for (const auto& c : cases) {
     std::set<std::string> skipped;  // methods that cannot run this case at all
     for (double k : ks) {
-      const Scene base = load_stability_scene(c, {"symplectic-euler", "symplectic-euler", {}}, k, 1e-3, c.duration);
+      const Scene base = load_stability_scene(c, {"symplectic-euler", "symplectic-euler", {}}, k,
+                                              1e-3, c.duration);
       const double omega = largest_natural_frequency(*base.system, base.initial);
       for (const auto& m : study) {
         if (skipped.count(m.label)) continue;
@@ -177,14 +178,16 @@ int run_stability(const StabilityOptions& options, const std::string& scenes_dir
           skipped.insert(m.label);
           continue;
         }
-        const char* bound = b.h_stable == 0.0 ? "below" : std::isinf(b.h_unstable) ? "above" : "bracketed";
-        std::string reason = b.why;
-        std::replace(reason.begin(), reason.end(), '"', '\'');
-        std::fprintf(csv, "%s,%s,%s,%.6g,%.9g,%.9g,%.9g,%.9g,%s,%d,%.4g,\"%s\"\n", c.name.c_str(),
-                     m.label.c_str(), m.method.c_str(), k, omega, h_theory, b.h_stable, b.h_unstable,
-                     bound, b.runs, b.wall, reason.c_str());
+        const char* bound = b.h_stable == 0.0          ? "below"
+                            : std::isinf(b.h_unstable) ? "above"
+                                                       : "bracketed";
+        std::fprintf(csv, "%s,%s,%s,%.6g,%.9g,%.9g,%.9g,%.9g,%s,%d,%.4g,%s\n", c.name.c_str(),
+                     m.label.c_str(), m.method.c_str(), k, omega, h_theory, b.h_stable,
+                     b.h_unstable, bound, b.runs, b.wall, csv_quoted(b.why).c_str());
         std::fflush(csv);
-        std::fprintf(stderr, "stability: %-14s k = %-8.3g %-22s h_stable = %-10.4g (theory %-10.4g) %2d runs %7.2f s\n",
+        std::fprintf(stderr,
+                     "stability: %-14s k = %-8.3g %-22s h_stable = %-10.4g (theory %-10.4g) %2d "
+                     "runs %7.2f s\n",
                      c.name.c_str(), k, m.label.c_str(), b.h_stable, h_theory, b.runs, b.wall);
       }
     }

@@ -12,12 +12,14 @@ std::vector<StudyMethod> study_methods() {
   for (const auto& m : methods())
     if (m.kind == MethodKind::Explicit) out.push_back({m.name, m.name, {}});
   for (const char* beta : {"0", "0.25", "0.5", "0.75", "1"})
-    out.push_back({std::string("implicit-b") + beta, "implicit",
+    out.push_back({std::string("implicit-b") + beta,
+                   "implicit",
                    {std::string("integrator.beta=") + beta, "integrator.newton_iterations=1"}});
   out.push_back({"implicit-midpoint", "implicit-midpoint", {"integrator.newton_iterations=1"}});
   // The clamped Jacobian of compressed springs (the default) costs the one-Newton-step midpoint
   // rule its second order; this entry measures the exact linearisation.
-  out.push_back({"implicit-midpoint-noclamp", "implicit-midpoint",
+  out.push_back({"implicit-midpoint-noclamp",
+                 "implicit-midpoint",
                  {"integrator.newton_iterations=1", "integrator.clamp_compressed=false"}});
   out.push_back({"bdf2", "bdf2", {"integrator.newton_iterations=1"}});
   out.push_back({"fast-mass-spring-10", "fast-mass-spring", {"integrator.iterations=10"}});
@@ -28,14 +30,17 @@ std::vector<StudyMethod> study_methods() {
   for (const auto& m : methods()) {
     const std::string name = m.name;
     if (name == "ceres-implicit") continue;
-    if (std::none_of(out.begin(), out.end(), [&](const StudyMethod& s) { return s.method == name; }))
-      out.push_back({name, name, {}, m.kind == MethodKind::WholeStep ? Sweep::Tolerance : Sweep::StepSize});
+    if (std::none_of(out.begin(), out.end(),
+                     [&](const StudyMethod& s) { return s.method == name; }))
+      out.push_back(
+          {name, name, {}, m.kind == MethodKind::WholeStep ? Sweep::Tolerance : Sweep::StepSize});
   }
   return out;
 }
 
 std::vector<StudyMethod> available_study_methods(const std::vector<StudyMethod>& all,
-                                                 const std::vector<std::string>& only, std::ostream& log) {
+                                                 const std::vector<std::string>& only,
+                                                 std::ostream& log) {
   std::vector<StudyMethod> out;
   for (const auto& s : all) {
     if (!only.empty() && std::find(only.begin(), only.end(), s.label) == only.end() &&
@@ -48,7 +53,8 @@ std::vector<StudyMethod> available_study_methods(const std::vector<StudyMethod>&
       known = false;
     }
     if (!known) {
-      log << "skipped " << s.label << ": method '" << s.method << "' is not in this build's registry\n";
+      log << "skipped " << s.label << ": method '" << s.method
+          << "' is not in this build's registry\n";
       continue;
     }
     out.push_back(s);
@@ -56,13 +62,11 @@ std::vector<StudyMethod> available_study_methods(const std::vector<StudyMethod>&
   for (const auto& name : only)
     if (std::none_of(all.begin(), all.end(),
                      [&](const StudyMethod& s) { return s.label == name || s.method == name; }))
-      log << "skipped " << name << ": no such study method (labels: "
-          << [&] {
-               std::string l;
-               for (const auto& s : all) l += (l.empty() ? "" : ", ") + s.label;
-               return l;
-             }()
-          << ")\n";
+      log << "skipped " << name << ": no such study method (labels: " << [&] {
+        std::string l;
+        for (const auto& s : all) l += (l.empty() ? "" : ", ") + s.label;
+        return l;
+      }() << ")\n";
   return out;
 }
 

@@ -1,7 +1,10 @@
 #pragma once
+#include <algorithm>
 #include <ostream>
 #include <string>
 #include <vector>
+
+#include "problems/input_error.hpp"
 
 namespace hooke {
 
@@ -32,7 +35,27 @@ std::vector<StudyMethod> study_methods();
 /// is in `only` (empty: all). Each entry left out because the registry lacks it is named on `log`,
 /// as is each name in `only` that matches nothing.
 std::vector<StudyMethod> available_study_methods(const std::vector<StudyMethod>& all,
-                                                 const std::vector<std::string>& only, std::ostream& log);
+                                                 const std::vector<std::string>& only,
+                                                 std::ostream& log);
+
+/// The entries of `all` (anything with a `name`) named in `names`, in table order (empty: all);
+/// throws InputError for --cases naming an unknown case, listing the known ones.
+template <class Case>
+std::vector<Case> select_cases(const std::vector<Case>& all,
+                               const std::vector<std::string>& names) {
+  std::vector<Case> out;
+  std::string known;
+  for (const auto& c : all) {
+    known += (known.empty() ? "" : ", ") + c.name;
+    if (names.empty() || std::find(names.begin(), names.end(), c.name) != names.end())
+      out.push_back(c);
+  }
+  for (const auto& name : names)
+    if (std::none_of(all.begin(), all.end(), [&](const Case& c) { return c.name == name; }))
+      throw InputError("<command line>", "--cases",
+                       "unknown case '" + name + "' (cases: " + known + ")");
+  return out;
+}
 
 /// Splits "a,b,c" into its non-empty items.
 std::vector<std::string> split_list(const std::string& text);

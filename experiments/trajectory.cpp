@@ -18,9 +18,9 @@ namespace {
 using Clock = std::chrono::steady_clock;
 }
 
-Trajectory run_trajectory(const Scene& scene, const std::string& method, const MethodOptions& options,
-                          const std::vector<long long>& sample_steps, bool step_between_samples,
-                          const RunLimits& limits) {
+Trajectory run_trajectory(const Scene& scene, const std::string& method,
+                          const MethodOptions& options, const std::vector<long long>& sample_steps,
+                          bool step_between_samples, const RunLimits& limits) {
   Trajectory tr;
   const MassSpringSystem& sys = *scene.system;
   std::unique_ptr<Stepper> stepper;
@@ -47,13 +47,15 @@ Trajectory run_trajectory(const Scene& scene, const std::string& method, const M
     std::ostringstream os;
     const double E = sys.kinetic_energy(st.v) + sys.potential_energy(st.x);
     if (!(E <= limits.energy_limit)) {
-      os << "diverged by t = " << st.t << " (energy " << E << " J > " << limits.energy_limit << " J)";
+      os << "diverged by t = " << st.t << " (energy " << E << " J > " << limits.energy_limit
+         << " J)";
       return os.str();
     }
     if (std::isfinite(limits.max_strain)) {
       const double strain = sys.max_strain(st.x);
       if (!(strain <= limits.max_strain)) {
-        os << "diverged by t = " << st.t << " (strain " << strain << " > " << limits.max_strain << ")";
+        os << "diverged by t = " << st.t << " (strain " << strain << " > " << limits.max_strain
+           << ")";
         return os.str();
       }
     }
@@ -110,7 +112,9 @@ Errors compare(const Trajectory& a, const Trajectory& ref) {
 }
 
 Errors max_errors(const Errors& a, const Errors& b) {
-  auto mx = [](double x, double y) { return std::isnan(x) || std::isnan(y) ? NAN : std::max(x, y); };
+  auto mx = [](double x, double y) {
+    return std::isnan(x) || std::isnan(y) ? NAN : std::max(x, y);
+  };
   return {mx(a.rms_final, b.rms_final), mx(a.max_final, b.max_final), mx(a.rms_traj, b.rms_traj),
           mx(a.max_traj, b.max_traj)};
 }
@@ -119,7 +123,8 @@ MethodOptions reference_options(const Scene& scene, double rtol, double atol) {
   MethodOptions o = scene.integrator.options;
   o.whole_step.rtol = rtol;
   double size = 0.0;
-  for (Index i = 0; i < scene.initial.x.size(); ++i) size = std::max(size, std::abs(scene.initial.x[i]));
+  for (Index i = 0; i < scene.initial.x.size(); ++i)
+    size = std::max(size, std::abs(scene.initial.x[i]));
   o.whole_step.atol = atol > 0 ? atol : 1e-3 * rtol * std::max(size, 1.0);
   o.whole_step.max_steps = 10000000;
   o.whole_step.sundials_linear_solver = "klu";
@@ -132,15 +137,16 @@ Reference compute_reference(const Scene& scene, double rtol, double atol,
   const bool constrained = !scene.system->constraints().empty();
   const RunLimits none;
   Reference ref;
-  ref.trajectory = run_trajectory(scene, "cvode", reference_options(scene, rtol, atol), sample_steps,
-                                  !constrained, none);
+  ref.trajectory = run_trajectory(scene, "cvode", reference_options(scene, rtol, atol),
+                                  sample_steps, !constrained, none);
   if (!ref.trajectory.complete) return ref;
   const Trajectory loose = run_trajectory(scene, "cvode", reference_options(scene, 10 * rtol, atol),
                                           sample_steps, !constrained, none);
   ref.own_error = compare(loose, ref.trajectory);
   std::ostringstream how;
   how << "CVODE BDF (KLU, analytic Jacobian) at rtol " << rtol << " (" << fmt(ref.trajectory.wall)
-      << " s); its own error is estimated as the larger difference from CVODE at rtol " << 10 * rtol;
+      << " s); its own error is estimated as the larger difference from CVODE at rtol "
+      << 10 * rtol;
   if (independent_check) {
     const Trajectory ida = run_trajectory(scene, "ida", reference_options(scene, rtol, atol),
                                           sample_steps, !constrained, none);
@@ -168,6 +174,17 @@ std::string fmt(double v) {
   if (std::isnan(v)) return "-";
   char buf[32];
   std::snprintf(buf, sizeof buf, "%.3g", v);
+  return buf;
+}
+
+std::string csv_quoted(std::string s) {
+  std::replace(s.begin(), s.end(), '"', '\'');
+  return "\"" + s + "\"";
+}
+
+std::string exact_number(double v) {
+  char buf[40];
+  std::snprintf(buf, sizeof buf, "%.17g", v);
   return buf;
 }
 

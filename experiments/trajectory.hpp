@@ -31,9 +31,9 @@ struct RunLimits {
 /// sample to the next if step_between_samples, for adaptive whole-step backends) and recording the
 /// state after each step in sample_steps (ascending, last = scene.time.steps()). A step that
 /// breaks down or fails, a non-finite state or a broken limit ends the run with complete = false.
-Trajectory run_trajectory(const Scene& scene, const std::string& method, const MethodOptions& options,
-                          const std::vector<long long>& sample_steps, bool step_between_samples,
-                          const RunLimits& limits);
+Trajectory run_trajectory(const Scene& scene, const std::string& method,
+                          const MethodOptions& options, const std::vector<long long>& sample_steps,
+                          bool step_between_samples, const RunLimits& limits);
 
 /// Position errors of one trajectory against a reference with the same samples (m): RMS over
 /// particles of |x_i - x_ref_i| and the largest |x_i - x_ref_i|, at the final sample and as the
@@ -68,5 +68,9 @@ std::vector<long long> sample_steps(long long n_steps, int samples);
 
 /// "%.3g", or "-" for NaN (tables).
 std::string fmt(double v);
+/// s in double quotes for a CSV field, its own double quotes turned into single ones.
+std::string csv_quoted(std::string s);
+/// "%.17g": a number that reads back exactly (scene overrides, CSV).
+std::string exact_number(double v);
 
 }  // namespace hooke

@@ -35,37 +35,35 @@
 
 namespace hooke {
 
-namespace {
-
-std::string number(double v) {
-  char buf[40];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  return buf;
-}
-
-std::string csv_text(std::string s) {
-  std::replace(s.begin(), s.end(), '"', '\'');
-  return "\"" + s + "\"";
-}
-
-}  // namespace
-
 std::vector<WorkPrecisionCase> work_precision_cases(bool full, const std::string& scenes_dir) {
   const std::string n = full ? "16" : "8";
   const std::vector<std::string> grid = {"mesh.nx=" + n, "mesh.ny=" + n};
   const std::vector<double> h_default = {1e-2, 2e-3, 5e-4, 1e-4};
-  const std::vector<double> h_full = {1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5, 1e-5};
+  const std::vector<double> h_full = {1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5};
   std::vector<WorkPrecisionCase> cases(3);
-  cases[0] = {"chain", scenes_dir + "/chain.toml", {}, full ? 1.0 : 0.5, full ? h_full : h_default,
-              "chain of 30 particles (0.3 kg, 1 m, k = 500 N/m) pinned at one end, falling under gravity"};
-  cases[1] = {"hanging_cloth", scenes_dir + "/hanging_cloth_16.toml", grid, full ? 1.0 : 0.5,
-              full ? h_full : h_default,
-              "1 kg cloth, " + n + " x " + n + " particles, two corners pinned (k = 1000, 200, 20 N/m)"};
-  cases[2] = {"stiff_cloth", scenes_dir + "/hanging_cloth_16.toml", grid, full ? 0.5 : 0.2,
+  cases[0] = {
+      "chain",
+      scenes_dir + "/chain.toml",
+      {},
+      full ? 1.0 : 0.5,
+      full ? h_full : h_default,
+      "chain of 30 particles (0.3 kg, 1 m, k = 500 N/m) pinned at one end, falling under gravity"};
+  cases[1] = {
+      "hanging_cloth",
+      scenes_dir + "/hanging_cloth_16.toml",
+      grid,
+      0.5,
+      full ? h_full : h_default,
+      "1 kg cloth, " + n + " x " + n + " particles, two corners pinned (k = 1000, 200, 20 N/m)"};
+  cases[2] = {"stiff_cloth",
+              scenes_dir + "/hanging_cloth_16.toml",
+              grid,
+              full ? 0.3 : 0.2,
               full ? h_full : h_default,
               "the hanging cloth at k = 1e6 (structural), 2e5 (shear), 2e4 (flexion) N/m"};
-  cases[2].sets.insert(cases[2].sets.end(), {"springs.structural_stiffness=1e6",
-                                             "springs.shear_stiffness=2e5", "springs.flexion_stiffness=2e4"});
+  cases[2].sets.insert(cases[2].sets.end(),
+                       {"springs.structural_stiffness=1e6", "springs.shear_stiffness=2e5",
+                        "springs.flexion_stiffness=2e4"});
   return cases;
 }
 
@@ -73,33 +71,31 @@ int run_work_precision(const WorkPrecisionOptions& options, const std::string& s
   namespace fs = std::filesystem;
   using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
-  std::vector<WorkPrecisionCase> cases;
-  for (auto& c : work_precision_cases(options.full, scenes_dir))
-    if (options.cases.empty() || std::find(options.cases.begin(), options.cases.end(), c.name) != options.cases.end())
-      cases.push_back(c);
-  for (const auto& name : options.cases)
-    if (std::none_of(cases.begin(), cases.end(), [&](const WorkPrecisionCase& c) { return c.name == name; }))
-      throw InputError("<command line>", "--cases",
-                       "unknown case '" + name + "' (cases: chain, hanging_cloth, stiff_cloth)");
-  const std::vector<StudyMethod> study = available_study_methods(study_methods(), options.methods, std::cerr);
+  const std::vector<WorkPrecisionCase> cases =
+      select_cases(work_precision_cases(options.full, scenes_dir), options.cases);
+  const std::vector<StudyMethod> study =
+      available_study_methods(study_methods(), options.methods, std::cerr);
   std::vector<double> rtols = options.rtols;
-  if (rtols.empty()) rtols = options.full ? std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8}
-                                          : std::vector<double>{1e-3, 1e-5, 1e-7};
+  if (rtols.empty())
+    rtols = options.full ? std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8}
+                         : std::vector<double>{1e-3, 1e-5, 1e-7};
   const int S = std::max(1, options.samples);
 
   fs::create_directories(options.out_dir);
   FILE* csv = std::fopen((options.out_dir + "/workprecision.csv").c_str(), "w");
   FILE* refcsv = std::fopen((options.out_dir + "/reference.csv").c_str(), "w");
   if (!csv || !refcsv) throw std::runtime_error("cannot write into " + options.out_dir);
-  std::fprintf(csv, "case,label,method,h,rtol,wall_s,steps,rms_err_final,max_err_final,rms_err_traj,max_err_traj,status\n");
+  std::fprintf(csv,
+               "case,label,method,h,rtol,wall_s,steps,rms_err_final,max_err_final,rms_err_traj,max_"
+               "err_traj,status\n");
   std::fprintf(refcsv, "case,rtol,wall_s,err_rms_final,err_rms_traj,err_max_traj,how\n");
   for (const auto& c : cases) {
     auto load = [&](const StudyMethod& m, double h) {
       std::vector<std::string> sets = c.sets;
       sets.push_back("integrator.method=" + m.method);
       sets.insert(sets.end(), m.sets.begin(), m.sets.end());
-      sets.push_back("time.dt=" + number(h));
-      sets.push_back("time.duration=" + number(c.duration));
+      sets.push_back("time.dt=" + exact_number(h));
+      sets.push_back("time.duration=" + exact_number(c.duration));
       sets.push_back("output.vtk=false");
       return load_scene(c.scene, sets);
     };
@@ -107,11 +103,13 @@ int run_work_precision(const WorkPrecisionOptions& options, const std::string& s
     const StudyMethod cvode{"cvode", "cvode", {}, Sweep::Tolerance};
     const Scene ref_scene = load(cvode, c.duration / S);
     if (!ref_scene.system->constraints().empty())
-      throw InputError(c.scene, "constraints", "work-precision compares unconstrained trajectories");
+      throw InputError(c.scene, "constraints",
+                       "work-precision compares unconstrained trajectories");
     std::vector<long long> ref_samples;
     for (int i = 1; i <= S; ++i) ref_samples.push_back(i);
     std::fprintf(stderr, "workprecision: %s: reference ...\n", c.name.c_str());
-    const Reference ref = compute_reference(ref_scene, options.reference_rtol, 0.0, ref_samples, true);
+    const Reference ref =
+        compute_reference(ref_scene, options.reference_rtol, 0.0, ref_samples, true);
     if (!ref.trajectory.complete) {
       std::fprintf(stderr, "error: %s: the CVODE reference did not complete: %s\n", c.name.c_str(),
                    ref.trajectory.status.c_str());
@@ -119,7 +117,7 @@ int run_work_precision(const WorkPrecisionOptions& options, const std::string& s
     }
     std::fprintf(refcsv, "%s,%.3g,%.4g,%.6g,%.6g,%.6g,%s\n", c.name.c_str(), options.reference_rtol,
                  ref.trajectory.wall, ref.own_error.rms_final, ref.own_error.rms_traj,
-                 ref.own_error.max_traj, csv_text(ref.how).c_str());
+                 ref.own_error.max_traj, csv_quoted(ref.how).c_str());
     std::fflush(refcsv);
     std::fprintf(stderr, "workprecision: %s: %s\n", c.name.c_str(), ref.how.c_str());
 
@@ -152,24 +150,28 @@ int run_work_precision(const WorkPrecisionOptions& options, const std::string& s
         for (int i = 1; i < S; ++i) samples.push_back(per * i);
         samples.push_back(N);
         RunLimits limits;
-        limits.energy_limit = divergence_energy_limit(*scene.system, scene.initial, scene.run.energy_growth_limit);
+        limits.energy_limit =
+            divergence_energy_limit(*scene.system, scene.initial, scene.run.energy_growth_limit);
         limits.check_every = 10;
         // Adaptive methods: atol follows rtol (1e-3 rtol x the scene's size), as for the reference;
         // a fixed tight atol would hide the rtol sweep.
-        const MethodOptions opts = rtol > 0 ? reference_options(scene, rtol, 0.0) : scene.integrator.options;
-        const Trajectory tr = run_trajectory(scene, m.method, opts, samples,
-                                             m.sweep == Sweep::Tolerance, limits);
+        const MethodOptions opts =
+            rtol > 0 ? reference_options(scene, rtol, 0.0) : scene.integrator.options;
+        const Trajectory tr =
+            run_trajectory(scene, m.method, opts, samples, m.sweep == Sweep::Tolerance, limits);
         const Errors e = compare(tr, ref.trajectory);
         std::fprintf(csv, "%s,%s,%s,%.6g,%.3g,%.6g,%lld,%.6g,%.6g,%.6g,%.6g,%s\n", c.name.c_str(),
                      m.label.c_str(), m.method.c_str(), h, rtol, tr.wall, tr.steps, e.rms_final,
-                     e.max_final, e.rms_traj, e.max_traj, csv_text(tr.status).c_str());
+                     e.max_final, e.rms_traj, e.max_traj, csv_quoted(tr.status).c_str());
         std::fflush(csv);
-        std::fprintf(stderr, "workprecision: %-14s %-20s h = %-9.3g rtol = %-7.2g wall %8.3f s  err %-9.3g %s\n",
-                     c.name.c_str(), m.label.c_str(), h, rtol, tr.wall, e.rms_final, tr.status.c_str());
+        std::fprintf(
+            stderr,
+            "workprecision: %-14s %-20s h = %-9.3g rtol = %-7.2g wall %8.3f s  err %-9.3g %s\n",
+            c.name.c_str(), m.label.c_str(), h, rtol, tr.wall, e.rms_final, tr.status.c_str());
         // A method that takes 60 s for one run would take longer still at smaller h: stop it here.
         if (tr.wall > 60.0) {
-          std::fprintf(stderr, "workprecision: %s: %s took %.0f s; smaller steps skipped\n", c.name.c_str(),
-                       m.label.c_str(), tr.wall);
+          std::fprintf(stderr, "workprecision: %s: %s took %.0f s; smaller steps skipped\n",
+                       c.name.c_str(), m.label.c_str(), tr.wall);
           skip = true;
         }
       }
@@ -177,8 +179,8 @@ int run_work_precision(const WorkPrecisionOptions& options, const std::string& s
   }
   std::fclose(csv);
   std::fclose(refcsv);
-  std::printf("workprecision: wrote %s/workprecision.csv and reference.csv (%.1f s)\n", options.out_dir.c_str(),
-              std::chrono::duration<double>(Clock::now() - start).count());
+  std::printf("workprecision: wrote %s/workprecision.csv and reference.csv (%.1f s)\n",
+              options.out_dir.c_str(), std::chrono::duration<double>(Clock::now() - start).count());
   if (options.plot) run_plot_script("work_precision.py", options.out_dir);
   return 0;
 }

@@ -17,9 +17,11 @@ std::vector<double> sampled(double dt, double T, double (*f)(double)) {
 
 TEST(ResolutionStudy, FirstPeriodOfADampedSwingWithRippleIsItsPeriod) {
   // A damped swing of period 0.9 s with a small fast ripple (period 0.05 s) on top: the ripple's
-  // minima lie within the 0.2 s window of a deeper one or are too shallow, so only the swing counts.
+  // minima lie within the 0.2 s window of a deeper one or are too shallow, so only the swing
+  // counts.
   const auto y = sampled(1e-3, 4.0, [](double t) {
-    return -0.5 - 0.4 * std::exp(-0.3 * t) * std::cos(2 * M_PI * t / 0.9) + 0.002 * std::sin(2 * M_PI * t / 0.05);
+    return -0.5 - 0.4 * std::exp(-0.3 * t) * std::cos(2 * M_PI * t / 0.9) +
+           0.002 * std::sin(2 * M_PI * t / 0.05);
   });
   const double p = first_period(y, 1e-3, 0.2, 0.01);
   EXPECT_NEAR(p, 0.9, 0.01);

@@ -35,7 +35,8 @@ Measured measure(const std::string& method, double k) {
   out.boundary = find_stability_boundary([&](double h) { return classify_run(c, m, k, h, s); }, s);
   const Scene scene = load_stability_scene(c, m, k, 1e-3, 1.0);
   const double omega = largest_natural_frequency(*scene.system, scene.initial);
-  EXPECT_NEAR(omega, std::sqrt(2.0 * k / 1.0), 1e-9 * omega) << "two 1 kg particles: omega = sqrt(2k/m)";
+  EXPECT_NEAR(omega, std::sqrt(2.0 * k / 1.0), 1e-9 * omega)
+      << "two 1 kg particles: omega = sqrt(2k/m)";
   out.theory = imaginary_axis_limit(*make_explicit_stepper(method)) / omega;
   return out;
 }
@@ -81,7 +82,11 @@ TEST(StabilityMap, BoundarySearchBracketsAThreshold) {
   EXPECT_EQ(all.runs, 1);
   EXPECT_EQ(all.h_stable, s.h_max);
   EXPECT_TRUE(std::isinf(all.h_unstable));
-  const Boundary none = find_stability_boundary([](double) { return Verdict{false, "x", 0, 0.0}; }, s);
+  const Boundary none = find_stability_boundary(
+      [](double) {
+        return Verdict{false, "x", 0, 0.0};
+      },
+      s);
   EXPECT_EQ(none.h_stable, 0.0);
   EXPECT_NEAR(none.h_unstable, s.h_min, 1e-12);
 }
