@@ -25,7 +25,8 @@ struct StudyMethod {
 /// The study's method list: every explicit method of the registry; `implicit` with beta in
 /// {0, 0.25, 0.5, 0.75, 1} and one Newton step; implicit-midpoint (also without clamping the
 /// Jacobian of compressed springs) and bdf2 (one Newton step);
-/// fast-mass-spring at 10 iterations; xpbd; cvode and ida (tolerance sweeps); then any other
+/// fast-mass-spring at 10 iterations; xpbd; cvode and ida (rtol 1e-6, atol 1e-8 unless a
+/// tolerance sweep sets them); then any other
 /// registry method with its default options, except ceres-implicit (exact backward Euler by a
 /// general least-squares solver: the stability of implicit-b1 run to convergence at 100x the
 /// cost). Entries whose method this build lacks are dropped later by available_study_methods().
