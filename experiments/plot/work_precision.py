@@ -19,7 +19,7 @@ def main(out_dir):
     for case in dict.fromkeys(r["case"] for r in rows):
         sub = [r for r in rows if r["case"] == case]
         ref = refs.get(case)
-        fig, axes = plt.subplots(1, 2, figsize=(11, 4.8), sharey=True)
+        fig, axes = plt.subplots(1, 2, figsize=(13, 4.8), sharey=True)
         for ax, col, what in ((axes[0], "rms_err_final", "at the final time"),
                               (axes[1], "rms_err_traj", "max over the trajectory")):
             for label in dict.fromkeys(r["label"] for r in sub):
@@ -37,7 +37,7 @@ def main(out_dir):
             ax.set_xlabel("wall time (s)")
             ax.set_title(f"{case}: RMS position error {what}")
         axes[0].set_ylabel("RMS position error vs reference (m)")
-        axes[1].legend(ncol=2, loc="best")
+        axes[1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
         fig.tight_layout()
         fig.savefig(os.path.join(out_dir, f"workprecision_{case}.png"))
         plt.close(fig)
