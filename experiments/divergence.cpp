@@ -1,6 +1,7 @@
 #include "experiments/divergence.hpp"
 
 #include <algorithm>
+#include <cmath>
 
 #include "hooke/forces/gravity.hpp"
 
@@ -19,6 +20,11 @@ double divergence_energy_scale(const MassSpringSystem& sys, const State& s0) {
     if (const auto* g = dynamic_cast<const Gravity*>(f.get()))
       scale += sys.masses().sum() * g->acceleration().norm() * std::max(extent, 1.0);
   return scale;
+}
+
+double divergence_energy_limit(const MassSpringSystem& sys, const State& s0, double growth_limit) {
+  const double E0 = sys.kinetic_energy(s0.v) + sys.potential_energy(s0.x);
+  return E0 + growth_limit * std::max({divergence_energy_scale(sys, s0), std::abs(E0), 1e-30});
 }
 
 }  // namespace hooke

@@ -3,18 +3,26 @@
 //   hooke scenes
 //   hooke info SCENE.toml [--set ...]
 //   hooke crosscheck SCENE.toml [--methods a,b] [--reference-rtol R] [--set ...] [--out DIR]
+//   hooke workprecision [--full] [--cases a,b] [--methods a,b] [--out DIR] [--no-plot]
+//   hooke resolution [--full] [--n 8,16,32] [--out DIR] [--no-plot]
+//   hooke stability [--full] [--cases a,b] [--methods a,b] [--k 1e2,1e4] [--out DIR] [--no-plot]
 // Exit codes: 0 success, 1 internal or I/O error, 2 bad input (error: FILE: KEY: reason),
 // 3 a run that diverged (the message names step and time; output so far is kept).
 #include <CLI/CLI.hpp>
 #include <algorithm>
+#include <cmath>
 #include <filesystem>
 #include <iostream>
 #include <sstream>
 
 #include "experiments/crosscheck_command.hpp"
 #include "experiments/info_command.hpp"
+#include "experiments/resolution_study.hpp"
 #include "experiments/run_command.hpp"
 #include "experiments/step_convergence_command.hpp"
+#include "experiments/stability_map.hpp"
+#include "experiments/study_methods.hpp"
+#include "experiments/work_precision.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "hooke_config.hpp"
@@ -37,6 +45,22 @@ std::string resolve_scene(const std::string& arg) {
   const fs::path shipped = scenes_dir() / (arg + ".toml");
   if (arg.find('/') == std::string::npos && fs::exists(shipped)) return shipped.string();
   return arg;
+}
+
+/// Positive numbers from "a,b,c" (an option named `option`); throws InputError.
+std::vector<double> parse_numbers(const std::string& text, const std::string& option) {
+  std::vector<double> out;
+  for (const auto& item : hooke::split_list(text)) {
+    double v = 0.0;
+    try {
+      v = std::stod(item);
+    } catch (const std::exception&) {
+      throw hooke::InputError("<command line>", option, "'" + item + "' is not a number");
+    }
+    if (!(v > 0.0)) throw hooke::InputError("<command line>", option, "values must be > 0, got " + item);
+    out.push_back(v);
+  }
+  return out;
 }
 
 }  // namespace
@@ -84,6 +108,60 @@ int main(int argc, char** argv) {
   convergence->add_option("scene", conv_scene, "cloth scene (default hanging_cloth_16)");
   convergence->add_flag("--full", conv.full, "the paper's size: k = 1e2..1e6, h = 1e-3, 1e-2, 1/30");
   convergence->add_option("--out", out_dir, "output directory (default out/step-convergence)");
+  hooke::StabilityOptions stab;
+  std::string stab_cases, stab_methods, stab_k;
+  bool no_plot = false;
+  auto* stability = app.add_subcommand(
+      "stability", "Stability map: the largest stable time step per stiffness k and method, with the "
+                   "theoretical explicit limits; writes stability.csv and stability_<case>.png");
+  stability->add_flag("--full", stab.full, "paper size: 16 x 16 cloth, k in half decades");
+  stability->add_option("--cases", stab_cases, "comma-separated: two_particle,hanging_cloth,stiff_flexion (default: all)");
+  stability->add_option("--methods", stab_methods, "comma-separated study labels or method names (default: all)");
+  stability->add_option("--k", stab_k, "comma-separated stiffness values in N/m (default 1e1..1e7 by decades)");
+  stability->add_option("--h-min", stab.settings.h_min, "smallest step tried (s, default 1e-5)");
+  stability->add_option("--h-max", stab.settings.h_max, "largest step tried (s, default 1e-1)");
+  stability->add_option("--bisections", stab.settings.bisections, "bisections of the bracket in log h (default 4)");
+  stability->add_option("--strain-bound", stab.settings.strain_bound, "unstable above this spring strain (default 10; the two-particle case uses 1)");
+  stability->add_option("--growth-limit", stab.settings.growth_limit,
+                        "unstable when E > E0 + this x the energy scale (default 10)");
+  stability->add_option("--out", out_dir, "output directory (default out/stability)");
+  stability->add_flag("--no-plot", no_plot, "write the CSV only");
+  stability->footer(
+      "A run of max(T, 100 h) simulated seconds (T = 1 s for two_particle, 0.2 s for the cloths, 0.5 s with --full) is "
+      "unstable if the step fails, the state becomes non-finite, the total energy exceeds E0 + "
+      "growth-limit x the energy scale of `hooke run` (every spring stretched by its rest length, "
+      "plus kinetic energy and gravity's work over the initial extent), or a spring's strain exceeds "
+      "strain-bound (1 for two_particle: its particles meet). h is scanned down from h-max by half decades to the first stable run, then the "
+      "bracket is bisected. The theoretical explicit limit is y / omega_max (see `hooke info`).");
+
+  hooke::WorkPrecisionOptions wp;
+  std::string wp_cases, wp_methods, wp_rtols;
+  auto* workprecision = app.add_subcommand(
+      "workprecision", "Work-precision: error against a CVODE reference versus wall time for every "
+                       "method over a range of h (rtol for cvode/ida); writes workprecision.csv, "
+                       "reference.csv and workprecision_<case>.png");
+  workprecision->add_flag("--full", wp.full, "paper size: 16 x 16 cloths, 6 step sizes 1e-2..3e-5, longer runs");
+  workprecision->add_option("--cases", wp_cases, "comma-separated: chain,hanging_cloth,stiff_cloth (default: all)");
+  workprecision->add_option("--methods", wp_methods, "comma-separated study labels or method names (default: all)");
+  workprecision->add_option("--rtols", wp_rtols, "comma-separated tolerances of cvode/ida (default 1e-3,1e-5,1e-7)");
+  workprecision->add_option("--reference-rtol", wp.reference_rtol, "CVODE reference rtol (default 1e-10)");
+  workprecision->add_option("--samples", wp.samples, "trajectory samples (default 10)");
+  workprecision->add_option("--out", out_dir, "output directory (default out/workprecision)");
+  workprecision->add_flag("--no-plot", no_plot, "write the CSV only");
+
+  hooke::ResolutionOptions res;
+  std::string res_n;
+  auto* resolution = app.add_subcommand(
+      "resolution", "Resolution study: static sag and first swing period of the same 1 m, 1 kg cloth at "
+                    "n x n particles, under three rules for k and drag; writes resolution.csv and resolution.png");
+  resolution->add_flag("--full", res.full, "paper size: n = 8, 16, 32, 64, 128, 256");
+  resolution->add_option("--n", res_n, "comma-separated grid sizes (default 8,16,32)");
+  resolution->add_option("--h", res.h, "step of the dynamic BDF2 run (s, default 5e-3)");
+  resolution->add_option("--duration", res.duration, "simulated time of the dynamic run (s, default 4)");
+  resolution->add_option("--stiffness-scale", res.stiffness_scale,
+                         "multiplies the scene's spring stiffnesses at 16 x 16 (default 0.1: a soft cloth)");
+  resolution->add_option("--out", out_dir, "output directory (default out/resolution)");
+  resolution->add_flag("--no-plot", no_plot, "write the CSV only");
 
   try {
     app.parse(argc, argv);
@@ -111,6 +189,36 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("step-convergence")) {
       conv.out_dir = out_dir.empty() ? "out/step-convergence" : out_dir;
       return hooke::run_step_convergence(resolve_scene(conv_scene), conv);
+    }
+    if (app.got_subcommand("resolution")) {
+      for (double v : parse_numbers(res_n, "--n")) {
+        if (v != std::floor(v) || v < 2) throw hooke::InputError("<command line>", "--n", "grid sizes are integers >= 2");
+        res.n.push_back(int(v));
+      }
+      if (!(res.h > 0.0) || !(res.duration > 0.0) || !(res.stiffness_scale > 0.0))
+        throw hooke::InputError("<command line>", "--h", "--h, --duration and --stiffness-scale must be > 0");
+      if (!out_dir.empty()) res.out_dir = out_dir;
+      res.plot = !no_plot;
+      return hooke::run_resolution(res, scenes_dir().string());
+    }
+    if (app.got_subcommand("workprecision")) {
+      wp.cases = hooke::split_list(wp_cases);
+      wp.methods = hooke::split_list(wp_methods);
+      wp.rtols = parse_numbers(wp_rtols, "--rtols");
+      if (!(wp.reference_rtol > 0.0)) throw hooke::InputError("<command line>", "--reference-rtol", "must be > 0");
+      if (!out_dir.empty()) wp.out_dir = out_dir;
+      wp.plot = !no_plot;
+      return hooke::run_work_precision(wp, scenes_dir().string());
+    }
+    if (app.got_subcommand("stability")) {
+      stab.cases = hooke::split_list(stab_cases);
+      stab.methods = hooke::split_list(stab_methods);
+      stab.k = parse_numbers(stab_k, "--k");
+      if (!(stab.settings.h_min > 0.0 && stab.settings.h_min < stab.settings.h_max))
+        throw hooke::InputError("<command line>", "--h-min", "need 0 < h-min < h-max");
+      if (!out_dir.empty()) stab.out_dir = out_dir;
+      stab.plot = !no_plot;
+      return hooke::run_stability(stab, scenes_dir().string());
     }
     hooke::Scene scene = hooke::load_scene(resolve_scene(scene_path), overrides);
     if (app.got_subcommand("crosscheck")) {

@@ -19,6 +19,8 @@
 //         per method) and DIR/step_convergence.png (through experiments/plot/step_convergence.py).
 #include "experiments/step_convergence_command.hpp"
 
+#include "experiments/plot_script.hpp"
+
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -186,13 +188,7 @@ int run_step_convergence(const std::string& scene_path, const StepConvergenceOpt
   csv.close();
   std::ofstream(opt.out_dir + "/step_convergence.md") << md.str();
   std::cout << md.str();
-  const std::string plot = std::string("/usr/bin/python3 ") + HOOKE_PLOT_DIR +
-                           "/step_convergence.py " + opt.out_dir + "/step_convergence.csv " +
-                           opt.out_dir + "/step_convergence.png";
-  if (std::system(plot.c_str()) != 0) {
-    std::cerr << "warning: the plot failed (" << plot << "); the CSV is written\n";
-    return 1;
-  }
+  if (run_plot_script("step_convergence.py", opt.out_dir) != 0) return 1;
   std::cout << "wrote " << opt.out_dir << "/step_convergence.{csv,md,png}\n";
   return 0;
 #endif

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs every Debian package hooke needs to build, test, run the demo and plot.
 # Idempotent: installs only what is missing; a no-op (no apt-get update) when all is present.
-# Run as root (or with sudo available) on Debian 12.
+# Run as root (or with sudo available) on Debian 12. With --paper it also installs what
+# `make paper` needs (pandoc), which building and testing do not.
 set -euo pipefail
 
 packages=(
@@ -19,6 +20,9 @@ packages=(
   libspectra-dev                    # largest natural frequency (hooke info, stability limits)
   python3-matplotlib python3-numpy  # plots (run with /usr/bin/python3)
 )
+if [ "${1:-}" = "--paper" ]; then
+  packages+=(pandoc)                # paper/paper.md -> out/paper/paper.html
+fi
 
 missing=()
 for p in "${packages[@]}"; do

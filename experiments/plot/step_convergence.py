@@ -1,7 +1,7 @@
 #!/usr/bin/python3
 """Plots hooke step-convergence output: objective error against iterations and against wall time,
 one row per stiffness k (at h = 1e-2 s when present, else the smallest h), one line per method.
-Usage: step_convergence.py step_convergence.csv out.png"""
+Usage: step_convergence.py DIR (reads DIR/step_convergence.csv, writes DIR/step_convergence.png)"""
 import csv
 import sys
 from collections import defaultdict
@@ -11,7 +11,7 @@ import matplotlib
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
 
-rows = list(csv.DictReader(open(sys.argv[1])))
+rows = list(csv.DictReader(open(sys.argv[1] + "/step_convergence.csv")))
 hs = sorted({float(r["h"]) for r in rows})
 h = 1e-2 if 1e-2 in hs else hs[0]
 ks = sorted({float(r["k"]) for r in rows})
@@ -44,4 +44,4 @@ axes[0][1].legend(fontsize=7, loc="best")
 fig.suptitle(f"One backward-Euler step, h = {h:g} s: error (g(x) - g*) / (g(y) - g*) against the "
              "exact step (Ceres)", fontsize=10)
 fig.tight_layout()
-fig.savefig(sys.argv[2], dpi=110)
+fig.savefig(sys.argv[1] + "/step_convergence.png", dpi=110)

@@ -12,6 +12,12 @@
 #   info        `hooke info hanging_cloth` exits 0 and describes the 32 x 32 cloth.
 #   scenes      `hooke scenes` lists every shipped scene with its one-line description.
 #   bad_input   missing scene file, malformed --set and unknown subcommand: exit 2 with a message.
+#   stability   `hooke stability` at a tiny size (two_particle, two methods, one k): stability.csv has
+#               its documented header and one row per method with a bracketed boundary; the plot
+#               script writes stability_two_particle.png.
+#   workprecision  `hooke workprecision` on the chain with three methods: workprecision.csv and
+#               reference.csv have their headers, rk4's smallest step has a finite error; the PNG.
+#   resolution  `hooke resolution` at n = 4, 6: one row per variant and size with a finite sag.
 foreach(var CASE HOOKE SCENES_DIR OUT)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "cli_test.cmake: pass -D${var}=...")
@@ -64,6 +70,20 @@ function(resolved_body path var)
   string(REGEX REPLACE "^#[^\n]*\n" "" text "${text}")
   string(REGEX REPLACE "\ndir = [^\n]*" "" text "${text}")
   set(${var} "${text}" PARENT_SCOPE)
+endfunction()
+
+# A CSV file with this exact header line and `lines` lines in all.
+function(expect_csv path header lines)
+  expect_file("${path}")
+  file(STRINGS "${path}" content)
+  list(GET content 0 first)
+  if(NOT first STREQUAL "${header}")
+    message(FATAL_ERROR "${path}: header '${first}', expected '${header}'${report}")
+  endif()
+  list(LENGTH content n)
+  if(NOT n EQUAL ${lines})
+    message(FATAL_ERROR "${path}: ${n} lines, expected ${lines}${report}")
+  endif()
 endfunction()
 
 file(REMOVE_RECURSE "${OUT}")
@@ -183,6 +203,43 @@ elseif(CASE STREQUAL "step_convergence")
       message(FATAL_ERROR "${m} did not reach the target at k = 100${report}")
     endif()
   endforeach()
+
+elseif(CASE STREQUAL "stability")
+  hooke_exec(stability --cases two_particle --methods symplectic-euler,implicit-b1 --k 1e4
+             --bisections 3 --out "${OUT}")
+  expect_rc(0)
+  expect_csv("${OUT}/stability.csv"
+             "case,label,method,k,omega_max,h_theory,h_stable,h_unstable,bound,runs,wall_s,reason" 3)
+  file(READ "${OUT}/stability.csv" text)
+  expect_contains("${text}" "two_particle,symplectic-euler,symplectic-euler,10000,141.42" "stability.csv")
+  expect_contains("${text}" ",bracketed," "stability.csv")
+  expect_contains("${text}" "two_particle,implicit-b1,implicit,10000," "stability.csv")
+  expect_file("${OUT}/stability_two_particle.png")
+  expect_file("${OUT}/stability_two_particle.md")
+
+elseif(CASE STREQUAL "workprecision")
+  hooke_exec(workprecision --cases chain --methods rk4,implicit-b1,cvode --rtols 1e-4 --samples 2
+             --out "${OUT}")
+  expect_rc(0)
+  # 4 step sizes for rk4 and implicit-b1, one tolerance for cvode, plus the header.
+  expect_csv("${OUT}/workprecision.csv"
+             "case,label,method,h,rtol,wall_s,steps,rms_err_final,max_err_final,rms_err_traj,max_err_traj,status" 10)
+  expect_csv("${OUT}/reference.csv" "case,rtol,wall_s,err_rms_final,err_rms_traj,err_max_traj,how" 2)
+  file(STRINGS "${OUT}/workprecision.csv" rows REGEX "^chain,rk4,rk4,0.0001,")
+  if(NOT rows MATCHES "^chain,rk4,rk4,0.0001,0,[0-9.e-]+,5000,[0-9]")
+    message(FATAL_ERROR "rk4 at h = 1e-4 has no finite error: '${rows}'${report}")
+  endif()
+  expect_file("${OUT}/workprecision_chain.png")
+
+elseif(CASE STREQUAL "resolution")
+  hooke_exec(resolution --n 4,6 --duration 0.5 --out "${OUT}" --no-plot)
+  expect_rc(0)
+  expect_csv("${OUT}/resolution.csv"
+             "variant,n,particles,springs,k_structural,drag,period_s,sag_com_m,sag_lowest_m,settle_speed,wall_s" 7)
+  file(STRINGS "${OUT}/resolution.csv" rows REGEX "^membrane,6,36,")
+  if(NOT rows MATCHES "^membrane,6,36,[0-9]+,[0-9.e+-]+,[0-9.e+-]+,[^,]+,0\\.[0-9]+,")
+    message(FATAL_ERROR "membrane n = 6 has no finite sag: '${rows}'${report}")
+  endif()
 
 elseif(CASE STREQUAL "scenes")
   hooke_exec(scenes)

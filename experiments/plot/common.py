@@ -1,0 +1,44 @@
+"""Shared helpers of the hooke plot scripts: CSV reading and Markdown tables (Debian's matplotlib)."""
+import csv
+import math
+
+import matplotlib
+
+matplotlib.use("Agg")
+import matplotlib.pyplot as plt  # noqa: E402
+
+plt.rcParams.update({"figure.dpi": 110, "savefig.dpi": 110, "axes.grid": True, "grid.alpha": 0.3,
+                     "legend.fontsize": 7, "font.size": 9})
+
+
+def read_csv(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def num(text):
+    """Float of a CSV field; NaN for empty, '-' or 'nan'."""
+    try:
+        return float(text)
+    except (TypeError, ValueError):
+        return math.nan
+
+
+def g3(v):
+    """Three significant digits, '-' for NaN, for tables."""
+    return "-" if v is None or (isinstance(v, float) and math.isnan(v)) else f"{v:.3g}"
+
+
+def markdown_table(header, rows):
+    out = ["| " + " | ".join(header) + " |", "|" + "---|" * len(header)]
+    out += ["| " + " | ".join(str(c) for c in r) + " |" for r in rows]
+    return "\n".join(out) + "\n"
+
+
+# One distinct style per method label, stable across figures.
+_MARKERS = "os^vD<>pP*Xh"
+
+
+def style(label, labels):
+    i = sorted(set(labels)).index(label)
+    return {"marker": _MARKERS[i % len(_MARKERS)], "color": plt.cm.tab20(i % 20)}

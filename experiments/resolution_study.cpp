@@ -1,0 +1,181 @@
+// hooke resolution: does the simulated cloth depend on the grid that discretises it?
+//
+// Question: the same physical cloth (1 m x 1 m, 1 kg, the springs of hanging_cloth_16.toml at 16 x
+// 16 softened 10 x by default, so that stretch and not only geometry sets the sag (strains of about
+// 0.3), two corners pinned, gravity) is discretised at n x n particles for n = 8..256. Do its
+// static sag and its first swing period stay put as n grows, and under which rule for the
+// per-spring stiffness k and per-particle drag? Why "membrane" keeps k: a uniform in-plane strain e
+// stretches each spring of an n x n lattice by e a (a = spacing), storing k (e a)^2 / 2, and there
+// are about 1 / a^2 springs per unit area, so the energy per area k e^2 / 2 (up to a lattice
+// constant) does not depend on a. The 1D rule k = EA / L (k proportional to 1 / a) is right for a
+// chain, and makes a 2D cloth stiffer as it is refined. Flexion springs (i to i+2) resist bending
+// only through their chord's shortening, to fourth order in the fold angle, so no linear rule makes
+// their bending resistance invariant; they keep their per-spring k in every variant. Measurements
+// (no exact solution; compared across n): the cloth starts flat and falls; a BDF2 run (one Newton
+// step per step, h = 5e-3 s, 4 s) records the centre-of-mass height, whose first two local minima
+// give the swing period; backward Euler (beta = 1, one Newton step, h = 0.1 s) then settles the
+// cloth until every particle is slower than 1e-4 m/s (at most 400 steps); the sag is the depth of
+// the centre of mass below the pinned corners (and of the lowest particle). Run:    hooke
+// resolution [--full] [--n 8,16,32] [--out DIR] Writes: DIR/resolution.csv
+// (variant,n,particles,springs,k_structural,drag,period_s,sag_com_m,
+//         sag_lowest_m,settle_speed,wall_s) and, through experiments/plot/resolution.py,
+//         DIR/resolution.png and DIR/resolution.md.
+#include "experiments/resolution_study.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "experiments/plot_script.hpp"
+#include "experiments/trajectory.hpp"
+#include "hooke/registry.hpp"
+#include "hooke/simulation.hpp"
+#include "problems/scene.hpp"
+
+namespace hooke {
+
+namespace {
+
+/// Height (y) of the centre of mass of the free and pinned particles together (m).
+double com_height(const MassSpringSystem& sys, const Vec& x) {
+  double my = 0.0;
+  for (Index i = 0; i < sys.num_particles(); ++i) my += sys.masses()[i] * x[3 * i + 1];
+  return my / sys.masses().sum();
+}
+
+}  // namespace
+
+std::vector<ResolutionVariant> resolution_variants() {
+  return {
+      {"unscaled", 0.0, false,
+       "only nx and ny change: per-spring k and per-particle drag as at 16 x 16"},
+      {"membrane", 0.0, true,
+       "k per spring fixed (2D membrane invariance), drag per particle x (16/n)^2"},
+      {"1d-rule", 1.0, true,
+       "k per spring x (n-1)/15 (k = EA/L, the 1D rule), drag per particle x (16/n)^2"},
+  };
+}
+
+double first_period(const std::vector<double>& y, double dt, double window, double depth) {
+  const long long w = std::max(1LL, static_cast<long long>(window / dt));
+  const long long n = static_cast<long long>(y.size());
+  std::vector<long long> minima;
+  for (long long i = 1; i + 1 < n && minima.size() < 2; ++i) {
+    bool is_min = true;
+    for (long long j = std::max(0LL, i - w); j <= std::min(n - 1, i + w) && is_min; ++j)
+      is_min = y[size_t(i)] <= y[size_t(j)];
+    if (!is_min) continue;
+    if (!minima.empty()) {
+      const double top = *std::max_element(y.begin() + minima.back(), y.begin() + i);
+      if (top - y[size_t(i)] < depth) continue;
+    }
+    if (i + w >= n) break;  // a minimum at the end of the record may not be one
+    minima.push_back(i);
+  }
+  if (minima.size() < 2) return NAN;
+  return double(minima[1] - minima[0]) * dt;
+}
+
+int run_resolution(const ResolutionOptions& options, const std::string& scenes_dir) {
+  namespace fs = std::filesystem;
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  std::vector<int> ns = options.n;
+  if (ns.empty())
+    ns = options.full ? std::vector<int>{8, 16, 32, 64, 128, 256} : std::vector<int>{8, 16, 32};
+  const std::string scene_file = scenes_dir + "/hanging_cloth_16.toml";
+  // Reference values of the 16 x 16 scene, read from the scene itself.
+  const Scene ref = load_scene(scene_file);
+  const toml::table& springs = *ref.resolved["springs"].as_table();
+  const double soft = options.stiffness_scale;
+  const double k_structural = soft * springs["structural_stiffness"].value_or(0.0);
+  const double k_shear = soft * springs["shear_stiffness"].value_or(0.0);
+  const double k_flexion = soft * springs["flexion_stiffness"].value_or(0.0);
+  const double drag = ref.resolved["forces"]["drag"].value_or(0.0);
+  const long long n_ref = ref.resolved["mesh"]["nx"].value_or(16LL);
+
+  fs::create_directories(options.out_dir);
+  const std::string path = options.out_dir + "/resolution.csv";
+  FILE* csv = std::fopen(path.c_str(), "w");
+  if (!csv) throw std::runtime_error("cannot write " + path);
+  std::fprintf(csv,
+               "variant,n,particles,springs,k_structural,drag,period_s,sag_com_m,sag_lowest_m,"
+               "settle_speed,wall_s\n");
+  for (const auto& var : resolution_variants()) {
+    for (int n : ns) {
+      const auto t0 = Clock::now();
+      const double ratio = double(n - 1) / double(n_ref - 1);  // a_ref / a
+      const double kf = std::pow(ratio, var.stiffness_power);
+      const double c = var.scale_drag ? drag * double(n_ref * n_ref) / double(n * n) : drag;
+      const std::vector<std::string> sets = {
+          "mesh.nx=" + std::to_string(n),
+          "mesh.ny=" + std::to_string(n),
+          "springs.structural_stiffness=" + exact_number(k_structural * kf),
+          "springs.shear_stiffness=" + exact_number(k_shear * kf),
+          "springs.flexion_stiffness=" + exact_number(k_flexion * kf),
+          "forces.drag=" + exact_number(c),
+          "integrator.method=bdf2",
+          "integrator.newton_iterations=1",
+          "time.dt=" + exact_number(options.h),
+          "time.duration=" + exact_number(options.duration),
+          "output.vtk=false"};
+      const Scene scene = load_scene(scene_file, sets);
+      const MassSpringSystem& sys = *scene.system;
+      // Dynamic run: centre-of-mass height every step.
+      Simulation dyn(sys, make_stepper("bdf2", sys, scene.integrator.options), scene.initial);
+      std::vector<double> y = {com_height(sys, scene.initial.x)};
+      std::string failure;
+      for (long long s = 0; s < scene.time.steps(); ++s) {
+        const StepSummary st = dyn.advance(options.h);
+        if (st.status == Status::BrokeDown || st.status == Status::Fatal) {
+          failure = st.message;
+          break;
+        }
+        y.push_back(com_height(sys, dyn.state().x));
+      }
+      const double period = failure.empty() ? first_period(y, options.h, 0.2, 0.01) : NAN;
+      // Static sag: backward Euler at a large step from the end of the dynamic run.
+      MethodOptions settle = scene.integrator.options;
+      settle.implicit.beta = 1.0;
+      settle.implicit.newton_iterations = 1;
+      Simulation st(sys, make_stepper("implicit", sys, settle), dyn.state());
+      double speed = NAN;
+      for (int s = 0; s < 400 && failure.empty(); ++s) {
+        const StepSummary r = st.advance(0.1);
+        if (r.status == Status::BrokeDown || r.status == Status::Fatal) {
+          failure = r.message;
+          break;
+        }
+        speed = st.state().v.lpNorm<Eigen::Infinity>();
+        if (speed < 1e-4) break;
+      }
+      double pin_y = 0.0, lowest = 1e300;
+      for (Index i = 0; i < sys.num_particles(); ++i) {
+        if (sys.pinned()[size_t(i)]) pin_y = scene.initial.x[3 * i + 1];
+        lowest = std::min(lowest, st.state().x[3 * i + 1]);
+      }
+      const double sag_com = failure.empty() ? pin_y - com_height(sys, st.state().x) : NAN;
+      const double sag_low = failure.empty() ? pin_y - lowest : NAN;
+      const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
+      std::fprintf(csv, "%s,%d,%lld,%zu,%.6g,%.6g,%.6g,%.6g,%.6g,%.3g,%.3g\n", var.name.c_str(), n,
+                   (long long)sys.num_particles(), scene.edges.size(), k_structural * kf, c, period,
+                   sag_com, sag_low, speed, wall);
+      std::fflush(csv);
+      std::fprintf(stderr,
+                   "resolution: %-9s n = %-4d period %-8.4g s  sag %-8.4g m (lowest %-8.4g m)  "
+                   "%6.1f s%s%s\n",
+                   var.name.c_str(), n, period, sag_com, sag_low, wall,
+                   failure.empty() ? "" : "  failed: ", failure.c_str());
+    }
+  }
+  std::fclose(csv);
+  std::printf("resolution: wrote %s (%.1f s)\n", path.c_str(),
+              std::chrono::duration<double>(Clock::now() - start).count());
+  if (options.plot) run_plot_script("resolution.py", options.out_dir);
+  return 0;
+}
+
+}  // namespace hooke

@@ -1,0 +1,188 @@
+// hooke workprecision: which method reaches a given accuracy fastest?
+//
+// Question: for each method of the study (experiments/study_methods.hpp), how does the position
+// error at the final time, and over the trajectory, fall with the wall time spent, as the time
+// step h (or, for the adaptive CVODE and IDA, the tolerance rtol) is varied?
+// Scenes (work_precision_cases): the chain (chain.toml: 30 particles, k = 500, pinned at one end),
+// the hanging cloth (hanging_cloth_16 at 8 x 8, 16 x 16 with --full) and the stiff cloth (the same
+// with structural k = 1e6).
+// Reference: CVODE BDF at rtol 1e-10 (KLU, analytic Jacobian), stepping between the samples. Its
+// own error is estimated as the larger difference from CVODE at rtol 1e-9 and from IDA (another
+// formulation and code) at 1e-10, and reported beside every table (experiments/trajectory.cpp).
+// Adaptive methods run at rtol with atol = 1e-3 rtol x the scene's size (as the reference).
+// Errors: at each of `samples` equally spaced times, the RMS over particles of |x_i - x_ref_i|
+// (and the max); "final" is the last sample, "traj" the maximum over samples. Step sizes are
+// rounded so that every sample time falls on a step. A run that diverges (the `hooke run` energy
+// rule) or fails is kept in the CSV with its status and no error.
+// Run:    hooke workprecision [--full] [--cases chain,...] [--methods rk4,...] [--out DIR]
+// Writes: DIR/workprecision.csv (case,label,method,h,rtol,wall_s,steps,rms_err_final,
+//         max_err_final,rms_err_traj,max_err_traj,status), DIR/reference.csv (case,rtol,wall_s,
+//         err_rms_final,err_rms_traj,err_max_traj,how) and, through
+//         experiments/plot/work_precision.py, DIR/workprecision_<case>.png and .md.
+#include "experiments/work_precision.hpp"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <iostream>
+
+#include "experiments/divergence.hpp"
+#include "experiments/plot_script.hpp"
+#include "experiments/trajectory.hpp"
+#include "hooke/registry.hpp"
+
+namespace hooke {
+
+std::vector<WorkPrecisionCase> work_precision_cases(bool full, const std::string& scenes_dir) {
+  const std::string n = full ? "16" : "8";
+  const std::vector<std::string> grid = {"mesh.nx=" + n, "mesh.ny=" + n};
+  const std::vector<double> h_default = {1e-2, 2e-3, 5e-4, 1e-4};
+  const std::vector<double> h_full = {1e-2, 3e-3, 1e-3, 3e-4, 1e-4, 3e-5};
+  std::vector<WorkPrecisionCase> cases(3);
+  cases[0] = {
+      "chain",
+      scenes_dir + "/chain.toml",
+      {},
+      full ? 1.0 : 0.5,
+      full ? h_full : h_default,
+      "chain of 30 particles (0.3 kg, 1 m, k = 500 N/m) pinned at one end, falling under gravity"};
+  cases[1] = {
+      "hanging_cloth",
+      scenes_dir + "/hanging_cloth_16.toml",
+      grid,
+      0.5,
+      full ? h_full : h_default,
+      "1 kg cloth, " + n + " x " + n + " particles, two corners pinned (k = 1000, 200, 20 N/m)"};
+  cases[2] = {"stiff_cloth",
+              scenes_dir + "/hanging_cloth_16.toml",
+              grid,
+              full ? 0.3 : 0.2,
+              full ? h_full : h_default,
+              "the hanging cloth at k = 1e6 (structural), 2e5 (shear), 2e4 (flexion) N/m"};
+  cases[2].sets.insert(cases[2].sets.end(),
+                       {"springs.structural_stiffness=1e6", "springs.shear_stiffness=2e5",
+                        "springs.flexion_stiffness=2e4"});
+  return cases;
+}
+
+int run_work_precision(const WorkPrecisionOptions& options, const std::string& scenes_dir) {
+  namespace fs = std::filesystem;
+  using Clock = std::chrono::steady_clock;
+  const auto start = Clock::now();
+  const std::vector<WorkPrecisionCase> cases =
+      select_cases(work_precision_cases(options.full, scenes_dir), options.cases);
+  const std::vector<StudyMethod> study =
+      available_study_methods(study_methods(), options.methods, std::cerr);
+  std::vector<double> rtols = options.rtols;
+  if (rtols.empty())
+    rtols = options.full ? std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8}
+                         : std::vector<double>{1e-3, 1e-5, 1e-7};
+  const int S = std::max(1, options.samples);
+
+  fs::create_directories(options.out_dir);
+  FILE* csv = std::fopen((options.out_dir + "/workprecision.csv").c_str(), "w");
+  FILE* refcsv = std::fopen((options.out_dir + "/reference.csv").c_str(), "w");
+  if (!csv || !refcsv) throw std::runtime_error("cannot write into " + options.out_dir);
+  std::fprintf(csv,
+               "case,label,method,h,rtol,wall_s,steps,rms_err_final,max_err_final,rms_err_traj,max_"
+               "err_traj,status\n");
+  std::fprintf(refcsv, "case,rtol,wall_s,err_rms_final,err_rms_traj,err_max_traj,how\n");
+  for (const auto& c : cases) {
+    auto load = [&](const StudyMethod& m, double h) {
+      std::vector<std::string> sets = c.sets;
+      sets.push_back("integrator.method=" + m.method);
+      sets.insert(sets.end(), m.sets.begin(), m.sets.end());
+      sets.push_back("time.dt=" + exact_number(h));
+      sets.push_back("time.duration=" + exact_number(c.duration));
+      sets.push_back("output.vtk=false");
+      return load_scene(c.scene, sets);
+    };
+    // The reference steps straight from sample to sample (dt = T / S).
+    const StudyMethod cvode{"cvode", "cvode", {}, Sweep::Tolerance};
+    const Scene ref_scene = load(cvode, c.duration / S);
+    if (!ref_scene.system->constraints().empty())
+      throw InputError(c.scene, "constraints",
+                       "work-precision compares unconstrained trajectories");
+    std::vector<long long> ref_samples;
+    for (int i = 1; i <= S; ++i) ref_samples.push_back(i);
+    std::fprintf(stderr, "workprecision: %s: reference ...\n", c.name.c_str());
+    const Reference ref =
+        compute_reference(ref_scene, options.reference_rtol, 0.0, ref_samples, true);
+    if (!ref.trajectory.complete) {
+      std::fprintf(stderr, "error: %s: the CVODE reference did not complete: %s\n", c.name.c_str(),
+                   ref.trajectory.status.c_str());
+      return 3;
+    }
+    std::fprintf(refcsv, "%s,%.3g,%.4g,%.6g,%.6g,%.6g,%s\n", c.name.c_str(), options.reference_rtol,
+                 ref.trajectory.wall, ref.own_error.rms_final, ref.own_error.rms_traj,
+                 ref.own_error.max_traj, csv_quoted(ref.how).c_str());
+    std::fflush(refcsv);
+    std::fprintf(stderr, "workprecision: %s: %s\n", c.name.c_str(), ref.how.c_str());
+
+    for (const auto& m : study) {
+      std::vector<std::pair<double, double>> runs;  // (h, rtol)
+      if (m.sweep == Sweep::Tolerance)
+        for (double r : rtols) runs.emplace_back(c.duration / S, r);
+      else
+        for (double h : c.h) {
+          const long long per_sample = std::max(1LL, std::llround(c.duration / (S * h)));
+          runs.emplace_back(c.duration / double(S * per_sample), 0.0);
+        }
+      bool skip = false;
+      for (const auto& [h, rtol] : runs) {
+        if (skip) break;
+        Scene scene;
+        try {
+          scene = load(m, h);
+        } catch (const InputError& e) {
+          std::cerr << "skipped " << m.label << " on " << c.name << ": " << e.what() << "\n";
+          break;
+        }
+        if (const std::string why = method_unsupported(m.method, *scene.system); !why.empty()) {
+          std::cerr << "skipped " << m.label << " on " << c.name << ": " << why << "\n";
+          break;
+        }
+        const long long N = scene.time.steps();
+        const long long per = m.sweep == Sweep::Tolerance ? 1 : N / S;
+        std::vector<long long> samples;
+        for (int i = 1; i < S; ++i) samples.push_back(per * i);
+        samples.push_back(N);
+        RunLimits limits;
+        limits.energy_limit =
+            divergence_energy_limit(*scene.system, scene.initial, scene.run.energy_growth_limit);
+        limits.check_every = 10;
+        // Adaptive methods: atol follows rtol (1e-3 rtol x the scene's size), as for the reference;
+        // a fixed tight atol would hide the rtol sweep.
+        const MethodOptions opts =
+            rtol > 0 ? reference_options(scene, rtol, 0.0) : scene.integrator.options;
+        const Trajectory tr =
+            run_trajectory(scene, m.method, opts, samples, m.sweep == Sweep::Tolerance, limits);
+        const Errors e = compare(tr, ref.trajectory);
+        std::fprintf(csv, "%s,%s,%s,%.6g,%.3g,%.6g,%lld,%.6g,%.6g,%.6g,%.6g,%s\n", c.name.c_str(),
+                     m.label.c_str(), m.method.c_str(), h, rtol, tr.wall, tr.steps, e.rms_final,
+                     e.max_final, e.rms_traj, e.max_traj, csv_quoted(tr.status).c_str());
+        std::fflush(csv);
+        std::fprintf(
+            stderr,
+            "workprecision: %-14s %-20s h = %-9.3g rtol = %-7.2g wall %8.3f s  err %-9.3g %s\n",
+            c.name.c_str(), m.label.c_str(), h, rtol, tr.wall, e.rms_final, tr.status.c_str());
+        // A method that takes 60 s for one run would take longer still at smaller h: stop it here.
+        if (tr.wall > 60.0) {
+          std::fprintf(stderr, "workprecision: %s: %s took %.0f s; smaller steps skipped\n",
+                       c.name.c_str(), m.label.c_str(), tr.wall);
+          skip = true;
+        }
+      }
+    }
+  }
+  std::fclose(csv);
+  std::fclose(refcsv);
+  std::printf("workprecision: wrote %s/workprecision.csv and reference.csv (%.1f s)\n",
+              options.out_dir.c_str(), std::chrono::duration<double>(Clock::now() - start).count());
+  if (options.plot) run_plot_script("work_precision.py", options.out_dir);
+  return 0;
+}
+
+}  // namespace hooke

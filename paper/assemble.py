@@ -1,0 +1,134 @@
+"""Assembles the paper from its source and the experiments' output.
+
+Usage: /usr/bin/python3 paper/assemble.py paper/paper.md OUT
+Writes OUT/findings_*.md (key numbers derived from the CSV files the experiments wrote) and
+OUT/paper.md, in which every line `<!-- include FILE -->` of the source is replaced by OUT/FILE.
+Nothing in the paper's tables is typed by hand: a missing file is an error.
+"""
+import math
+import os
+import re
+import sys
+
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "experiments", "plot"))
+from common import g3, markdown_table, num, read_csv  # noqa: E402
+
+
+def stability_findings(out):
+    rows = read_csv(os.path.join(out, "stability", "stability.csv"))
+    table = []
+    for case in dict.fromkeys(r["case"] for r in rows):
+        for label in dict.fromkeys(r["label"] for r in rows if r["case"] == case):
+            ratios = [num(r["h_stable"]) / num(r["h_theory"]) for r in rows
+                      if r["case"] == case and r["label"] == label and r["bound"] == "bracketed"
+                      and num(r["h_theory"]) > 0]
+            if ratios:
+                table.append([case, label, len(ratios), g3(min(ratios)), g3(sorted(ratios)[len(ratios) // 2]),
+                              g3(max(ratios))])
+    text = markdown_table(["case", "method", "k values", "min h/h_theory", "median", "max"], table)
+    # Implicit methods the linear theory calls unconditionally stable (not beta < 1/2) that still
+    # failed at some step: where, and why (the first failure's message).
+    odd = []
+    for r in rows:
+        m = re.fullmatch(r"implicit-b([0-9.]+)", r["label"])
+        if num(r["h_theory"]) == num(r["h_theory"]) or (m and float(m.group(1)) < 0.5) or r["bound"] != "bracketed":
+            continue
+        odd.append([r["case"], r["label"], g3(num(r["k"])), g3(num(r["h_stable"])), g3(num(r["h_unstable"])),
+                    r["reason"][:110]])
+    if odd:
+        text += ("\nRuns of methods that are unconditionally stable in the linear theory, which failed at some "
+                 "step all the same (h unstable), with the reason of the failure:\n\n")
+        text += markdown_table(["case", "method", "k (N/m)", "h stable (s)", "h unstable (s)", "reason"], odd)
+    # beta < 1/2 against the linear theory y = 2 / sqrt(1 - 2 beta) on the two-particle spring.
+    beta_rows = []
+    for r in rows:
+        m = re.fullmatch(r"implicit-b([0-9.]+)", r["label"])
+        if r["case"] == "two_particle" and m and float(m.group(1)) < 0.5 and r["bound"] == "bracketed":
+            y = 2.0 / math.sqrt(1.0 - 2.0 * float(m.group(1)))
+            beta_rows.append([r["label"], g3(num(r["k"])), g3(num(r["h_stable"])),
+                              g3(y / num(r["omega_max"])), g3(num(r["h_stable"]) * num(r["omega_max"]) / y)])
+    if beta_rows:
+        text += "\nThe beta scheme with one Newton step on the linear spring, against y = 2 / sqrt(1 - 2 beta):\n\n"
+        text += markdown_table(["method", "k (N/m)", "h measured (s)", "h theory (s)", "ratio"], beta_rows)
+    with open(os.path.join(out, "findings_stability.md"), "w") as f:
+        f.write(text)
+
+
+def work_precision_findings(out):
+    rows = read_csv(os.path.join(out, "workprecision", "workprecision.csv"))
+    table = []
+    for case in dict.fromkeys(r["case"] for r in rows):
+        for label in dict.fromkeys(r["label"] for r in rows if r["case"] == case):
+            pts = [r for r in rows if r["case"] == case and r["label"] == label and num(r["rms_err_final"]) > 0]
+            order = "-"
+            if len(pts) >= 2 and num(pts[0]["rtol"]) == 0:
+                xs = [math.log(num(r["h"])) for r in pts]
+                ys = [math.log(num(r["rms_err_final"])) for r in pts]
+                mx, my = sum(xs) / len(xs), sum(ys) / len(ys)
+                sxx = sum((x - mx) ** 2 for x in xs)
+                if sxx > 0:
+                    order = g3(sum((x - mx) * (y - my) for x, y in zip(xs, ys)) / sxx)
+            best = {}
+            for tol in (1e-3, 1e-6):
+                ok = [r for r in pts if num(r["rms_err_final"]) <= tol]
+                best[tol] = g3(min(num(r["wall_s"]) for r in ok)) if ok else "-"
+            stable = sum(1 for r in rows if r["case"] == case and r["label"] == label and r["status"] != "" and
+                         not r["status"].startswith("diverged") and not r["status"].startswith("failed"))
+            total = sum(1 for r in rows if r["case"] == case and r["label"] == label)
+            table.append([case, label, f"{stable}/{total}", order, best[1e-3], best[1e-6]])
+    with open(os.path.join(out, "findings_workprecision.md"), "w") as f:
+        f.write(markdown_table(["case", "method", "runs completed", "fitted order (final error vs h)",
+                                "wall (s) to reach 1e-3 m", "wall (s) to reach 1e-6 m"], table))
+
+
+def resolution_findings(out):
+    rows = read_csv(os.path.join(out, "resolution", "resolution.csv"))
+    table = []
+    for v in dict.fromkeys(r["variant"] for r in rows):
+        pts = [r for r in rows if r["variant"] == v]
+        sags = [num(r["sag_com_m"]) for r in pts if num(r["sag_com_m"]) > 0]
+        per = [num(r["period_s"]) for r in pts if num(r["period_s"]) > 0]
+
+        def spread(xs):
+            return g3(max(xs) / min(xs) - 1) if xs else "-"
+        table.append([v, ", ".join(r["n"] for r in pts), g3(min(sags)) if sags else "-", g3(max(sags)) if sags else "-",
+                      spread(sags), spread(per)])
+    with open(os.path.join(out, "findings_resolution.md"), "w") as f:
+        f.write(markdown_table(["variant", "n", "smallest sag (m)", "largest sag (m)", "sag max/min - 1",
+                                "period max/min - 1"], table))
+
+
+def timings(out):
+    rows = read_csv(os.path.join(out, "timings.csv"))
+    with open(os.path.join(out, "timings.md"), "w") as f:
+        f.write(markdown_table(["command", "wall time (s)"], [[f"`hooke {r['experiment']}`", g3(num(r["seconds"]))]
+                                                              for r in rows]))
+
+
+def main(source, out):
+    stability_findings(out)
+    work_precision_findings(out)
+    resolution_findings(out)
+    timings(out)
+    lines = []
+    with open(source) as f:
+        for line in f:
+            m = re.fullmatch(r"\s*<!-- include (\S+) -->\s*", line)
+            if m:
+                path = os.path.join(out, m.group(1))
+                if not os.path.exists(path):
+                    sys.exit(f"assemble.py: {source}: includes {path}, which the experiments did not write")
+                with open(path) as inc:
+                    lines.append(inc.read().rstrip("\n") + "\n")
+            else:
+                for img in re.findall(r"!\[[^\]]*\]\(([^)]+)\)", line):
+                    if not os.path.exists(os.path.join(out, img)):
+                        sys.exit(f"assemble.py: {source}: figure {img} was not written into {out}")
+                lines.append(line)
+    with open(os.path.join(out, "paper.md"), "w") as f:
+        f.writelines(lines)
+    print(f"assemble.py: wrote {out}/paper.md")
+
+
+if __name__ == "__main__":
+    main(sys.argv[1], sys.argv[2])

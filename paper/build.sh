@@ -1,0 +1,48 @@
+#!/usr/bin/env bash
+# Rebuilds the paper from scratch: runs the three experiments into OUT (default size, or the
+# paper's size with --full), records the machine and the timings, assembles OUT/paper.md from
+# paper/paper.md (every table and figure is a file the experiments wrote) and renders
+# OUT/paper.html with pandoc (figures embedded).
+# Usage: paper/build.sh HOOKE_BINARY OUT [--full]      (`make paper`, `make paper FULL=1`)
+set -euo pipefail
+hooke=$(realpath "$1")
+out=$2
+shift 2
+size=("$@")
+here=$(cd "$(dirname "$0")" && pwd)
+mkdir -p "$out"
+out=$(realpath "$out")
+
+echo "experiment,seconds" > "$out/timings.csv"
+run() {  # run NAME ARGS...: one experiment, timed
+  local name=$1
+  shift
+  local t0
+  t0=$(date +%s%N)
+  echo "paper: hooke $name ${size[*]:-} ..."
+  "$hooke" "$name" "${size[@]}" --out "$out/$name" "$@"
+  echo "$name,$(( ($(date +%s%N) - t0) / 1000000 ))e-3" >> "$out/timings.csv"
+}
+run stability
+run workprecision
+run resolution
+
+{
+  echo "| property | value |"
+  echo "|---|---|"
+  echo "| CPU | $(lscpu | sed -n 's/^Model name: *//p' | head -1), $(nproc) cores |"
+  echo "| memory | $(free -g | awk '/^Mem:/{print $2}') GiB |"
+  echo "| OS | Debian $(cat /etc/debian_version 2>/dev/null || echo unknown), kernel $(uname -r) |"
+  echo "| compiler | $(c++ --version | head -1) (Release build) |"
+  echo "| BLAS | OpenBLAS, OPENBLAS_CORETYPE=${OPENBLAS_CORETYPE:-unset}, OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-unset} |"
+  echo "| hooke | $("$hooke" --version), commit $(git -C "$here" rev-parse --short HEAD 2>/dev/null || echo unknown) |"
+  echo "| size | ${size[*]:-default (small)} |"
+  echo "| load average when done | $(cut -d' ' -f1-3 /proc/loadavg) (the machine is shared: wall times are noisy) |"
+  echo "| date | $(date -u '+%Y-%m-%d %H:%M UTC') |"
+} > "$out/machine.md"
+
+/usr/bin/python3 -B "$here/assemble.py" "$here/paper.md" "$out"
+pandoc "$out/paper.md" --from markdown --to html5 --standalone --self-contained --toc \
+  --resource-path="$out" --metadata title="hooke: stability, cost and resolution of stiff mass-spring integrators" \
+  --css "$here/paper.css" -o "$out/paper.html"
+echo "paper: wrote $out/paper.html (sources: $out/paper.md, figures and CSV in $out/*/)"
