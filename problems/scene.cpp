@@ -319,8 +319,12 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "file", "does not exist");
   if (fs::is_directory(path, ec)) throw InputError(path, "file", "is a directory, not a scene file");
+  // A device, FIFO or socket (/dev/zero, /dev/stdin) could be read forever: only regular files.
+  if (!fs::is_regular_file(path, ec))
+    throw InputError(path, "file", "is not a regular file (a device, FIFO or socket?)");
   const auto size = fs::file_size(path, ec);
-  if (!ec && size > (64u << 20))
+  if (ec) throw InputError(path, "file", "cannot read its size: " + ec.message());
+  if (size > (64u << 20))
     throw InputError(path, "file", "is " + std::to_string(size >> 20) +
                                        " MiB; scene files are limited to 64 MiB (use an obj mesh)");
   std::ifstream in(path, std::ios::binary);

@@ -85,6 +85,15 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 Scene load_scene_from_string(const std::string& text, const std::string& file,
                              const std::vector<std::string>& overrides = {});
 
+/// Memory a scene may need before the loader refuses it (bytes): the mesh builders estimate the
+/// resident memory of a run from the particle and spring counts (see check_size in
+/// problems/builders/common.cpp) and refuse, before allocating, any scene above this budget,
+/// naming the estimate. Default: 64 GiB or the machine's physical memory, whichever is smaller;
+/// the environment variable HOOKE_MAX_MEMORY_GIB overrides the default (a number of GiB > 0).
+double scene_memory_limit();
+/// Sets the budget for this process (bytes > 0); e.g. the fuzz target keeps it below its RSS limit.
+void set_scene_memory_limit(double bytes);
+
 /// Names of the mesh types ("grid", "chain", ...), for messages and `hooke scenes`.
 const std::vector<std::string>& mesh_types();
 
