@@ -244,7 +244,12 @@ void read_run_settings(TableReader& root, Scene& scene) {
   {
     auto it = root.table("run");
     TableReader& r = *it;
-    scene.run.energy_growth_limit = r.positive("energy_growth_limit", 10.0);
+    RunSettings& run = scene.run;
+    run.energy_growth_limit = r.positive("energy_growth_limit", 10.0);
+    run.allow_not_converged = r.boolean("allow_not_converged", false);
+    run.max_step_halvings = int(r.integer("max_step_halvings", 0, 0, 30));
+    run.checkpoint_every = r.integer("checkpoint_every", 0, 0, 1LL << 62);
+    run.checkpoint_seconds = r.positive("checkpoint_seconds", 300.0);
     r.finish();
   }
 }

@@ -38,12 +38,24 @@ struct OutputSettings {
   bool png = true;         ///< write final.png (a picture of the final state)
 };
 
-/// [run]: divergence detection.
+/// [run]: divergence detection, numerical failures, checkpoints.
 struct RunSettings {
   /// The run stops (exit 3) when total energy exceeds its initial value by more than
   /// energy_growth_limit times the scene's energy scale (every spring stretched by its rest
   /// length, plus initial kinetic energy, plus gravity's energy over the initial extent).
   double energy_growth_limit = 10.0;
+  /// A step that misses its tolerance (iterative linear solver or Newton not converged, CVODE
+  /// giving up) stops the run with exit 3 unless this is true; then it is accepted, a warning is
+  /// printed for the first one and the count at the end (what the method-matrix study wants).
+  bool allow_not_converged = false;
+  /// A failed step (not converged, breakdown such as a matrix that is not positive definite,
+  /// non-finite state) is retried as two steps of h/2, each of which may be halved again, up to
+  /// this many times (h / 2^max_step_halvings); every retry is reported on stderr. 0: no retry.
+  int max_step_halvings = 0;
+  /// Write DIR/checkpoint.bin every N steps (0: never by count).
+  long long checkpoint_every = 0;
+  /// Write DIR/checkpoint.bin when this much wall time (s) has passed since the last one.
+  double checkpoint_seconds = 300.0;
 };
 
 /// An exact solution of a mass-spring scene, where one is known: writes the state at time t.

@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs every Debian package hooke needs to build, test, run the demo and plot.
 # Idempotent: installs only what is missing; a no-op (no apt-get update) when all is present.
-# Run as root (or with sudo available) on Debian 12.
+# Run as root (or with sudo available) on Debian 12. With the argument `fuzz`, also the fuzzing
+# toolchain.
 set -euo pipefail
 
 packages=(
@@ -19,6 +20,11 @@ packages=(
   libspectra-dev                    # largest natural frequency (hooke info, stability limits)
   python3-matplotlib python3-numpy  # plots (run with /usr/bin/python3)
 )
+
+# `install-deps.sh fuzz`: also clang with libFuzzer and the sanitizer runtimes (make fuzz).
+if [ "${1:-}" = "fuzz" ]; then
+  packages+=(clang-14 libclang-rt-14-dev)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
