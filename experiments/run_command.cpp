@@ -255,12 +255,17 @@ int run_mass_spring(Scene& scene, const std::string& dir, const RunOptions& opti
     return s.status == Status::Converged ||
            (s.status == Status::NotConverged && scene.run.allow_not_converged);
   };
+  double fail_t = 0.0, fail_h = 0.0;  // start and size of the last failed (sub)step
   // One step of size h; a failure is retried as two steps of h/2 (each retried in turn) while
   // depth < max_step_halvings. The last summary is returned, its iterations summed.
   std::function<StepSummary(long long, double, int)> advance = [&](long long step, double h,
                                                                    int depth) -> StepSummary {
     const double t_end = sim.state().t + h;
     StepSummary s = sim.advance(h);
+    if (!ok(s)) {
+      fail_t = sim.state().t;
+      fail_h = h;
+    }
     if (ok(s) || depth >= scene.run.max_step_halvings) return s;
     if (depth == 0) ++halved_steps;
     std::fprintf(stderr,
@@ -306,8 +311,7 @@ int run_mass_spring(Scene& scene, const std::string& dir, const RunOptions& opti
                    "residual %.3g): %s: %s\n"
                    "  kept: %s/log.csv and the frames written so far; fixes: a smaller time.dt, "
                    "run.max_step_halvings > 0%s\n",
-                   scene.file.c_str(), step, sim.state().t, t_next - sim.state().t,
-                   backend_label(scene).c_str(), sum.iterations, sum.residual, to_string(sum.status),
+                   scene.file.c_str(), step, fail_t, fail_h, backend_label(scene).c_str(), sum.iterations, sum.residual, to_string(sum.status),
                    sum.message.c_str(), dir.c_str(),
                    sum.status == Status::NotConverged
                        ? ", a looser tolerance, more iterations, or run.allow_not_converged = true"
