@@ -6,8 +6,11 @@ CMAKE_FLAGS ?=
 # make fuzz: how long the libFuzzer run lasts (seconds).
 FUZZ_SECONDS ?= 600
 # make sanitize: CTest regex of tests left out under ASan/UBSan: the install test (its consumer
-# project is not built with the sanitizer flags) and the crosscheck study (minutes under ASan).
-SANITIZE_EXCLUDE ?= ^Install\.|^Cli\.Crosscheck$$
+# project is not built with the sanitizer flags) and the accuracy studies that take 20 s to 6 min
+# each under ASan (reference agreement with CVODE, Ceres against Newton, every backend on the
+# same cloth step, Gauss-Seidel convergence, crosscheck): together 20 minutes of the 25 on 2
+# cores. Their code paths stay covered by the shorter tests of the same backends.
+SANITIZE_EXCLUDE ?= ^Install\.|^Cli\.Crosscheck$$|Agree|^CeresImplicitStepper\.|EveryBackendTakesSameClothStep|^GaussSeidel\.ConvergesOnSpdClothMatrix$$
 
 .PHONY: all deps configure build demo test sanitize fuzz clean
 
@@ -48,7 +51,7 @@ fuzz:
 	cmake --preset fuzz $(CMAKE_FLAGS)
 	cmake --build build-fuzz -j $(JOBS) --target hooke_scene_fuzz
 	mkdir -p build-fuzz/corpus
-	cd build-fuzz && ./bin/hooke_scene_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=10 \
+	cd build-fuzz && ./bin/hooke_scene_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=30 \
 	  -print_final_stats=1 -artifact_prefix=$(CURDIR)/build-fuzz/ corpus \
 	  $(CURDIR)/problems/scenes $(CURDIR)/tests/problems/malformed
 

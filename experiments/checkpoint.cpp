@@ -56,7 +56,9 @@ class Writer {
 class Reader {
  public:
   Reader(const std::string& bytes, const std::string& path) : m_b(bytes), m_path(path) {}
-  [[noreturn]] void fail(const std::string& why) const { throw InputError(m_path, "checkpoint", why); }
+  [[noreturn]] void fail(const std::string& why) const {
+    throw InputError(m_path, "checkpoint", why);
+  }
   template <class T>
   T pod() {
     if (m_b.size() - m_at < sizeof(T)) fail("truncated (ends inside a field)");
@@ -69,7 +71,8 @@ class Reader {
   double f64() { return pod<double>(); }
   std::size_t length(std::uint64_t max, const char* what) {
     const long long n = i64();
-    if (n < 0 || std::uint64_t(n) > max) fail(std::string("implausible ") + what + " length " + std::to_string(n));
+    if (n < 0 || std::uint64_t(n) > max)
+      fail(std::string("implausible ") + what + " length " + std::to_string(n));
     return std::size_t(n);
   }
   std::string str() {
@@ -130,9 +133,10 @@ void write_checkpoint(const std::string& path, const Checkpoint& c) {
 Checkpoint read_checkpoint(const std::string& path) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
-    throw InputError(path, "checkpoint",
-                     "does not exist (nothing to resume: the run finished, or it was stopped before "
-                     "its first checkpoint)");
+    throw InputError(
+        path, "checkpoint",
+        "does not exist (nothing to resume: the run finished, or it was stopped before "
+        "its first checkpoint)");
   std::ifstream in(path, std::ios::binary);
   const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
   if (bytes.size() < sizeof kMagic + sizeof(std::uint64_t) ||

@@ -1,9 +1,9 @@
-// Claim of Stepper::history() / restore_history() / exact_resume() (solver/integrators/stepper.hpp),
-// on which `hooke resume` rests: for every registered method (and implicit methods on an iterative
-// backend, whose warm start is history too), 5 steps, then a fresh stepper given the exported
-// history, then 7 more steps, end bit for bit where 12 uninterrupted steps end, whenever the method
-// claims exact_resume(); the others (CVODE, IDA restart) agree to their tolerance. New methods of
-// the registry join the sweep without a test edit.
+// Claim of Stepper::history() / restore_history() / exact_resume()
+// (solver/integrators/stepper.hpp), on which `hooke resume` rests: for every registered method (and
+// implicit methods on an iterative backend, whose warm start is history too), 5 steps, then a fresh
+// stepper given the exported history, then 7 more steps, end bit for bit where 12 uninterrupted
+// steps end, whenever the method claims exact_resume(); the others (CVODE, IDA restart) agree to
+// their tolerance. New methods of the registry join the sweep without a test edit.
 #include <gtest/gtest.h>
 
 #include <random>
@@ -33,7 +33,8 @@ std::vector<Case> cases() {
 
 std::string case_name(const testing::TestParamInfo<Case>& info) {
   return test::pascal_case(info.param.method) +
-         (info.param.linear_solver.empty() ? "" : "On" + test::pascal_case(info.param.linear_solver));
+         (info.param.linear_solver.empty() ? ""
+                                           : "On" + test::pascal_case(info.param.linear_solver));
 }
 
 class StepperHistory : public testing::TestWithParam<Case> {

@@ -22,7 +22,8 @@ namespace {
 namespace fs = std::filesystem;
 
 fs::path scenes_dir() {
-  if (const char* env = std::getenv("HOOKE_SOURCE_DIR")) return fs::path(env) / "problems" / "scenes";
+  if (const char* env = std::getenv("HOOKE_SOURCE_DIR"))
+    return fs::path(env) / "problems" / "scenes";
   return fs::path(HOOKE_SOURCE_DIR) / "problems" / "scenes";
 }
 
@@ -157,7 +158,8 @@ TEST(HostileInput, MemoryBudgetAppliesToEveryMeshType) {
     try {
       const Scene s = load_scene(f.string());
       // Only ODE scenes and the fixed two-particle mesh (2 particles) have no size to check.
-      const bool fixed = s.is_ode() || s.resolved["mesh"]["type"].value_or(std::string()) == "two-particle";
+      const bool fixed =
+          s.is_ode() || s.resolved["mesh"]["type"].value_or(std::string()) == "two-particle";
       EXPECT_TRUE(fixed) << name << " was loaded despite a 1 KiB budget";
     } catch (const InputError& e) {
       EXPECT_NE(e.reason().find("GiB"), std::string::npos) << e.what();
