@@ -1,5 +1,6 @@
 // The hooke command: run a scene, list the shipped scenes, describe a scene.
 //   hooke run SCENE.toml [--set section.key=value]... [--out DIR]
+//   hooke resume DIR
 //   hooke scenes
 //   hooke info SCENE.toml [--set ...]
 //   hooke crosscheck SCENE.toml [--methods a,b] [--reference-rtol R] [--set ...] [--out DIR]
@@ -7,7 +8,9 @@
 //   hooke resolution [--full] [--n 8,16,32] [--out DIR] [--no-plot]
 //   hooke stability [--full] [--cases a,b] [--methods a,b] [--k 1e2,1e4] [--out DIR] [--no-plot]
 // Exit codes: 0 success, 1 internal or I/O error, 2 bad input (error: FILE: KEY: reason),
-// 3 a run that diverged (the message names step and time; output so far is kept).
+// 3 a run that diverged or whose step failed numerically (the message names step, time and
+// backend; output so far is kept), 130 / 143 a run stopped by SIGINT / SIGTERM after writing a
+// checkpoint (continue it with hooke resume DIR).
 #include <CLI/CLI.hpp>
 #include <algorithm>
 #include <cmath>
@@ -79,6 +82,17 @@ int main(int argc, char** argv) {
   run->add_option("--set", overrides, "override a scene key: section.key=value (repeatable)");
   run->add_option("--out", out_dir, "output directory (default: [output] dir, or out/<scene>)");
   run->add_flag("--no-progress", no_progress, "never show the progress line");
+  long long stop_after = -1;
+  run->add_option("--stop-after", stop_after,
+                  "testing aid: checkpoint after step N and stop as if interrupted (exit 130)");
+
+  std::string resume_dir;
+  auto* resume = app.add_subcommand(
+      "resume", "Continue a run stopped by SIGINT/SIGTERM (or --stop-after) from DIR/checkpoint.bin");
+  resume->add_option("dir", resume_dir, "output directory of the stopped run")->required();
+  resume->add_flag("--no-progress", no_progress, "never show the progress line");
+  resume->add_option("--stop-after", stop_after,
+                     "testing aid: checkpoint after step N and stop as if interrupted (exit 130)");
   run->footer("Methods: " + hooke::method_names() + "\nLinear solvers: " + hooke::linear_solver_names());
 
   app.add_subcommand("scenes", "List the shipped scenes");
@@ -220,6 +234,12 @@ int main(int argc, char** argv) {
       stab.plot = !no_plot;
       return hooke::run_stability(stab, scenes_dir().string());
     }
+    if (app.got_subcommand("resume")) {
+      hooke::RunOptions opts;
+      opts.progress = !no_progress;
+      opts.stop_after = stop_after;
+      return hooke::resume_run(resume_dir, opts);
+    }
     hooke::Scene scene = hooke::load_scene(resolve_scene(scene_path), overrides);
     if (app.got_subcommand("crosscheck")) {
       std::stringstream ss(cross_methods);
@@ -237,6 +257,7 @@ int main(int argc, char** argv) {
     hooke::RunOptions opts;
     opts.out_dir = out_dir;
     opts.progress = !no_progress;
+    opts.stop_after = stop_after;
     return hooke::run_scene(scene, opts);
   } catch (const hooke::InputError& e) {
     std::cerr << "error: " << e.what() << "\n";

@@ -5,16 +5,34 @@
 
 namespace hooke {
 
+/// Exit codes of a run stopped by a signal (128 + signal number, as shells report them); the run
+/// wrote a checkpoint first (mass-spring scenes) and `hooke resume DIR` continues it.
+constexpr int kExitInterrupted = 130;  ///< SIGINT (Ctrl-C), also --stop-after
+constexpr int kExitTerminated = 143;   ///< SIGTERM
+
 /// Options of `hooke run` that do not belong to the scene.
 struct RunOptions {
   std::string out_dir;  ///< overrides [output] dir when not empty
   bool progress = true; ///< show a progress line (only when stderr is a terminal)
+  /// Testing aid: after this step, write a checkpoint and stop as if interrupted (exit 130),
+  /// deterministically. -1: never.
+  long long stop_after = -1;
 };
 
 /// Runs a loaded scene and writes scene.toml, log.csv, final.csv, frames/ and final.png into the
-/// output directory. Returns the process exit code: 0 on success, 3 when the run diverged (the
-/// message on stderr names the step and time; everything written so far is kept).
+/// output directory. Returns the process exit code: 0 on success, 3 when the run diverged or a
+/// step failed numerically (the message on stderr names the step, time, backend and its numbers;
+/// everything written so far is kept), 130 / 143 when stopped by SIGINT / SIGTERM (after writing
+/// DIR/checkpoint.bin).
 /// Throws std::runtime_error when an output file cannot be written.
 int run_scene(Scene& scene, const RunOptions& options);
+
+/// Continues a mass-spring run that stopped with a checkpoint: reads DIR/scene.toml and
+/// DIR/checkpoint.bin, cuts log.csv back to the checkpointed step, and runs to the end, appending
+/// to log.csv and frames/ and writing final.csv and final.png. One-step methods (and bdf2, whose
+/// history is in the checkpoint) give a final.csv identical bit for bit to an uninterrupted run
+/// with the same thread count. Same exit codes as run_scene; InputError for a missing or corrupt
+/// checkpoint.
+int resume_run(const std::string& dir, const RunOptions& options);
 
 }  // namespace hooke

@@ -265,7 +265,12 @@ void read_run_settings(TableReader& root, Scene& scene) {
   {
     auto it = root.table("run");
     TableReader& r = *it;
-    scene.run.energy_growth_limit = r.positive("energy_growth_limit", 10.0);
+    RunSettings& run = scene.run;
+    run.energy_growth_limit = r.positive("energy_growth_limit", 10.0);
+    run.allow_not_converged = r.boolean("allow_not_converged", false);
+    run.max_step_halvings = int(r.integer("max_step_halvings", 0, 0, 30));
+    run.checkpoint_every = r.integer("checkpoint_every", 0, 0, 1LL << 62);
+    run.checkpoint_seconds = r.positive("checkpoint_seconds", 300.0);
     r.finish();
   }
 }
@@ -340,8 +345,12 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "file", "does not exist");
   if (fs::is_directory(path, ec)) throw InputError(path, "file", "is a directory, not a scene file");
+  // A device, FIFO or socket (/dev/zero, /dev/stdin) could be read forever: only regular files.
+  if (!fs::is_regular_file(path, ec))
+    throw InputError(path, "file", "is not a regular file (a device, FIFO or socket?)");
   const auto size = fs::file_size(path, ec);
-  if (!ec && size > (64u << 20))
+  if (ec) throw InputError(path, "file", "cannot read its size: " + ec.message());
+  if (size > (64u << 20))
     throw InputError(path, "file", "is " + std::to_string(size >> 20) +
                                        " MiB; scene files are limited to 64 MiB (use an obj mesh)");
   std::ifstream in(path, std::ios::binary);

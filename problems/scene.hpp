@@ -42,12 +42,24 @@ struct OutputSettings {
   bool png = true;         ///< write final.png (a picture of the final state)
 };
 
-/// [run]: divergence detection.
+/// [run]: divergence detection, numerical failures, checkpoints.
 struct RunSettings {
   /// The run stops (exit 3) when total energy exceeds its initial value by more than
   /// energy_growth_limit times the scene's energy scale (every spring stretched by its rest
   /// length, plus initial kinetic energy, plus gravity's energy over the initial extent).
   double energy_growth_limit = 10.0;
+  /// A step that misses its tolerance (iterative linear solver or Newton not converged, CVODE
+  /// giving up) stops the run with exit 3 unless this is true; then it is accepted, a warning is
+  /// printed for the first one and the count at the end (what the method-matrix study wants).
+  bool allow_not_converged = false;
+  /// A failed step (not converged, breakdown such as a matrix that is not positive definite,
+  /// non-finite state) is retried as two steps of h/2, each of which may be halved again, up to
+  /// this many times (h / 2^max_step_halvings); every retry is reported on stderr. 0: no retry.
+  int max_step_halvings = 0;
+  /// Write DIR/checkpoint.bin every N steps (0: never by count).
+  long long checkpoint_every = 0;
+  /// Write DIR/checkpoint.bin when this much wall time (s) has passed since the last one.
+  double checkpoint_seconds = 300.0;
 };
 
 /// An exact solution of a mass-spring scene, where one is known: writes the state at time t.
@@ -88,6 +100,15 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
 /// The same from TOML text (file is used in messages and to resolve relative mesh paths).
 Scene load_scene_from_string(const std::string& text, const std::string& file,
                              const std::vector<std::string>& overrides = {});
+
+/// Memory a scene may need before the loader refuses it (bytes): the mesh builders estimate the
+/// resident memory of a run from the particle and spring counts (see check_size in
+/// problems/builders/common.cpp) and refuse, before allocating, any scene above this budget,
+/// naming the estimate. Default: 64 GiB or the machine's physical memory, whichever is smaller;
+/// the environment variable HOOKE_MAX_MEMORY_GIB overrides the default (a number of GiB > 0).
+double scene_memory_limit();
+/// Sets the budget for this process (bytes > 0); e.g. the fuzz target keeps it below its RSS limit.
+void set_scene_memory_limit(double bytes);
 
 /// Names of the mesh types ("grid", "chain", ...), for messages and `hooke scenes`.
 const std::vector<std::string>& mesh_types();

@@ -2,7 +2,8 @@
 # Installs every Debian package hooke needs to build, test, run the demo and plot.
 # Idempotent: installs only what is missing; a no-op (no apt-get update) when all is present.
 # Run as root (or with sudo available) on Debian 12. With --paper it also installs what
-# `make paper` needs (pandoc), which building and testing do not.
+# `make paper` needs (pandoc), which building and testing do not; with the argument `fuzz`, also
+# the fuzzing toolchain.
 set -euo pipefail
 
 packages=(
@@ -22,6 +23,11 @@ packages=(
 )
 if [ "${1:-}" = "--paper" ]; then
   packages+=(pandoc)                # paper/paper.md -> out/paper/paper.html
+fi
+
+# `install-deps.sh fuzz`: also clang with libFuzzer and the sanitizer runtimes (make fuzz).
+if [ "${1:-}" = "fuzz" ]; then
+  packages+=(clang-14 libclang-rt-14-dev)
 fi
 
 missing=()

@@ -17,6 +17,7 @@ Simulation::Simulation(const MassSpringSystem& system, std::unique_ptr<Stepper> 
 StepSummary Simulation::advance(double h) {
   StepSummary s = m_stepper->step(m_state, h, m_next);
   if (s.status != Status::Converged && s.status != Status::NotConverged) return s;
+  if (s.status == Status::NotConverged && !m_accept_not_converged) return s;
   // Whole-step backends may stop short of t + h (e.g. CVODE's too-much-work): such a step cannot
   // be accepted as a step of size h.
   if (std::abs(m_next.t - (m_state.t + h)) > 1e-12 * std::max(std::abs(m_state.t) + h, 1.0)) {

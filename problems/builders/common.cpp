@@ -1,4 +1,8 @@
+#include <unistd.h>
+
+#include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <sstream>
 
 #include "problems/builders/mesh_build.hpp"
@@ -26,17 +30,54 @@ void pin_ids(TableReader& mesh, const std::string& key, const std::vector<long l
   }
 }
 
+namespace {
+constexpr double kGiB = double(1ull << 30);
+
+double default_memory_limit() {
+  if (const char* env = std::getenv("HOOKE_MAX_MEMORY_GIB")) {
+    char* end = nullptr;
+    const double gib = std::strtod(env, &end);
+    if (end != env && *end == '\0' && std::isfinite(gib) && gib > 0.0) return gib * kGiB;
+    throw InputError("<environment>", "HOOKE_MAX_MEMORY_GIB",
+                     std::string("must be a number of GiB > 0, got '") + env + "'");
+  }
+  double limit = 64.0 * kGiB;
+  const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
+  if (pages > 0 && page > 0) limit = std::min(limit, double(pages) * double(page));
+  return limit;
+}
+
+double& memory_limit_slot() {
+  static double limit = 0.0;  // 0: not yet decided
+  return limit;
+}
+}  // namespace
+
+double scene_memory_limit() {
+  double& limit = memory_limit_slot();
+  if (limit <= 0.0) limit = default_memory_limit();
+  return limit;
+}
+
+void set_scene_memory_limit(double bytes) {
+  HOOKE_ASSERT(bytes > 0.0 && std::isfinite(bytes), "memory limit must be > 0, got " << bytes);
+  memory_limit_slot() = bytes;
+}
+
 void check_size(TableReader& mesh, const std::string& key, double particles, double springs) {
   // Rough resident memory of a run: state and scratch (~20 doubles per particle), spring arrays
   // (~60 bytes), and two 3n x 3n Jacobians with 4 blocks per spring plus diagonals (12 bytes per
-  // stored scalar each).
+  // stored scalar each). Called before anything of that size is allocated.
   const double bytes = particles * 20 * 8 + springs * 60 + 2 * 12.0 * 9 * (4 * springs + particles);
-  const double limit = 64.0 * (1ull << 30);  // far above any machine this targets
-  if (particles > 2e9 || bytes > limit) {
+  const double limit = scene_memory_limit();
+  // Particle ids are ints in the spring arrays: more than 2^31 - 1 particles cannot be indexed.
+  if (particles > 2147483647.0 || bytes > limit) {
     std::ostringstream os;
     os.precision(3);
     os << "a mesh of " << particles << " particles and " << springs << " springs would need about "
-       << bytes / double(1ull << 30) << " GiB; refusing sizes above 64 GiB";
+       << bytes / kGiB << " GiB, above the memory budget of " << limit / kGiB
+       << " GiB (default: the smaller of 64 GiB and physical memory; HOOKE_MAX_MEMORY_GIB sets it)";
+    if (particles > 2147483647.0) os << " and above 2^31 - 1 particles";
     mesh.fail(key, os.str());
   }
 }

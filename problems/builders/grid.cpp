@@ -1,6 +1,7 @@
 // Cloth grid and cantilever: particles on a rectangular lattice with structural (i±1, j±1),
 // shear (diagonals) and flexion (i±2, j±2) springs.
 #include <cmath>
+#include <sstream>
 
 #include "problems/builders/mesh_build.hpp"
 
@@ -70,12 +71,16 @@ void pin_grid(TableReader& mesh, const std::vector<std::vector<double>>& pins, l
     for (int c = 0; c < 2; ++c) {
       const double d = pins[k][static_cast<size_t>(c)];
       if (d != std::floor(d)) mesh.fail(key, "grid coordinates must be integers [i, j]");
+      // Range-check in double first: casting a value beyond long long's range is undefined.
+      if (d < -double(size[c]) || d >= double(size[c])) {
+        std::ostringstream os;
+        os.precision(17);
+        os << (c == 0 ? "i" : "j") << " = " << d << " outside the grid (0.." << size[c] - 1
+           << ", negative counts from the end)";
+        mesh.fail(key, os.str());
+      }
       long long v = static_cast<long long>(d);
       if (v < 0) v += size[c];
-      if (v < 0 || v >= size[c])
-        mesh.fail(key, std::string(c == 0 ? "i" : "j") + " = " + std::to_string(static_cast<long long>(d)) +
-                           " outside the grid (0.." + std::to_string(size[c] - 1) +
-                           ", negative counts from the end)");
       ij[c] = v;
     }
     out.pinned[static_cast<size_t>(ij[1] * nx + ij[0])] = 1;

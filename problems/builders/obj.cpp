@@ -19,7 +19,8 @@ struct ObjMesh {
   std::vector<std::array<int, 3>> triangles;
 };
 
-ObjMesh read_obj(const std::string& path) {
+/// Reads vertices and faces; mesh is for the size check (key "file") as vertices accumulate.
+ObjMesh read_obj(const std::string& path, TableReader& mesh) {
   std::ifstream in(path);
   if (!in) throw InputError(path, "file", "cannot open the OBJ file");
   ObjMesh m;
@@ -45,6 +46,9 @@ ObjMesh read_obj(const std::string& path) {
       }
       m.vertices.push_back(p);
       m.vertex_line.push_back(lineno);
+      // A triangle mesh has about 3 edges per vertex; check the estimate every 64k vertices.
+      if (m.vertices.size() % 65536 == 0)
+        check_size(mesh, "file", double(m.vertices.size()), 3.0 * double(m.vertices.size()));
     } else if (tag == "f") {
       std::vector<int> face;
       std::string tok;
@@ -65,6 +69,8 @@ ObjMesh read_obj(const std::string& path) {
         for (size_t b = a + 1; b < face.size(); ++b)
           if (face[a] == face[b]) fail("face uses vertex " + std::to_string(face[a] + 1) + " twice");
       for (size_t k = 1; k + 1 < face.size(); ++k) m.triangles.push_back({face[0], face[k], face[k + 1]});
+      if (m.triangles.size() % 65536 < face.size() - 2)  // crossed a multiple of 64k triangles
+        check_size(mesh, "file", double(m.vertices.size()), 3.0 * double(m.triangles.size()));
     }
     // Other statements (vt, vn, o, g, s, usemtl, mtllib, l, ...) carry nothing hooke simulates.
   }
@@ -98,10 +104,22 @@ void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_
   const std::string file = mesh.string("file");
   namespace fs = std::filesystem;
   const fs::path p = fs::path(file).is_absolute() ? fs::path(file) : fs::path(base_dir) / file;
-  if (!fs::exists(p)) mesh.fail("file", "OBJ file '" + p.string() + "' does not exist");
+  std::error_code ec;
+  if (!fs::exists(p, ec))
+    mesh.fail("file", "OBJ file '" + p.string() + "' does not exist" + (ec ? " (" + ec.message() + ")" : ""));
+  if (!fs::is_regular_file(p, ec))
+    mesh.fail("file", "OBJ file '" + p.string() + "' is not a regular file (" +
+                          (fs::is_directory(p, ec) ? "a directory" : "a device, FIFO or socket") + ")");
+  // A bound on the file before a byte is read; read_obj checks the memory estimate as the vertex
+  // count grows, so an absurd mesh is refused long before it is held in memory.
+  const auto size = fs::file_size(p, ec);
+  if (ec) mesh.fail("file", "cannot read the size of '" + p.string() + "': " + ec.message());
+  if (size > (2ull << 30))
+    mesh.fail("file", "OBJ file '" + p.string() + "' is " + std::to_string(size >> 20) +
+                          " MiB; meshes are limited to 2048 MiB");
   // The resolved scene (scene.toml in the output directory) must find the mesh from anywhere.
   mesh.set_resolved("file", fs::absolute(p).lexically_normal().string());
-  ObjMesh obj = read_obj(p.string());
+  ObjMesh obj = read_obj(p.string(), mesh);
   const Index n = static_cast<Index>(obj.vertices.size());
   check_size(mesh, "file", double(n), 3.0 * double(obj.triangles.size()));
   const double scale = mesh.positive("scale", 1.0);

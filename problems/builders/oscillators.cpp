@@ -43,6 +43,7 @@ void build_two_particle(TableReader& mesh, TableReader& springs, MeshBuild& out)
 
 void build_damped_springs(TableReader& mesh, TableReader& springs, MeshBuild& out) {
   const long long count = mesh.integer("count", 5, 1, 10000000LL);
+  check_size(mesh, "count", 2.0 * double(count), double(count));
   const double m = mesh.positive("mass", 1.0);
   const double L = mesh.positive("rest_length", 1.0);
   const double spacing = mesh.positive("spacing", 0.5);

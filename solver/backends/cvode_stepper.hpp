@@ -96,6 +96,8 @@ class CvodeStepper final : public Stepper {
 
   /// Registry name, "cvode".
   const char* name() const override { return "cvode"; }
+  /// CVODE's step-size and order history cannot be exported: a resumed run restarts it.
+  bool exact_resume() const override { return false; }
   /// Advances s0 by h (s); see the class comment for restarts and outcomes.
   StepSummary step(const State& s0, double h, State& s1) override;
 

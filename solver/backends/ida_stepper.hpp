@@ -75,6 +75,8 @@ class IdaStepper final : public Stepper {
 
   /// Registry name, "ida".
   const char* name() const override { return "ida"; }
+  /// IDA's step-size and order history cannot be exported: a resumed run restarts it.
+  bool exact_resume() const override { return false; }
   /// Advances s0 by h (s); see the class comment.
   StepSummary step(const State& s0, double h, State& s1) override;
 

@@ -61,6 +61,30 @@ std::string ImplicitStepper::report() const {
   return os.str();
 }
 
+std::vector<double> ImplicitStepper::history() const {
+  std::vector<double> h;
+  h.reserve(size_t(3 + m_prev_x.size() + m_prev_v.size() + m_delta.size()));
+  h.push_back(m_has_prev ? 1.0 : 0.0);
+  h.push_back(m_prev_h);
+  h.push_back(m_prev_t1);
+  h.insert(h.end(), m_prev_x.data(), m_prev_x.data() + m_prev_x.size());
+  h.insert(h.end(), m_prev_v.data(), m_prev_v.data() + m_prev_v.size());
+  h.insert(h.end(), m_delta.data(), m_delta.data() + m_delta.size());
+  return h;
+}
+
+void ImplicitStepper::restore_history(const std::vector<double>& h) {
+  const size_t N = size_t(m_prev_x.size()), nf = size_t(m_delta.size());
+  HOOKE_ASSERT(h.size() == 3 + 2 * N + nf, name() << ": history of " << h.size() << " numbers, expected "
+                                                  << 3 + 2 * N + nf << " for " << N << " dofs");
+  m_has_prev = h[0] != 0.0;
+  m_prev_h = h[1];
+  m_prev_t1 = h[2];
+  m_prev_x = Eigen::Map<const Vec>(h.data() + 3, Index(N));
+  m_prev_v = Eigen::Map<const Vec>(h.data() + 3 + N, Index(N));
+  m_delta = Eigen::Map<const Vec>(h.data() + 3 + 2 * N, Index(nf));
+}
+
 const char* ImplicitStepper::name() const {
   switch (m_scheme) {
     case ImplicitScheme::Beta: return "implicit";

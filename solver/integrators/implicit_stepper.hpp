@@ -63,6 +63,10 @@ class ImplicitStepper final : public Stepper {
   const LinearSummary& linear_totals() const { return m_totals; }
   double assembly_seconds() const { return m_assembly_seconds; }
   std::string report() const override;
+  /// BDF2's previous state, h and end time, and the last linear correction (the warm start of
+  /// iterative backends): [has_prev, prev_h, prev_t1, prev_x (3n), prev_v (3n), delta (free dofs)].
+  std::vector<double> history() const override;
+  void restore_history(const std::vector<double>& history) override;
 
  private:
   const MassSpringSystem& m_system;

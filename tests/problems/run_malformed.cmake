@@ -7,6 +7,9 @@
 #   # expect-file: SUFFIX   the message names a file ending in SUFFIX (an OBJ mesh) instead of
 #                           the scene itself
 #   # expect-text: TEXT     the message also contains TEXT (e.g. the memory a mesh would need)
+#   # env: NAME=VALUE       run hooke with this environment variable set (e.g. a memory budget)
+# With -DMAKE_HUGE=ON the scene is first created: a two-line header followed by zero bytes up to
+# 65 MiB (a sparse file), to check the scene-size limit without shipping a huge file.
 # Passes only if hooke exits with exactly 2 (no crash, no signal, no timeout), stderr starts with
 # "error: FILE: KEY: " (for a "line N" key, "error: FILE: line N, column C: " also matches) and the
 # output directory was never created.
@@ -16,7 +19,17 @@ foreach(var HOOKE SCENE OUT)
   endif()
 endforeach()
 
-file(STRINGS "${SCENE}" header LIMIT_COUNT 4)
+if(MAKE_HUGE)
+  get_filename_component(_dir "${SCENE}" DIRECTORY)
+  file(MAKE_DIRECTORY "${_dir}")
+  file(WRITE "${SCENE}" "# expect: file\n# expect-text: MiB\n")
+  execute_process(COMMAND truncate -s 65M "${SCENE}" RESULT_VARIABLE _rc)
+  if(NOT _rc EQUAL 0)
+    message(FATAL_ERROR "could not create the huge scene ${SCENE}")
+  endif()
+endif()
+
+file(STRINGS "${SCENE}" header LIMIT_COUNT 6)
 list(GET header 0 first)
 if(NOT first MATCHES "^# expect: (.+)$")
   message(FATAL_ERROR "${SCENE}: the first line must be '# expect: KEY', got '${first}'")
@@ -25,18 +38,22 @@ string(STRIP "${CMAKE_MATCH_1}" key)
 set(expect_file "${SCENE}")
 set(expect_text "")
 set(file_is_suffix FALSE)
+set(env_prefix "")
 foreach(line IN LISTS header)
   if(line MATCHES "^# expect-file: (.+)$")
     string(STRIP "${CMAKE_MATCH_1}" expect_file)
     set(file_is_suffix TRUE)
   elseif(line MATCHES "^# expect-text: (.+)$")
     string(STRIP "${CMAKE_MATCH_1}" expect_text)
+  elseif(line MATCHES "^# env: ([A-Za-z_0-9]+=.*)$")
+    string(STRIP "${CMAKE_MATCH_1}" _assign)
+    set(env_prefix "${CMAKE_COMMAND}" -E env "${_assign}")
   endif()
 endforeach()
 
 file(REMOVE_RECURSE "${OUT}")
 execute_process(
-  COMMAND "${HOOKE}" run "${SCENE}" --out "${OUT}" --no-progress
+  COMMAND ${env_prefix} "${HOOKE}" run "${SCENE}" --out "${OUT}" --no-progress
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
 
 set(report "\n--- exit: ${rc}\n--- stderr:\n${err}\n--- stdout:\n${out}")

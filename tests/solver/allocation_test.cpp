@@ -34,7 +34,17 @@ std::atomic<long> g_allocations{0};
 inline void count_allocation() { g_allocations.fetch_add(1, std::memory_order_relaxed); }
 }  // namespace
 
-#if defined(__GLIBC__)
+// AddressSanitizer owns malloc: interposing it here as well would hand ASan's free() blocks it
+// never allocated. Under ASan (make sanitize) only operator new is counted.
+#if defined(__SANITIZE_ADDRESS__)
+#define HOOKE_TEST_UNDER_ASAN 1
+#elif defined(__has_feature)
+#if __has_feature(address_sanitizer)
+#define HOOKE_TEST_UNDER_ASAN 1
+#endif
+#endif
+
+#if defined(__GLIBC__) && !defined(HOOKE_TEST_UNDER_ASAN)
 #define HOOKE_TEST_COUNTS_MALLOC 1
 extern "C" {
 void* __libc_malloc(size_t size);
@@ -346,6 +356,9 @@ TEST(Allocation, CholmodAllocatesOnlyInFactor) {
   bool built = false;
   for (const auto& b : hooke::linear_solvers()) built = built || std::string(b.name) == "cholmod";
   if (!built) GTEST_SKIP() << "built without CHOLMOD";
+#ifndef HOOKE_TEST_COUNTS_MALLOC
+  GTEST_SKIP() << "CHOLMOD allocates through malloc, which this build does not count (ASan)";
+#endif
   auto sys = make_cloth();
   hooke::ReducedMatrix R(*sys);
   hooke::Jacobians J = sys->make_jacobians();
