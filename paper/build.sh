@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Rebuilds the paper from scratch: runs the three experiments into OUT (default size, or the
+# Rebuilds the paper from scratch: runs the four experiments into OUT (default size, or the
 # paper's size with --full), records the machine and the timings, assembles OUT/paper.md from
 # paper/paper.md (every table and figure is a file the experiments wrote) and renders
 # OUT/paper.html with pandoc (figures embedded).
@@ -26,6 +26,7 @@ run() {  # run NAME ARGS...: one experiment, timed
 run stability
 run workprecision
 run resolution
+run step-convergence
 
 {
   echo "| property | value |"
