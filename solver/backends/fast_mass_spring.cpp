@@ -418,6 +418,8 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
         m_rho_lbfgs[size_t(slot)] = 1.0 / st;
         newest = slot;
         stored = std::min(stored + 1, H);
+      } else if (stored == H) {
+        stored = H - 1;  // the rejected pair overwrote the oldest one: drop it from the history
       }
       m_X.swap(m_Xtrial);
       m_G.swap(m_Gnew);
