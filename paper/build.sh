@@ -5,6 +5,11 @@
 # OUT/paper.html with pandoc (figures embedded).
 # Usage: paper/build.sh HOOKE_BINARY OUT [--full]      (`make paper`, `make paper FULL=1`)
 set -euo pipefail
+# The studies factor small matrices (8 x 8 .. 16 x 16 cloths) thousands of times: OpenBLAS threads
+# only add overhead there, and on a shared 2-core machine they cost up to 6x in wall time
+# (stability: 716 s with the default threads under load, 116 s with one thread on a quiet machine).
+# machine.md records the value used.
+export OPENBLAS_NUM_THREADS=${OPENBLAS_NUM_THREADS:-1}
 hooke=$(realpath "$1")
 out=$2
 shift 2
