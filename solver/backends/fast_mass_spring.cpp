@@ -42,16 +42,11 @@ std::string fast_mass_spring_unsupported(const MassSpringSystem& system) {
 
 FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
                                              FastMassSpringOptions options)
-    : m_sys(system), m_opt(std::move(options)) {
+    : m_sys(system), m_opt(std::move(options)), m_f(system) {
   if (const std::string err = m_opt.validate(); !err.empty())
     throw std::invalid_argument("fast-mass-spring: " + err);
   if (const std::string why = fast_mass_spring_unsupported(system); !why.empty())
     throw std::invalid_argument("fast-mass-spring: " + why);
-  const SpringPotentialForces forces(system);
-  m_sets = forces.springs;
-  m_g = forces.gravity;
-  m_drag = forces.drag;
-  m_wind = forces.wind;
 
   const Index n = system.num_particles();
   m_row.assign(size_t(n), -1);
@@ -66,7 +61,7 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
   // joining two free particles (set-up only; steps just rewrite values).
   std::vector<Eigen::Triplet<double, int>> t;
   for (Index r = 0; r < nf; ++r) t.emplace_back(int(r), int(r), 0.0);
-  for (const SpringSet* s : m_sets)
+  for (const SpringSet* s : m_f.springs)
     for (size_t k = 0; k < s->size(); ++k) {
       const Index ri = m_row[size_t(s->i[k])], rj = m_row[size_t(s->j[k])];
       if (ri >= 0 && rj >= 0) {
@@ -86,9 +81,9 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
   };
   m_diag.resize(size_t(nf));
   for (Index r = 0; r < nf; ++r) m_diag[size_t(r)] = position(r, r);
-  m_slots.resize(m_sets.size());
-  for (size_t si = 0; si < m_sets.size(); ++si) {
-    const SpringSet& s = *m_sets[si];
+  m_slots.resize(m_f.springs.size());
+  for (size_t si = 0; si < m_f.springs.size(); ++si) {
+    const SpringSet& s = *m_f.springs[si];
     m_slots[si].resize(s.size());
     for (size_t k = 0; k < s.size(); ++k) {
       const Index ri = m_row[size_t(s.i[k])], rj = m_row[size_t(s.j[k])];
@@ -117,7 +112,7 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
     m_alpha.assign(size_t(m_opt.lbfgs_history), 0.0);
   }
   size_t groups = 0;
-  for (const SpringSet* s : m_sets) groups = std::max(groups, s->group_start.size());
+  for (const SpringSet* s : m_f.springs) groups = std::max(groups, s->group_start.size());
   m_group_energy.assign(groups + 1, 0.0);
 }
 
@@ -130,8 +125,8 @@ void FastMassSpringStepper::prepare(double h) {
   const auto t0 = Clock::now();
   double* a = m_A.valuePtr();
   std::fill(a, a + m_A.nonZeros(), 0.0);
-  for (size_t si = 0; si < m_sets.size(); ++si) {
-    const SpringSet& s = *m_sets[si];
+  for (size_t si = 0; si < m_f.springs.size(); ++si) {
+    const SpringSet& s = *m_f.springs[si];
     for (size_t k = 0; k < s.size(); ++k) {
       const auto& slot = m_slots[si][k];
       const double c = s.coeff[k];
@@ -142,7 +137,7 @@ void FastMassSpringStepper::prepare(double h) {
     }
   }
   const Vec& m = m_sys.masses();
-  for (size_t r = 0; r < m_free.size(); ++r) a[m_diag[r]] += m[m_free[r]] / (h * h) + m_drag / h;
+  for (size_t r = 0; r < m_free.size(); ++r) a[m_diag[r]] += m[m_free[r]] / (h * h) + m_f.drag / h;
   if (!m_free.empty()) {
     const LinearSummary f = m_chol->factor(m_A);
     // M/h^2 > 0 on the diagonal and a spring Laplacian make A symmetric positive definite, so a
@@ -163,19 +158,19 @@ void FastMassSpringStepper::begin_step(const State& s0, double h) {
   const Vec& m = m_sys.masses();
   for (size_t r = 0; r < m_free.size(); ++r) {
     const Index p = m_free[r];
-    const Vec3 b = m[p] / (h * h) * m_y.segment<3>(3 * p) + m[p] * m_g +
-                   (m_drag / h) * (s0.x.segment<3>(3 * p) + h * m_wind);
+    const Vec3 b = m[p] / (h * h) * m_y.segment<3>(3 * p) + m[p] * m_f.gravity +
+                   (m_f.drag / h) * (s0.x.segment<3>(3 * p) + h * m_f.wind);
     m_const.row(Index(r)) = b.transpose();
   }
   for (const PinLink& l : m_pin_links)
-    m_const.row(l.r) += m_sets[l.set]->coeff[l.spring] * m_y.segment<3>(3 * l.q).transpose();
+    m_const.row(l.r) += m_f.springs[l.set]->coeff[l.spring] * m_y.segment<3>(3 * l.q).transpose();
 }
 
 double FastMassSpringStepper::local_step(ConstRef x) {
   const auto t0 = Clock::now();
   m_acc.setZero();
   double energy = 0.0;
-  for (const SpringSet* sp : m_sets) {
+  for (const SpringSet* sp : m_f.springs) {
     const SpringSet& s = *sp;
     // Each spring's best direction d = L (x_i - x_j) / |x_i - x_j| enters b as +k d at i and -k d
     // at j. Particle ranges run in parallel (SpringSet's partition: no two threads write one
@@ -220,9 +215,9 @@ double FastMassSpringStepper::quadratic_terms(ConstRef x) const {
     // Gravity's term is taken relative to y (a constant shift of g): its absolute value would
     // dwarf the differences between iterates and cost digits in every comparison of g.
     const Vec3 dy = xp - m_y.segment<3>(3 * p);
-    q += m[p] / (2 * h * h) * dy.squaredNorm() - m[p] * m_g.dot(dy);
-    if (m_drag > 0.0)
-      q += m_drag / (2 * h) * (xp - s0.x.segment<3>(3 * p) - h * m_wind).squaredNorm();
+    q += m[p] / (2 * h * h) * dy.squaredNorm() - m[p] * m_f.gravity.dot(dy);
+    if (m_f.drag > 0.0)
+      q += m_f.drag / (2 * h) * (xp - s0.x.segment<3>(3 * p) - h * m_f.wind).squaredNorm();
   }
   return q;
 }
@@ -235,10 +230,10 @@ double FastMassSpringStepper::objective(const State& s0, double h, ConstRef x) c
   for (const Index p : m_free) {
     const Vec3 xp = x.segment<3>(3 * p);
     const Vec3 dy = xp - y.segment<3>(3 * p);
-    g += m[p] / (2 * h * h) * dy.squaredNorm() - m[p] * m_g.dot(dy);
-    if (m_drag > 0.0) g += m_drag / (2 * h) * (xp - s0.x.segment<3>(3 * p) - h * m_wind).squaredNorm();
+    g += m[p] / (2 * h * h) * dy.squaredNorm() - m[p] * m_f.gravity.dot(dy);
+    if (m_f.drag > 0.0) g += m_f.drag / (2 * h) * (xp - s0.x.segment<3>(3 * p) - h * m_f.wind).squaredNorm();
   }
-  for (const SpringSet* sp : m_sets)
+  for (const SpringSet* sp : m_f.springs)
     for (size_t k = 0; k < sp->size(); ++k) {
       const double l = (x.segment<3>(3 * sp->i[k]) - x.segment<3>(3 * sp->j[k])).norm();
       g += 0.5 * sp->coeff[k] * (l - sp->rest_length[k]) * (l - sp->rest_length[k]);

@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "hooke/backends/spring_potential_forces.hpp"
 #include "hooke/forces/spring_set.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
@@ -104,10 +105,7 @@ class FastMassSpringStepper final : public Stepper {
 
   const MassSpringSystem& m_sys;
   FastMassSpringOptions m_opt;
-  std::vector<const SpringSet*> m_sets;  // the springs of every HookeSpring force
-  Vec3 m_g = Vec3::Zero();               // gravity acceleration (0 if none)
-  double m_drag = 0.0;                   // total air-drag coefficient c (kg/s per particle)
-  Vec3 m_wind = Vec3::Zero();            // c-weighted wind velocity
+  SpringPotentialForces m_f;  // springs, gravity, drag and wind of the system
   std::vector<Index> m_free;             // free particle ids, by row of the global system
   std::vector<Index> m_row;              // row of each particle, -1 if pinned
 

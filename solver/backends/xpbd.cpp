@@ -23,20 +23,15 @@ std::string xpbd_unsupported(const MassSpringSystem& system) {
 }
 
 XpbdStepper::XpbdStepper(const MassSpringSystem& system, XpbdOptions options)
-    : m_sys(system), m_opt(options) {
+    : m_sys(system), m_opt(options), m_f(system) {
   if (const std::string err = m_opt.validate(); !err.empty()) throw std::invalid_argument("xpbd: " + err);
   if (const std::string why = xpbd_unsupported(system); !why.empty())
     throw std::invalid_argument("xpbd: " + why);
-  const SpringPotentialForces forces(system);
-  m_sets = forces.springs;
-  m_g = forces.gravity;
-  m_drag = forces.drag;
-  m_wind = forces.wind;
   const Index n = system.num_particles();
   m_w.resize(n);
   for (Index p = 0; p < n; ++p) m_w[p] = system.pinned()[size_t(p)] ? 0.0 : 1.0 / system.masses()[p];
   m_p.setZero(3 * n);
-  for (const SpringSet* s : m_sets) m_lambda.emplace_back(s->size(), 0.0);
+  for (const SpringSet* s : m_f.springs) m_lambda.emplace_back(s->size(), 0.0);
 }
 
 StepSummary XpbdStepper::step(const State& s0, double h, State& s1) {
@@ -53,8 +48,8 @@ StepSummary XpbdStepper::step(const State& s0, double h, State& s1) {
   for (int sub = 0; sub < m_opt.substeps; ++sub) {
     for (Index p = 0; p < n; ++p) {
       if (m_w[p] > 0.0) {
-        Vec3 vp = v.segment<3>(3 * p) + hs * m_g;
-        if (m_drag > 0.0) vp = m_wind + (vp - m_wind) * std::exp(-m_drag * hs / m[p]);
+        Vec3 vp = v.segment<3>(3 * p) + hs * m_f.gravity;
+        if (m_f.drag > 0.0) vp = m_f.wind + (vp - m_f.wind) * std::exp(-m_f.drag * hs / m[p]);
         v.segment<3>(3 * p) = vp;
       }
       m_p.segment<3>(3 * p) = x.segment<3>(3 * p) + hs * v.segment<3>(3 * p);
@@ -63,8 +58,8 @@ StepSummary XpbdStepper::step(const State& s0, double h, State& s1) {
     double residual = 0.0;
     for (int sweep = 0; sweep < m_opt.iterations; ++sweep) {
       residual = 0.0;
-      for (size_t si = 0; si < m_sets.size(); ++si) {
-        const SpringSet& s = *m_sets[si];
+      for (size_t si = 0; si < m_f.springs.size(); ++si) {
+        const SpringSet& s = *m_f.springs[si];
         std::vector<double>& lambda = m_lambda[si];
         for (size_t k = 0; k < s.size(); ++k) {
           if (s.coeff[k] <= 0.0) continue;

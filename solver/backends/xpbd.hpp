@@ -2,6 +2,7 @@
 #include <string>
 #include <vector>
 
+#include "hooke/backends/spring_potential_forces.hpp"
 #include "hooke/forces/spring_set.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
@@ -46,10 +47,7 @@ class XpbdStepper final : public Stepper {
  private:
   const MassSpringSystem& m_sys;
   XpbdOptions m_opt;
-  std::vector<const SpringSet*> m_sets;
-  Vec3 m_g = Vec3::Zero();
-  double m_drag = 0.0;
-  Vec3 m_wind = Vec3::Zero();
+  SpringPotentialForces m_f;  // springs, gravity, drag and wind of the system
   Vec m_w;                           // inverse mass per particle (0 if pinned)
   Vec m_p;                           // 3n predicted positions
   std::vector<std::vector<double>> m_lambda;  // per set and spring
