@@ -59,6 +59,7 @@ class ImplicitStepper final : public Stepper {
   const char* name() const override;
   StepSummary step(const State& s0, double h, State& s1) override;
   const LinearSolver& linear_solver() const { return *m_solver; }
+  bool exact_resume() const override { return m_solver->exact_resume(); }
   /// Summed linear-backend times of all steps so far (analyze, factor, solve), and assembly time.
   const LinearSummary& linear_totals() const { return m_totals; }
   double assembly_seconds() const { return m_assembly_seconds; }

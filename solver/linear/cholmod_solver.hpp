@@ -40,6 +40,10 @@ class CholmodSolver final : public LinearSolver {
   /// its own workspace for the last k used, so repeated calls with the same k do not allocate.
   LinearSummary solve_columns(const Eigen::Ref<const Eigen::MatrixXd>& B,
                               Eigen::Ref<Eigen::MatrixXd> X);
+  /// CHOLMOD's flop count of one factorization over 4 nnz(L) (the flops of one solve), divided by
+  /// the measured ratio of their flop rates (the factorization runs as BLAS-3, the solve streams L):
+  /// see the definition. After analyze().
+  double factor_cost_in_solves() const override;
   /// Nonzeros of the factor L (after factor()).
   double factor_nonzeros() const;
 

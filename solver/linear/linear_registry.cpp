@@ -23,6 +23,10 @@ const std::vector<Entry>& table() {
 #if HOOKE_WITH_CHOLMOD
       {{"cholmod", "CHOLMOD supernodal Cholesky (SuiteSparse), analysed once, refactored per step"},
        [] { return std::make_unique<CholmodSolver>(); }},
+      {{"pcg-cholmod",
+        "conjugate gradients preconditioned by a CHOLMOD factorization of an earlier step's A, "
+        "refactored when that pays"},
+       [] { CholmodOptions o; o.ordering = "metis"; return std::make_unique<ConjugateGradientSolver>(std::make_unique<CholmodSolver>(o)); }},
 #endif
       {{"pcg-block", "conjugate gradients, 3x3 block-Jacobi preconditioner"},
        [] { return std::make_unique<ConjugateGradientSolver>(Preconditioner::BlockJacobi); }},

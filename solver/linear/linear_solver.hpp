@@ -48,6 +48,12 @@ class LinearSolver {
   virtual LinearSummary analyze(const SparseMatrix& A) = 0;
   virtual LinearSummary factor(const SparseMatrix& A) = 0;
   virtual LinearSummary solve(ConstRef b, VecRef x, const LinearSolveOptions& options) = 0;
+  /// False if results depend on state carried from earlier steps that a checkpoint does not hold
+  /// (e.g. the age of a reused preconditioner): a resumed run then agrees to tolerance, not bits.
+  virtual bool exact_resume() const { return true; }
+  /// Direct backends: the cost of one factor() in units of one solve(), estimated after analyze()
+  /// from operation counts (deterministic, no timing); 0 if unknown.
+  virtual double factor_cost_in_solves() const { return 0.0; }
 };
 
 }  // namespace hooke

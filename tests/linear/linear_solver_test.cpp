@@ -26,6 +26,7 @@
 #include <vector>
 
 #include "hooke/integrators/reduced_matrix.hpp"
+#include "hooke/linear/conjugate_gradient.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/linear/linear_solver.hpp"
 #include "hooke/model/mass_spring_system.hpp"
@@ -577,6 +578,103 @@ TEST(Cholmod, IndefiniteMatrixBreaksDownInFactor) {
   Vec x(30);
   EXPECT_EQ(chol->solve(C * xstar, x, {}).status, Status::Converged);
   EXPECT_LT(relative_distance(x, xstar), 1e-13);
+}
+
+// ---- PCG preconditioned by a reused factorization (pcg-cholmod) ----
+
+/// The 8x8 cloth's step matrix (light particles: far from diagonally dominant, so Jacobi-PCG
+/// needs many iterations) and the same matrix with its diagonal scaled by `diagonal_scale`.
+struct ReusePair {
+  std::unique_ptr<StepMatrix> P;
+  SparseMatrix A0, A1;
+};
+ReusePair reuse_pair(double diagonal_scale) {
+  ClothSpec spec = cloth_spec();
+  spec.n = 8;
+  spec.jitter = 0.3;
+  ReusePair r;
+  r.P = make_step_matrix(spec, 1e-2, true);
+  r.A0 = r.P->A();
+  r.A1 = r.A0;
+  for (Index c = 0; c < r.A1.outerSize(); ++c)
+    for (SparseMatrix::InnerIterator it(r.A1, c); it; ++it)
+      if (it.row() == it.col()) it.valueRef() *= diagonal_scale;
+  return r;
+}
+
+TEST(ReusedFactorizationPcg, KeepsItsFactorizationWhileTheMatrixDoesNotChange) {
+  if (!has_backend("cholmod")) GTEST_SKIP() << "built without CHOLMOD";
+  const ReusePair r = reuse_pair(1.0);
+  auto solver = hooke::make_linear_solver("pcg-cholmod");
+  auto& pcg = dynamic_cast<hooke::ConjugateGradientSolver&>(*solver);
+  EXPECT_FALSE(solver->exact_resume()) << "its preconditioner's age is not in a checkpoint";
+  ASSERT_EQ(setup(*solver, r.A0).status, Status::Converged);
+  EXPECT_EQ(pcg.factorizations(), 1) << "the first factor() factors";
+  for (int step = 0; step < 20; ++step) {
+    if (step > 0) {
+      ASSERT_EQ(solver->factor(r.A0).status, Status::Converged);
+    }
+    const Vec xstar = random_vector(r.A0.rows(), unsigned(40 + step));
+    Vec x = Vec::Zero(r.A0.rows());
+    const LinearSummary s = solver->solve(r.A0 * xstar, x, cold(1e-12, 1000));
+    ASSERT_EQ(s.status, Status::Converged) << describe(s);
+    // The preconditioner is A's own factorization: PCG is exact after one iteration.
+    EXPECT_EQ(s.iterations, 1) << "step " << step;
+    EXPECT_LT(relative_distance(x, xstar), 1e-10) << "step " << step;
+  }
+  EXPECT_EQ(pcg.factorizations(), 1) << "one iteration a step never pays for a refactorization";
+}
+
+TEST(ReusedFactorizationPcg, RefactorsOnceAStaleFactorizationCostsMoreThanItSaves) {
+  if (!has_backend("cholmod")) GTEST_SKIP() << "built without CHOLMOD";
+  // A1 = A0 with a diagonal 30x larger: A0's factorization is a poor preconditioner for it.
+  const ReusePair r = reuse_pair(30.0);
+  auto solver = hooke::make_linear_solver("pcg-cholmod");
+  auto& pcg = dynamic_cast<hooke::ConjugateGradientSolver&>(*solver);
+  ASSERT_EQ(setup(*solver, r.A0).status, Status::Converged);
+  const Vec xstar = random_vector(r.A0.rows(), 7);
+  Vec x = Vec::Zero(r.A0.rows());
+  LinearSummary s = solver->solve(r.A0 * xstar, x, cold(1e-12, 1000));
+  ASSERT_EQ(s.status, Status::Converged) << describe(s);
+  ASSERT_EQ(s.iterations, 1);
+  // Step 2 on A1 with A0's factorization: correct, but it takes many iterations.
+  ASSERT_EQ(solver->factor(r.A1).status, Status::Converged);
+  EXPECT_EQ(pcg.factorizations(), 1) << "one cheap step: no reason to refactor yet";
+  x.setZero();
+  s = solver->solve(r.A1 * xstar, x, cold(1e-12, 1000));
+  ASSERT_EQ(s.status, Status::Converged) << describe(s);
+  EXPECT_LT(relative_distance(x, xstar), 1e-9);
+  const int stale_iterations = s.iterations;
+  EXPECT_GT(stale_iterations, 5) << describe(s);
+  // Step 3: the last step (stale_iterations) cost more than the average since the factorization
+  // ((F + 1 + stale_iterations) / 2, F = the factorization's cost in iterations): refactor.
+  ASSERT_GT(stale_iterations, 1.0 + pcg.factor_cost()) << "premise of the renewal rule";
+  ASSERT_EQ(solver->factor(r.A1).status, Status::Converged);
+  EXPECT_EQ(pcg.factorizations(), 2);
+  x.setZero();
+  s = solver->solve(r.A1 * xstar, x, cold(1e-12, 1000));
+  EXPECT_EQ(s.iterations, 1) << "fresh factorization of A1";
+}
+
+TEST(ReusedFactorizationPcg, StaleFactorizationThatMissesTheToleranceRefactorsAndRetries) {
+  if (!has_backend("cholmod")) GTEST_SKIP() << "built without CHOLMOD";
+  const ReusePair r = reuse_pair(30.0);
+  auto solver = hooke::make_linear_solver("pcg-cholmod");
+  auto& pcg = dynamic_cast<hooke::ConjugateGradientSolver&>(*solver);
+  ASSERT_EQ(setup(*solver, r.A0).status, Status::Converged);
+  Vec x = Vec::Zero(r.A0.rows());
+  ASSERT_EQ(solver->solve(r.A0 * random_vector(r.A0.rows(), 8), x, cold(1e-12, 3)).status,
+            Status::Converged);
+  ASSERT_EQ(solver->factor(r.A1).status, Status::Converged);
+  ASSERT_EQ(pcg.factorizations(), 1);
+  const Vec xstar = random_vector(r.A0.rows(), 9);
+  x.setZero();
+  // Three iterations are far too few with A0's factorization, and plenty with A1's.
+  const LinearSummary s = solver->solve(r.A1 * xstar, x, cold(1e-12, 3));
+  EXPECT_EQ(s.status, Status::Converged) << describe(s);
+  EXPECT_EQ(pcg.factorizations(), 2);
+  EXPECT_LT(relative_distance(x, xstar), 1e-9);
+  EXPECT_GT(s.iterations, 3) << "the iterations of both attempts are reported";
 }
 
 // ---- Options and the registry ----

@@ -194,6 +194,39 @@ TEST(SceneGrid, SpringCountsMatchFormulas) {
   EXPECT_EQ(checked, int(sizes.size()) * 8);
 }
 
+TEST(SceneGrid, FlexionStrideTwoStartsBendingSpringsAtEveryOtherParticle) {
+  int checked = 0;
+  for (const auto& [nx, ny] : std::vector<std::pair<long long, long long>>{{3, 3}, {4, 5}, {7, 6}, {411, 411}}) {
+    const Scene s = load_scene_from_string(grid_text(nx, ny, true, true, true) + "flexion_stride = 2\n",
+                                           "grid.toml");
+    // Horizontal bending springs (i, j)-(i + 2, j) for even i <= nx - 3, vertical likewise.
+    const long long structural = (nx - 1) * ny + nx * (ny - 1), shear = 2 * (nx - 1) * (ny - 1);
+    const long long flexion = (nx - 1) / 2 * ny + nx * ((ny - 1) / 2);
+    EXPECT_EQ(static_cast<long long>(s.edges.size()), structural + shear + flexion) << nx << " x " << ny;
+    long long bending = 0;
+    for (const auto& e : s.edges) {
+      const long long a = std::min(e[0], e[1]), b = std::max(e[0], e[1]);
+      const long long ia = a % nx, ja = a / nx, ib = b % nx, jb = b / nx;
+      if (ja == jb && ib - ia == 2) {  // horizontal: starts at an even column
+        EXPECT_EQ(ia % 2, 0) << a << "-" << b;
+        ++bending;
+      } else if (ia == ib && jb - ja == 2) {  // vertical: starts at an even row
+        EXPECT_EQ(ja % 2, 0) << a << "-" << b;
+        ++bending;
+      }
+    }
+    EXPECT_EQ(bending, flexion);
+    ++checked;
+  }
+  EXPECT_EQ(checked, 4);
+  // The 411 x 411 grid of the local/global target has the 842k springs its description names.
+  const Scene target = load_scene_from_string(grid_text(411, 411, true, true, true) + "flexion_stride = 2\n",
+                                              "grid.toml");
+  EXPECT_EQ(target.edges.size(), 841730u);
+  EXPECT_THROW(load_scene_from_string(grid_text(5, 5, true, true, true) + "flexion_stride = 3\n", "grid.toml"),
+               InputError);
+}
+
 TEST(SceneGrid, NegativePinCoordinatesCountFromTheEnd) {
   const Scene s = load_scene_from_string(R"(
 [mesh]

@@ -1,0 +1,119 @@
+// The two performance targets of issue 7, on their shipped scene files (problems/scenes/), so
+// anyone can rerun them:
+//  - LocalGlobal411: target_local_global_411.toml, a 411 x 411 cloth with 842k springs solved by
+//    fast-mass-spring (Liu et al. 2013). Counters: one-off analysis and factorization, nnz(L), and
+//    one local/global iteration split into its local step and its global solve (3 right-hand
+//    sides), averaged over steps of 10 iterations after a warm-up step. The target is 27 ms per
+//    iteration (4x a typical public implementation's 107 ms).
+//  - BackwardEuler256/<linear solver>: target_backward_euler_256.toml, a 256 x 256 cloth (391k
+//    springs), one linearised backward-Euler step (beta = 1) per h = 0.01 s at linear tolerance
+//    1e-6, averaged over a run of steps from rest (the first, with the one-off analysis, included:
+//    it is what a user pays). Counters: PCG iterations, factorizations and their seconds, solve and
+//    assembly seconds per step. The target is 0.64 s per step (10x a classic Jacobi-PCG's 6.4 s).
+// Prints OPENBLAS_CORETYPE, OPENBLAS_NUM_THREADS and OMP_NUM_THREADS.
+//   build/bench/hooke_bench_targets --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
+
+#include <chrono>
+#include <cstdlib>
+#include <string>
+
+#include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/integrators/implicit_stepper.hpp"
+#include "hooke/linear/conjugate_gradient.hpp"
+#include "hooke/registry.hpp"
+#include "hooke/simulation.hpp"
+#include "problems/scene.hpp"
+
+namespace {
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+std::string scene_path(const char* name) { return std::string(HOOKE_BENCH_SCENES_DIR) + "/" + name; }
+
+void BM_LocalGlobal411(benchmark::State& state) {
+  const hooke::Scene scene = hooke::load_scene(scene_path("target_local_global_411.toml"));
+  const hooke::FastMassSpringOptions& o = scene.integrator.options.fast_mass_spring;
+  const double h = scene.time.dt;
+  auto t0 = Clock::now();
+  hooke::FastMassSpringStepper fms(*scene.system, o);
+  const double analyze = since(t0);
+  hooke::State s0 = scene.initial, s1;
+  fms.step(s0, h, s1);  // warm-up: factors
+  const double factor = fms.last_factor_seconds();
+  std::swap(s0, s1);
+  const double local0 = fms.local_seconds(), global0 = fms.global_seconds();
+  long long iterations = 0;
+  for (auto _ : state) {
+    t0 = Clock::now();
+    fms.step(s0, h, s1);
+    state.SetIterationTime(since(t0) / o.iterations);
+    iterations += o.iterations;
+    std::swap(s0, s1);
+  }
+  const double it = double(std::max(1LL, iterations));
+  state.counters["springs"] = double(scene.edges.size());
+  state.counters["analyze_s"] = analyze;
+  state.counters["factor_s"] = factor;
+  state.counters["factor_nnz"] = fms.factor_nonzeros();
+  state.counters["local_ms"] = 1e3 * (fms.local_seconds() - local0) / it;
+  state.counters["global_ms"] = 1e3 * (fms.global_seconds() - global0) / it;
+}
+
+void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int steps) {
+  const hooke::Scene scene = hooke::load_scene(scene_path("target_backward_euler_256.toml"),
+                                               {"integrator.linear_solver=" + linear_solver});
+  const double h = scene.time.dt;
+  long long iterations = 0, taken = 0;
+  double factor = 0.0, solve = 0.0, assembly = 0.0;
+  int factorizations = 0;
+  for (auto _ : state) {
+    auto stepper = hooke::make_stepper(scene.integrator.method, *scene.system, scene.integrator.options);
+    const auto* implicit = dynamic_cast<const hooke::ImplicitStepper*>(stepper.get());
+    hooke::Simulation sim(*scene.system, std::move(stepper), scene.initial);
+    const auto t0 = Clock::now();
+    for (int k = 0; k < steps; ++k) {
+      const hooke::StepSummary s = sim.advance(h);
+      if (s.status != hooke::Status::Converged) {
+        state.SkipWithError(s.message.c_str());
+        return;
+      }
+      iterations += s.iterations;
+      ++taken;
+    }
+    state.SetIterationTime(since(t0) / steps);
+    factor += implicit->linear_totals().factor_seconds;
+    solve += implicit->linear_totals().solve_seconds;
+    assembly += implicit->assembly_seconds();
+    const auto* pcg = dynamic_cast<const hooke::ConjugateGradientSolver*>(&implicit->linear_solver());
+    factorizations += pcg ? pcg->factorizations() : (linear_solver == "cholmod" ? steps : 0);
+  }
+  const double n = double(std::max(1LL, taken));
+  state.counters["springs"] = double(scene.edges.size());
+  state.counters["lin_iters"] = double(iterations) / n;
+  state.counters["factorizations"] = double(factorizations) / n * steps;
+  state.counters["factor_s"] = factor / n;
+  state.counters["solve_s"] = solve / n;
+  state.counters["assembly_s"] = assembly / n;
+}
+
+const int registered = [] {
+  for (const char* v : {"OPENBLAS_CORETYPE", "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"}) {
+    const char* value = std::getenv(v);
+    benchmark::AddCustomContext(v, value ? value : "(unset)");
+  }
+  benchmark::RegisterBenchmark("Target/LocalGlobal411/Iteration", BM_LocalGlobal411)
+      ->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
+  // Steps per run: pcg-cholmod over 20 (its factorization is amortised), cholmod over 3, Jacobi
+  // PCG over 2 (seconds each).
+  for (const auto& [solver, steps] : {std::pair<const char*, int>{"pcg-cholmod", 20}, {"cholmod", 3}, {"pcg", 2}})
+    benchmark::RegisterBenchmark(("Target/BackwardEuler256/Step/" + std::string(solver)).c_str(),
+                                 BM_BackwardEuler256, std::string(solver), steps)
+        ->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
+  return 0;
+}();
+
+}  // namespace
+
+BENCHMARK_MAIN();
