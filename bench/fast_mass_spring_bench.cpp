@@ -5,8 +5,11 @@
 //  - Iteration: one plain local/global iteration, i.e. a local step (all spring directions and the
 //    right-hand side) plus a global step (forward and back substitution with 3 right-hand sides),
 //    timed over steps of 10 iterations after a warm-up step (counters local_ms, global_ms);
-//  - Solve3: one CHOLMOD solve with three right-hand sides on the same factor, for the ratio of an
-//    iteration to the solve it contains (counter iter_over_solve3 on the Iteration case).
+//  - Solve3: one CHOLMOD solve (cholmod_l_solve2) with three right-hand sides on the same factor
+//    (METIS ordering, as fast-mass-spring uses), for the ratio of an iteration to it (counter
+//    iter_over_solve3 on the Iteration case);
+//  - Solve3Interleaved: the same solve by hooke's SupernodalSolver (what the global step runs),
+//    with its largest difference from CHOLMOD's result (counter rel_diff).
 // Prints OPENBLAS_CORETYPE and OPENBLAS_NUM_THREADS, which change the solve times.
 //   build/bench/hooke_bench_fast_mass_spring --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
@@ -60,7 +63,9 @@ void BM_Solve3(benchmark::State& state) {
   hooke::FastMassSpringStepper fms(*scene.system);
   hooke::State s1;
   fms.step(scene.initial, kH, s1);  // fills the global matrix
-  hooke::CholmodSolver chol;
+  hooke::CholmodOptions metis;
+  metis.ordering = "metis";  // as fast-mass-spring factors it
+  hooke::CholmodSolver chol(metis);
   chol.analyze(fms.global_matrix());
   chol.factor(fms.global_matrix());
   const Eigen::Index n = fms.global_matrix().rows();
@@ -79,6 +84,33 @@ void BM_Solve3(benchmark::State& state) {
   solve3_seconds()[state.range(0)] = total / double(count);
   state.counters["springs"] = double(scene.edges.size());
   state.counters["n"] = double(n);
+}
+
+/// The same solve through hooke's own supernodal kernel (CholmodSolver::solve_interleaved), with
+/// its largest difference from CHOLMOD's result relative to the largest entry (counter rel_diff).
+void BM_Solve3Interleaved(benchmark::State& state) {
+  const hooke::Scene scene = hooke::bench::make_cloth(state.range(0), "", 0.0);
+  hooke::FastMassSpringStepper fms(*scene.system);
+  hooke::State s1;
+  fms.step(scene.initial, kH, s1);
+  hooke::CholmodOptions metis;
+  metis.ordering = "metis";
+  hooke::CholmodSolver chol(metis);
+  chol.analyze(fms.global_matrix());
+  chol.factor(fms.global_matrix());
+  const Eigen::Index n = fms.global_matrix().rows();
+  using Rows3 = hooke::FastMassSpringStepper::Rows3;
+  const Rows3 B = Rows3::Random(n, 3);
+  Rows3 X(n, 3);
+  chol.solve_interleaved(B.data(), X.data(), 3);
+  Eigen::MatrixXd Bc = B, Xc(n, 3);
+  chol.solve_columns(Bc, Xc);
+  for (auto _ : state) {
+    chol.solve_interleaved(B.data(), X.data(), 3);
+    benchmark::DoNotOptimize(X.data());
+  }
+  state.counters["springs"] = double(scene.edges.size());
+  state.counters["rel_diff"] = (Xc - Eigen::MatrixXd(X)).cwiseAbs().maxCoeff() / Xc.cwiseAbs().maxCoeff();
 }
 
 void BM_Iteration(benchmark::State& state) {
@@ -120,6 +152,9 @@ const int registered = [] {
     auto* v = benchmark::RegisterBenchmark("LocalGlobal/Solve3", BM_Solve3)->Arg(springs)->UseRealTime()
                   ->Unit(benchmark::kMillisecond);
     if (big) v->Iterations(10);
+    auto* w = benchmark::RegisterBenchmark("LocalGlobal/Solve3Interleaved", BM_Solve3Interleaved)
+                  ->Arg(springs)->UseRealTime()->Unit(benchmark::kMillisecond);
+    if (big) w->Iterations(10);
     auto* i = benchmark::RegisterBenchmark("LocalGlobal/Iteration", BM_Iteration)->Arg(springs)
                   ->UseManualTime()->Unit(benchmark::kMillisecond);
     if (big) i->Iterations(3);

@@ -2,6 +2,7 @@
 
 #include <cholmod.h>
 
+#include <array>
 #include <chrono>
 #include <vector>
 
@@ -30,6 +31,22 @@ struct CholmodSolver::Impl {
   cholmod_dense *Xk = nullptr, *Yk = nullptr, *Ek = nullptr;  // its workspace
   Index n = 0;
   bool factored = false;
+  std::array<std::unique_ptr<SupernodalSolver>, 4> sn;  // per K, made on first use
+  Vec column;                                            // simplicial fallback's one column
+
+  SupernodalFactorView view() const {
+    static_assert(sizeof(SuiteSparse_long) == sizeof(std::int64_t), "64-bit CHOLMOD indices");
+    SupernodalFactorView v;
+    v.n = std::int64_t(L->n);
+    v.nsuper = std::int64_t(L->nsuper);
+    v.super = static_cast<const std::int64_t*>(L->super);
+    v.pi = static_cast<const std::int64_t*>(L->pi);
+    v.px = static_cast<const std::int64_t*>(L->px);
+    v.row = static_cast<const std::int64_t*>(L->s);
+    v.perm = static_cast<const std::int64_t*>(L->Perm);
+    v.value = static_cast<const double*>(L->x);
+    return v;
+  }
 };
 
 CholmodSolver::CholmodSolver(CholmodOptions options) : m(std::make_unique<Impl>()) {
@@ -117,6 +134,10 @@ LinearSummary CholmodSolver::factor(const SparseMatrix& A) {
     s.message = "cholmod: factorization failed with CHOLMOD status " + std::to_string(m->c.status);
   } else {
     m->factored = true;
+    // The factor's arrays may move when it is refactored: rebind the supernodal solvers.
+    if (m->L->is_super)
+      for (auto& sn : m->sn)
+        if (sn) sn->bind(m->view());
   }
   return s;
 }
@@ -126,6 +147,7 @@ LinearSummary CholmodSolver::solve(ConstRef b, VecRef x, const LinearSolveOption
   LinearSummary s;
   HOOKE_ASSERT(m->factored, "cholmod: solve without a successful factor");
   HOOKE_ASSERT(b.size() == m->n && x.size() == m->n, "cholmod: size mismatch");
+  if (m->L->is_super) return solve_interleaved(b.data(), x.data(), 1);
   m->B.x = const_cast<double*>(b.data());
   if (!cholmod_l_solve2(CHOLMOD_A, m->L, &m->B, nullptr, &m->X, nullptr, &m->Y, &m->E, &m->c)) {
     s.status = Status::Fatal;
@@ -162,6 +184,35 @@ LinearSummary CholmodSolver::solve_columns(const Eigen::Ref<const Eigen::MatrixX
       static_cast<const double*>(m->Xk->x), m->n, B.cols(), Eigen::OuterStride<>(Index(m->Xk->d)));
   s.solve_seconds = since(t0);
   return s;
+}
+
+LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K) {
+  const auto t0 = Clock::now();
+  LinearSummary s;
+  HOOKE_ASSERT(m->factored, "cholmod: solve without a successful factor");
+  HOOKE_ASSERT(K >= 1 && K <= 4, "cholmod: solve_interleaved with K = " << K << " (1..4)");
+  if (m->L->is_super) {
+    auto& sn = m->sn[size_t(K - 1)];
+    if (!sn) {
+      sn = std::make_unique<SupernodalSolver>(K);
+      sn->bind(m->view());
+    }
+    sn->solve(b, x);
+  } else {
+    m->column.resize(m->n);
+    for (int c = 0; c < K; ++c) {
+      for (Index r = 0; r < m->n; ++r) m->column[r] = b[K * r + c];
+      s = solve(m->column, m->column, {});
+      if (s.status != Status::Converged) return s;
+      for (Index r = 0; r < m->n; ++r) x[K * r + c] = m->column[r];
+    }
+  }
+  s.solve_seconds = since(t0);
+  return s;
+}
+
+SupernodalFactorView CholmodSolver::supernodal_view() const {
+  return m->factored && m->L->is_super ? m->view() : SupernodalFactorView{};
 }
 
 double CholmodSolver::factor_cost_in_solves() const {

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "hooke/linear/linear_solver.hpp"
+#include "hooke/linear/supernodal_solve.hpp"
 
 namespace hooke {
 
@@ -40,6 +41,15 @@ class CholmodSolver final : public LinearSolver {
   /// its own workspace for the last k used, so repeated calls with the same k do not allocate.
   LinearSummary solve_columns(const Eigen::Ref<const Eigen::MatrixXd>& B,
                               Eigen::Ref<Eigen::MatrixXd> X);
+  /// Solves A X = B for K right-hand sides (1..4) stored interleaved: entry c of row r at
+  /// [K r + c], as hooke stores x, y, z. A supernodal factor uses the hand-written
+  /// SupernodalSolver (faster than cholmod_l_solve2 for few right-hand sides: see its comment); a
+  /// simplicial one goes through cholmod_l_solve2 column by column. x may alias b. Does not
+  /// allocate after the first call with a given K.
+  LinearSummary solve_interleaved(const double* b, double* x, int K);
+  /// The factor's supernodal arrays (after factor(); all null if the factor is simplicial). Valid
+  /// until the next analyze() or factor().
+  SupernodalFactorView supernodal_view() const;
   /// CHOLMOD's flop count of one factorization over 4 nnz(L) (the flops of one solve), divided by
   /// the measured ratio of their flop rates (the factorization runs as BLAS-3, the solve streams L):
   /// see the definition. After analyze().

@@ -27,6 +27,10 @@
 
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/linear/conjugate_gradient.hpp"
+#include "hooke_config.hpp"
+#if HOOKE_WITH_CHOLMOD
+#include "hooke/linear/cholmod_solver.hpp"
+#endif
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/linear/linear_solver.hpp"
 #include "hooke/model/mass_spring_system.hpp"
@@ -676,6 +680,72 @@ TEST(ReusedFactorizationPcg, StaleFactorizationThatMissesTheToleranceRefactorsAn
   EXPECT_LT(relative_distance(x, xstar), 1e-9);
   EXPECT_GT(s.iterations, 3) << "the iterations of both attempts are reported";
 }
+
+// ---- The hand-written supernodal triangular solves (CholmodSolver::solve_interleaved) ----
+
+#if HOOKE_WITH_CHOLMOD
+/// Solves A X = B (K interleaved right-hand sides) with solve_interleaved and checks it against
+/// CHOLMOD's own cholmod_l_solve2 (solve_columns) and against the residual. Returns the number of
+/// comparisons made.
+int check_interleaved(hooke::CholmodSolver& chol, const SparseMatrix& A, int K, unsigned seed,
+                      bool in_place) {
+  const Index n = A.rows();
+  const Vec b = random_vector(K * n, seed);
+  Vec x = in_place ? b : Vec::Zero(K * n);
+  const LinearSummary s = chol.solve_interleaved(in_place ? x.data() : b.data(), x.data(), K);
+  EXPECT_EQ(s.status, Status::Converged) << describe(s);
+  Eigen::MatrixXd B(n, K), X(n, K);
+  for (Index r = 0; r < n; ++r)
+    for (int c = 0; c < K; ++c) B(r, c) = b[K * r + c];
+  chol.solve_columns(B, X);
+  double diff = 0.0, scale = 0.0, residual = 0.0;
+  for (int c = 0; c < K; ++c) {
+    Vec xc(n);
+    for (Index r = 0; r < n; ++r) xc[r] = x[K * r + c];
+    diff = std::max(diff, (xc - X.col(c)).cwiseAbs().maxCoeff());
+    scale = std::max(scale, X.col(c).cwiseAbs().maxCoeff());
+    residual = std::max(residual, (A * xc - B.col(c)).norm() / B.col(c).norm());
+  }
+  EXPECT_LT(diff / scale, 1e-10) << "K = " << K << ": against cholmod_l_solve2";
+  EXPECT_LT(residual, 1e-12) << "K = " << K;
+  return 2;
+}
+
+TEST(SupernodalSolve, MatchesCholmodForOneToFourRightHandSides) {
+  const SparseMatrix& A = cloth_problem().A();  // 3n x 3n step matrix of the 32 x 32 cloth
+  hooke::CholmodSolver chol;
+  ASSERT_EQ(setup(chol, A).status, Status::Converged);
+  ASSERT_NE(chol.supernodal_view().value, nullptr) << "the default factor is supernodal";
+  int checks = 0;
+  for (int K = 1; K <= 4; ++K) checks += check_interleaved(chol, A, K, unsigned(60 + K), false);
+  checks += check_interleaved(chol, A, 3, 70, true);  // x aliasing b
+  EXPECT_EQ(checks, 10);
+}
+
+TEST(SupernodalSolve, FollowsARefactorizationWithNewValues) {
+  SparseMatrix A = cloth_problem().A();
+  hooke::CholmodSolver chol;
+  ASSERT_EQ(setup(chol, A).status, Status::Converged);
+  check_interleaved(chol, A, 3, 80, false);  // binds the solver to the first factor
+  for (Index k = 0; k < A.nonZeros(); ++k) A.valuePtr()[k] *= 1.0 + 0.5 * std::sin(double(k));
+  A = SparseMatrix(0.5 * (A + SparseMatrix(A.transpose())));  // still symmetric, same pattern
+  for (Index c = 0; c < A.outerSize(); ++c)
+    for (SparseMatrix::InnerIterator it(A, c); it; ++it)
+      if (it.row() == it.col()) it.valueRef() += 10.0;  // and positive definite
+  ASSERT_EQ(chol.factor(A).status, Status::Converged);
+  EXPECT_EQ(check_interleaved(chol, A, 3, 81, false), 2);
+}
+
+TEST(SupernodalSolve, SimplicialFactorTakesCholmodsPath) {
+  const SparseMatrix& A = cloth_problem().A();
+  hooke::CholmodOptions o;
+  o.supernodal = false;
+  hooke::CholmodSolver chol(o);
+  ASSERT_EQ(setup(chol, A).status, Status::Converged);
+  EXPECT_EQ(chol.supernodal_view().value, nullptr);
+  EXPECT_EQ(check_interleaved(chol, A, 3, 90, false), 2);
+}
+#endif
 
 // ---- Options and the registry ----
 

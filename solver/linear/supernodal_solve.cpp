@@ -1,0 +1,261 @@
+#include "hooke/linear/supernodal_solve.hpp"
+
+#include <algorithm>
+
+#include "hooke/core.hpp"
+
+extern "C" {
+// LAPACK (OpenBLAS): inverse of a triangular matrix in place.
+void dtrtri_(const char* uplo, const char* diag, const int* n, double* a, const int* lda, int* info);
+}
+
+namespace hooke {
+
+namespace {
+using I = std::int64_t;
+
+/// The split of the supernodal elimination tree that SupernodalSolver::bind() computes: two bins
+/// of disjoint subtrees (each subtree a contiguous range of supernodes in postorder) and the top,
+/// the supernodes above them, processed serially.
+struct SplitView {
+  const I* top;           // per factor row: its index among the top's rows, or -1
+  I top_rows;             // rows (columns) of the top supernodes
+  const I* top_row;       // the factor row of each top row
+  I top_count;            // top supernodes, ascending
+  const I* top_supernode;
+  const I* range;         // subtree ranges [first, last], bin 0's then bin 1's, ascending
+  I bin_start[3];         // bin b's ranges: range[2r .. 2r+1] for r in [bin_start[b], bin_start[b+1])
+};
+
+/// The factor repacked by bind() (see "Panels" in supernodal_kernels.inc): per supernode, its
+/// inverted diagonal block at value + inv_start[s] and its off-diagonal block at off_start[s].
+struct Packed {
+  const I* inv_start;
+  const I* off_start;
+  const double* value;
+};
+
+/// One bin's scratch.
+struct Work {
+  double *D, *W, *T, *delta;
+};
+}  // namespace
+
+// The kernels twice: for AVX2 (4-wide vectors in one register) and for the baseline x86-64 ISA
+// (the same vector code in SSE2 halves). Chosen at run time; results differ between the two only
+// in rounding, and a machine always takes the same one.
+namespace sn_avx2 {
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#include "supernodal_kernels.inc"
+#pragma GCC pop_options
+}  // namespace sn_avx2
+
+namespace sn_base {
+// 32-byte vectors passed between the (inlined, file-local) helpers without AVX: GCC warns that the
+// ABI differs from AVX code, which matters only across separately compiled files.
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wpsabi"
+#include "supernodal_kernels.inc"
+#pragma GCC diagnostic pop
+}  // namespace sn_base
+
+namespace {
+/// Splits the supernodal tree for two threads: descends from the roots, moving the heaviest
+/// subtree's root into the top while that subtree holds more than half of the work left below,
+/// then deals the remaining subtrees into two bins, heaviest first, lighter bin first. Needs
+/// children numbered before parents (CHOLMOD's postordered supernodes); otherwise everything goes
+/// into the top and the solve is serial.
+void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<I>& top_row,
+                std::vector<I>& top_supernode, std::vector<I>& range, I (&bin_start)[3]) {
+  const I ns = f.nsuper;
+  std::vector<I> col2super(size_t(f.n)), parent(size_t(ns), -1), count(size_t(ns), 1);
+  std::vector<double> work(size_t(ns), 0.0);
+  for (I s = 0; s < ns; ++s)
+    for (I k = f.super[s]; k < f.super[s + 1]; ++k) col2super[size_t(k)] = s;
+  bool postordered = true;
+  for (I s = 0; s < ns; ++s) {
+    const I ncol = f.super[s + 1] - f.super[s], nrow = f.pi[s + 1] - f.pi[s];
+    if (nrow > ncol) parent[size_t(s)] = col2super[size_t(f.row[f.pi[s] + ncol])];
+    postordered = postordered && (parent[size_t(s)] < 0 || parent[size_t(s)] > s);
+    work[size_t(s)] += double(ncol) * double(nrow);
+  }
+  std::vector<std::vector<I>> children(static_cast<size_t>(ns));
+  std::vector<I> frontier;
+  for (I s = 0; s < ns; ++s) {
+    const I p = parent[size_t(s)];
+    if (p < 0) {
+      frontier.push_back(s);
+      continue;
+    }
+    if (!postordered) continue;
+    work[size_t(p)] += work[size_t(s)];
+    count[size_t(p)] += count[size_t(s)];
+    children[size_t(p)].push_back(s);
+  }
+  std::vector<char> in_top(size_t(ns), postordered ? 0 : 1);
+  range.clear();
+  bin_start[0] = bin_start[1] = bin_start[2] = 0;
+  if (postordered) {
+    for (;;) {
+      double total = 0.0;
+      size_t heaviest = 0;
+      for (size_t i = 0; i < frontier.size(); ++i) {
+        total += work[size_t(frontier[i])];
+        if (work[size_t(frontier[i])] > work[size_t(frontier[heaviest])]) heaviest = i;
+      }
+      const I x = frontier.empty() ? -1 : frontier[heaviest];
+      if (x < 0 || children[size_t(x)].empty() || work[size_t(x)] <= 0.5 * total) break;
+      in_top[size_t(x)] = 1;
+      frontier.erase(frontier.begin() + std::ptrdiff_t(heaviest));
+      frontier.insert(frontier.end(), children[size_t(x)].begin(), children[size_t(x)].end());
+    }
+    std::sort(frontier.begin(), frontier.end(),
+              [&](I a, I b) { return work[size_t(a)] > work[size_t(b)] || (work[size_t(a)] == work[size_t(b)] && a < b); });
+    std::vector<I> bins[2];
+    double load[2] = {0.0, 0.0};
+    for (const I x : frontier) {
+      const int b = load[1] < load[0] ? 1 : 0;
+      bins[b].push_back(x);
+      load[b] += work[size_t(x)];
+    }
+    for (int b = 0; b < 2; ++b) {
+      std::sort(bins[b].begin(), bins[b].end());
+      bin_start[b] = I(range.size() / 2);
+      for (const I x : bins[b]) {
+        range.push_back(x - count[size_t(x)] + 1);
+        range.push_back(x);
+      }
+    }
+    bin_start[2] = I(range.size() / 2);
+  }
+  top.assign(size_t(f.n), -1);
+  top_row.clear();
+  top_supernode.clear();
+  for (I s = 0; s < ns; ++s)
+    if (in_top[size_t(s)]) {
+      top_supernode.push_back(s);
+      for (I k = f.super[s]; k < f.super[s + 1]; ++k) {
+        top[size_t(k)] = I(top_row.size());
+        top_row.push_back(k);
+      }
+    }
+}
+}  // namespace
+
+SupernodalSolver::SupernodalSolver(int K) : m_K(K) {
+  HOOKE_ASSERT(K >= 1 && K <= 4, "SupernodalSolver: K = " << K << " right-hand sides (1..4)");
+  __builtin_cpu_init();
+  m_avx2 = __builtin_cpu_supports("avx2");
+}
+
+void SupernodalSolver::bind(const SupernodalFactorView& f) {
+  m_f = f;
+  auto round4 = [](I v) { return (v + 3) / 4 * 4; };
+  // Sizes: the packed blocks (lower-triangular chunks of the inverse: chunk q from row group q),
+  // the per-thread scratch (padded to multiples of 4).
+  I rows_below = 4, cols = 4, packed = 0, diagonal = 0;
+  m_inv_start.resize(size_t(f.nsuper));
+  m_off_start.resize(size_t(f.nsuper));
+  for (I s = 0; s < f.nsuper; ++s) {
+    const I ncol = f.super[s + 1] - f.super[s], m = f.pi[s + 1] - f.pi[s] - ncol;
+    const I c4 = round4(ncol), m4 = round4(m);
+    rows_below = std::max(rows_below, m4);
+    cols = std::max(cols, c4);
+    diagonal = std::max(diagonal, ncol * ncol);
+    m_inv_start[size_t(s)] = packed;
+    for (I q = 0; q < c4 / 4; ++q) packed += 16 * (c4 / 4 - q);
+    m_off_start[size_t(s)] = packed;
+    packed += c4 * m4;
+  }
+  split_tree(f, m_top, m_top_row, m_top_supernode, m_range, m_bin_start);
+  m_work_total = 0.0;
+  for (I s = 0; s < f.nsuper; ++s)
+    m_work_total += double(f.super[s + 1] - f.super[s]) * double(f.pi[s + 1] - f.pi[s]);
+  if (m_y.size() < size_t(m_K * f.n)) m_y.resize(size_t(m_K * f.n));
+  m_stride = 2 * m_K * cols + m_K * rows_below + m_K * I(m_top_row.size());
+  if (m_scratch.size() < size_t(2 * m_stride)) m_scratch.resize(size_t(2 * m_stride));
+  m_cols_max = cols;
+  m_rows_below_max = rows_below;
+  if (m_packed.size() < size_t(packed)) m_packed.resize(size_t(packed));
+  if (m_block.size() < size_t(diagonal)) m_block.resize(size_t(diagonal));
+  // Pack chunk q of an rows x cols block A (A(i, j) = get(i, j), zero outside) from row group g0.
+  auto pack = [&round4](double* out, I rows, I cols_, I q, I g0, const auto& get) {
+    const I groups = round4(rows) / 4;
+    for (I g = g0; g < groups; ++g)
+      for (int u = 0; u < 4; ++u)
+        for (int r = 0; r < 4; ++r) {
+          const I i = 4 * g + r, j = 4 * q + u;
+          *out++ = i < rows && j < cols_ ? get(i, j) : 0.0;
+        }
+  };
+  for (I s = 0; s < f.nsuper; ++s) {
+    const I ncol = f.super[s + 1] - f.super[s], nrow = f.pi[s + 1] - f.pi[s], m = nrow - ncol;
+    const I c4 = round4(ncol), m4 = round4(m);
+    const double* L = f.value + f.px[s];
+    // Invert the diagonal block: copy its lower triangle (zeros above), then LAPACK dtrtri.
+    double* A = m_block.data();
+    for (I j = 0; j < ncol; ++j)
+      for (I i = 0; i < ncol; ++i) A[j * ncol + i] = i >= j ? L[j * nrow + i] : 0.0;
+    const int n = int(ncol);
+    int info = 0;
+    dtrtri_("L", "N", &n, A, &n, &info);
+    HOOKE_ASSERT(info == 0, "SupernodalSolver: diagonal block of supernode " << s
+                                << " is singular (dtrtri info " << info << ")");
+    double* out = m_packed.data() + m_inv_start[size_t(s)];
+    for (I q = 0; q < c4 / 4; ++q) {
+      pack(out, ncol, ncol, q, q, [&](I i, I j) { return i >= j ? A[j * ncol + i] : 0.0; });
+      out += 16 * (c4 / 4 - q);
+    }
+    out = m_packed.data() + m_off_start[size_t(s)];
+    for (I q = 0; q < c4 / 4; ++q) {
+      pack(out, m, ncol, q, 0, [&](I i, I j) { return L[j * nrow + ncol + i]; });
+      out += 4 * m4;
+    }
+  }
+}
+
+SupernodalSolver::Shape SupernodalSolver::shape() const {
+  Shape out;
+  out.supernodes = m_f.nsuper;
+  for (I s = 0; s < m_f.nsuper; ++s) {
+    const double ncol = double(m_f.super[s + 1] - m_f.super[s]);
+    const double nrow = double(m_f.pi[s + 1] - m_f.pi[s]);
+    out.diagonal_entries += ncol * (ncol + 1) / 2;
+    out.off_diagonal_entries += (nrow - ncol) * ncol;
+  }
+  auto entries = [&](I s) {
+    const double ncol = double(m_f.super[s + 1] - m_f.super[s]);
+    return ncol * (ncol + 1) / 2 + double(m_f.pi[s + 1] - m_f.pi[s] - ncol) * ncol;
+  };
+  const double total = out.diagonal_entries + out.off_diagonal_entries;
+  for (const I s : m_top_supernode) out.top_fraction += entries(s) / total;
+  for (int b = 0; b < 2; ++b)
+    for (I r = m_bin_start[b]; r < m_bin_start[b + 1]; ++r)
+      for (I s = m_range[size_t(2 * r)]; s <= m_range[size_t(2 * r + 1)]; ++s)
+        out.bin_fraction[b] += entries(s) / total;
+  return out;
+}
+
+void SupernodalSolver::solve(const double* b, double* x) {
+  HOOKE_ASSERT(m_f.value, "SupernodalSolver: solve before bind");
+  SplitView split{m_top.data(), I(m_top_row.size()), m_top_row.data(), I(m_top_supernode.size()),
+                  m_top_supernode.data(), m_range.data(), {m_bin_start[0], m_bin_start[1], m_bin_start[2]}};
+  Work work[2];
+  for (int w = 0; w < 2; ++w) {
+    double* base = m_scratch.data() + w * m_stride;
+    work[w].D = base;
+    work[w].W = base + m_K * m_cols_max;
+    work[w].T = base + 2 * m_K * m_cols_max;
+    work[w].delta = work[w].T + m_K * m_rows_below_max;
+  }
+  // Two threads pay off from about 1e5 factor entries (a 10k-spring cloth's factor has 7e4).
+  const bool parallel = run_parallel(static_cast<long long>(m_work_total), 100000);
+  const Packed pk{m_inv_start.data(), m_off_start.data(), m_packed.data()};
+  if (m_avx2)
+    sn_avx2::solve_any(m_K, m_f, pk, split, parallel, b, x, m_y.data(), work);
+  else
+    sn_base::solve_any(m_K, m_f, pk, split, parallel, b, x, m_y.data(), work);
+}
+
+}  // namespace hooke
