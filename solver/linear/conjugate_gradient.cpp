@@ -43,6 +43,7 @@ LinearSummary ConjugateGradientSolver::analyze(const SparseMatrix& A) {
   m_z.setZero(n);
   m_p.setZero(n);
   m_Ap.setZero(n);
+  m_csr.build(A);
   s.analyze_seconds = seconds_since(t0);
   return s;
 }
@@ -62,6 +63,7 @@ LinearSummary ConjugateGradientSolver::factor(const SparseMatrix& A) {
   const auto t0 = Clock::now();
   LinearSummary s;
   m_A = &A;
+  m_csr.refresh(A);
   if (m_pre == Preconditioner::Jacobi) {
     for (Index i = 0; i < A.rows(); ++i) {
       const double d = A.valuePtr()[m_diag_pos[size_t(i)]];
@@ -145,7 +147,6 @@ LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x, const LinearSol
   HOOKE_ASSERT(b.size() == m_A->rows() && x.size() == m_A->rows(), name() << ": size mismatch");
   const auto t0 = Clock::now();
   LinearSummary s;
-  const SparseMatrix& A = *m_A;
   if (!options.warm_start) x.setZero();
   const double bnorm = b.norm();
   if (bnorm == 0.0) {
@@ -153,7 +154,7 @@ LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x, const LinearSol
     s.solve_seconds = seconds_since(t0);
     return s;
   }
-  m_r.noalias() = A * x;
+  m_csr.multiply(x, m_r);
   m_r = b - m_r;
   double res = m_r.norm() / bnorm;
   int it = 0;
@@ -170,7 +171,7 @@ LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x, const LinearSol
         s.message = os.str();
         break;
       }
-      m_Ap.noalias() = A * m_p;
+      m_csr.multiply(m_p, m_Ap);
       const double pAp = m_p.dot(m_Ap);
       if (!(pAp > 0.0)) {
         s.status = Status::BrokeDown;

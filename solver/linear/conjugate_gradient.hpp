@@ -66,6 +66,7 @@ class ConjugateGradientSolver final : public LinearSolver {
   Vec m_inv_diag;
   std::vector<Mat3> m_inv_blocks;
   Vec m_r, m_z, m_p, m_Ap;
+  linear_detail::CsrMirror m_csr;  // A by rows: the product A p, parallel and deterministic
 };
 
 }  // namespace hooke

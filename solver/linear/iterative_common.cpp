@@ -66,4 +66,26 @@ void CsrMirror::build(const SparseMatrix& A) {
     }
 }
 
+void CsrMirror::multiply(ConstRef x, VecRef y) const {
+  const long long n = static_cast<long long>(row_start.size()) - 1;
+  const int* rs = row_start.data();
+  const int* c = col.data();
+  const double* v = value.data();
+  const double* xp = x.data();
+  double* yp = y.data();
+  auto rows = [&](long long r0, long long r1) {
+    for (long long r = r0; r < r1; ++r) {
+      double a = 0.0;
+      for (int k = rs[r]; k < rs[r + 1]; ++k) a += v[k] * xp[c[k]];
+      yp[r] = a;
+    }
+  };
+  if (run_parallel(static_cast<long long>(value.size()), 200000)) {
+#pragma omp parallel for schedule(static)
+    for (long long b = 0; b < 64; ++b) rows(n * b / 64, n * (b + 1) / 64);
+  } else {
+    rows(0, n);
+  }
+}
+
 }  // namespace hooke::linear_detail

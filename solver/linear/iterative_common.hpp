@@ -38,6 +38,10 @@ struct CsrMirror {
     const double* v = A.valuePtr();
     for (size_t k = 0; k < perm.size(); ++k) value[k] = v[perm[k]];
   }
+  /// y = A x, row by row: in parallel (OpenMP, static rows) for large matrices, each row summed
+  /// in the same order by whichever thread owns it, so the result does not depend on the thread
+  /// count.
+  void multiply(ConstRef x, VecRef y) const;
 };
 
 }  // namespace linear_detail

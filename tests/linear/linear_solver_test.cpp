@@ -736,6 +736,33 @@ TEST(SupernodalSolve, FollowsARefactorizationWithNewValues) {
   EXPECT_EQ(check_interleaved(chol, A, 3, 81, false), 2);
 }
 
+TEST(SupernodalSolve, SameBitsWithOneOrTwoThreads) {
+#ifndef _OPENMP
+  GTEST_SKIP() << "built without OpenMP";
+#else
+  const SparseMatrix& A = cloth_problem().A();
+  hooke::CholmodSolver chol;
+  ASSERT_EQ(setup(chol, A).status, Status::Converged);
+  hooke::SupernodalSolver sn(3);
+  sn.bind(chol.supernodal_view());
+  const auto shape = sn.shape();
+  ASSERT_GT(shape.diagonal_entries + shape.off_diagonal_entries, 1e5) << "large enough to run on two threads";
+  EXPECT_GT(shape.bin_fraction[0], 0.2) << "both halves of the tree have work";
+  EXPECT_GT(shape.bin_fraction[1], 0.2);
+  EXPECT_NEAR(shape.top_fraction + shape.bin_fraction[0] + shape.bin_fraction[1], 1.0, 1e-12);
+  const Vec b = random_vector(3 * A.rows(), 95);
+  Vec x1(b.size()), x2(b.size());
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  sn.solve(b.data(), x1.data());
+  omp_set_num_threads(2);
+  sn.solve(b.data(), x2.data());
+  omp_set_num_threads(threads);
+  EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0);
+  EXPECT_GT(x1.norm(), 0.0);
+#endif
+}
+
 TEST(SupernodalSolve, SimplicialFactorTakesCholmodsPath) {
   const SparseMatrix& A = cloth_problem().A();
   hooke::CholmodOptions o;
