@@ -1,0 +1,247 @@
+// Roofline accounting of hooke's hot kernels at 1M springs (the benchmark cloth of
+// cloth_fixture.hpp: 408 x 408 particles, structural, shear and flexion springs), on 1 and 2
+// threads (the argument), next to a STREAM-style triad measured in the same binary. For each
+// kernel: the minimum bytes it must move and the flops it must do per call (counted from the data
+// structures, formulas below), and the achieved GB/s, GFLOP/s and fraction of the triad's GB/s.
+// See bench/README.md.
+//   build/bench/hooke_bench_roofline --benchmark_counters_tabular=true
+#include <benchmark/benchmark.h>
+
+#include <omp.h>
+
+#include <cstdlib>
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "bench/cloth_fixture.hpp"
+#include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/integrators/reduced_matrix.hpp"
+#include "hooke/linear/cholmod_solver.hpp"
+#include "hooke/linear/iterative_common.hpp"
+#include "hooke/linear/supernodal_solve.hpp"
+
+namespace {
+
+constexpr long long kSprings = 1000000;
+constexpr double kH = 1.0 / 60.0;
+
+/// Triad GB/s per thread count, measured by BM_Triad (registered first) and read by the kernels.
+std::map<int, double>& triad() {
+  static std::map<int, double> t;
+  return t;
+}
+
+/// One cloth and everything the kernels need, built once.
+struct Fixture {
+  hooke::Scene scene = hooke::bench::make_cloth(kSprings);              // with dampers
+  hooke::Scene undamped = hooke::bench::make_cloth(kSprings, "", 0.0);  // fast-mass-spring's
+  hooke::Jacobians J = scene.system->make_jacobians();
+  std::unique_ptr<hooke::ReducedMatrix> reduced;
+  hooke::linear_detail::CsrMirror csr;
+  std::unique_ptr<hooke::FastMassSpringStepper> fms;
+  std::unique_ptr<hooke::CholmodSolver> chol;
+  std::unique_ptr<hooke::SupernodalSolver> sn;
+  Fixture() {
+    const auto& sys = *scene.system;
+    sys.assemble_jacobians(scene.initial.x, scene.initial.v, J);
+    reduced = std::make_unique<hooke::ReducedMatrix>(sys);
+    reduced->assemble(J, kH, kH * kH);  // A = M - h D - h^2 K on the free particles
+    csr.build(reduced->matrix());
+    csr.refresh(reduced->matrix());
+    hooke::FastMassSpringOptions o;
+    o.iterations = 1;
+    fms = std::make_unique<hooke::FastMassSpringStepper>(*undamped.system, o);
+    hooke::State s1;
+    fms->step(undamped.initial, kH, s1);
+    hooke::CholmodOptions metis;
+    metis.ordering = "metis";
+    chol = std::make_unique<hooke::CholmodSolver>(metis);
+    chol->analyze(fms->global_matrix());
+    chol->factor(fms->global_matrix());
+    sn = std::make_unique<hooke::SupernodalSolver>(3);
+    sn->bind(chol->supernodal_view());
+  }
+};
+Fixture& fixture() {
+  static Fixture f;
+  return f;
+}
+
+/// Sets the thread count of this case and returns it.
+int threads(benchmark::State& state) {
+  const int t = int(state.range(0));
+  omp_set_num_threads(t);
+  return t;
+}
+
+void report(benchmark::State& state, double bytes, double flops, int t) {
+  state.counters["MB"] = bytes / 1e6;
+  state.counters["Mflop"] = flops / 1e6;
+  state.counters["GB/s"] = benchmark::Counter(bytes / 1e9, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["GFLOP/s"] = benchmark::Counter(flops / 1e9, benchmark::Counter::kIsIterationInvariantRate);
+  const auto tr = triad().find(t);
+  if (tr != triad().end()) state.counters["triad_GB/s"] = tr->second;
+}
+
+/// STREAM triad a = b + s c on 3 x 2^24 doubles (384 MB), 24 bytes and 2 flops per element.
+void BM_Triad(benchmark::State& state) {
+  const int t = threads(state);
+  const long long n = 1LL << 24;
+  std::vector<double> a(size_t(n), 0.0), b(size_t(n), 1.0), c(size_t(n), 2.0);
+  const double s = 3.0;
+  double seconds = 0.0;
+  long long calls = 0;
+  for (auto _ : state) {
+    const double t0 = omp_get_wtime();
+#pragma omp parallel for schedule(static)
+    for (long long i = 0; i < n; ++i) a[size_t(i)] = b[size_t(i)] + s * c[size_t(i)];
+    seconds += omp_get_wtime() - t0;
+    ++calls;
+    benchmark::DoNotOptimize(a.data());
+  }
+  triad()[t] = 24.0 * double(n) * double(calls) / seconds / 1e9;
+  report(state, 24.0 * double(n), 2.0 * double(n), t);
+}
+
+/// Forces of every spring and damper, gravity: reads x, v (2 x 3n doubles), writes f (3n),
+/// streams each spring's two ids and stiffness, rest length (and the damper's ids and
+/// coefficient): 24 + 16 bytes per spring and set. About 40 flops per spring (difference, length
+/// with a square root, force, scatter) and 20 per damper.
+void BM_ForceEvaluation(benchmark::State& state) {
+  const int t = threads(state);
+  Fixture& fx = fixture();
+  const auto& sys = *fx.scene.system;
+  hooke::Vec f(sys.dofs());
+  for (auto _ : state) {
+    sys.compute_forces(fx.scene.initial.x, fx.scene.initial.v, f);
+    benchmark::DoNotOptimize(f.data());
+  }
+  const double springs = double(fx.scene.edges.size()), dofs = double(sys.dofs());
+  report(state, 3.0 * 8 * dofs + 2 * 24.0 * springs, 60.0 * springs, t);
+}
+
+/// K = df/dx and D = df/dv values into their fixed patterns: both value arrays are zeroed and
+/// each spring and damper writes four 3x3 blocks (read-modify-write): at least 2 x 8 bytes per
+/// stored entry plus the springs' data. About 60 flops per spring block set.
+void BM_JacobianAssembly(benchmark::State& state) {
+  const int t = threads(state);
+  Fixture& fx = fixture();
+  const auto& sys = *fx.scene.system;
+  for (auto _ : state) {
+    sys.assemble_jacobians(fx.scene.initial.x, fx.scene.initial.v, fx.J);
+    benchmark::DoNotOptimize(fx.J.K.valuePtr());
+  }
+  const double springs = double(fx.scene.edges.size());
+  report(state, 2.0 * 2 * 8 * double(fx.J.K.nonZeros()) + 2 * 24.0 * springs, 2 * 60.0 * springs, t);
+}
+
+/// The implicit-step operator y = A x with A = M - h D - h^2 K (3n x 3n, CSR mirror, what CG
+/// runs): 12 bytes per stored entry (value and column), the row starts, x read and y written;
+/// 2 flops per entry.
+void BM_OperatorProduct(benchmark::State& state) {
+  const int t = threads(state);
+  Fixture& fx = fixture();
+  const hooke::Index n = fx.reduced->matrix().rows();
+  const hooke::Vec x = hooke::Vec::Ones(n);
+  hooke::Vec y(n);
+  for (auto _ : state) {
+    fx.csr.multiply(x, y);
+    benchmark::DoNotOptimize(y.data());
+  }
+  const double nnz = double(fx.csr.value.size());
+  report(state, 12.0 * nnz + 4.0 * double(n) + 2 * 8.0 * double(n), 2.0 * nnz, t);
+}
+
+/// One Jacobi-PCG iteration on A: the operator product plus z = D^-1 r and the vector updates
+/// (x, r, p updates and two dot products): the product's bytes plus 9 vectors of 3n doubles moved;
+/// its flops plus 12 per row.
+void BM_PcgIteration(benchmark::State& state) {
+  const int t = threads(state);
+  Fixture& fx = fixture();
+  const hooke::Index n = fx.reduced->matrix().rows();
+  hooke::Vec x = hooke::Vec::Zero(n), r = hooke::Vec::Ones(n), z(n), p = hooke::Vec::Ones(n), Ap(n);
+  hooke::Vec inv_diag = fx.reduced->matrix().diagonal().cwiseInverse();
+  double rz = r.dot(r);
+  for (auto _ : state) {
+    fx.csr.multiply(p, Ap);
+    const double alpha = rz / p.dot(Ap);
+    x.noalias() += alpha * p;
+    r.noalias() -= alpha * Ap;
+    z = inv_diag.cwiseProduct(r);
+    const double rz_new = r.dot(z);
+    p = z + (rz_new / rz) * p;
+    rz = rz_new;
+    benchmark::DoNotOptimize(x.data());
+  }
+  const double nnz = double(fx.csr.value.size());
+  report(state, 12.0 * nnz + 4.0 * double(n) + 11 * 8.0 * double(n), 2.0 * nnz + 12.0 * double(n), t);
+}
+
+/// One forward and back substitution with 3 right-hand sides (x, y, z) on the fast-mass-spring
+/// factor (n x n, METIS), by SupernodalSolver: its packed factor (inverted diagonal blocks and
+/// off-diagonal blocks, 4-column panels) is read once per sweep; 2 flops per entry and right-hand
+/// side per sweep.
+void BM_TriangularSolves3(benchmark::State& state) {
+  const int t = threads(state);
+  Fixture& fx = fixture();
+  const hooke::Index n = fx.fms->global_matrix().rows();
+  const hooke::Vec b = hooke::Vec::Ones(3 * n);
+  hooke::Vec x(3 * n);
+  for (auto _ : state) {
+    fx.sn->solve(b.data(), x.data());
+    benchmark::DoNotOptimize(x.data());
+  }
+  const auto shape = fx.sn->shape();
+  const double entries = shape.diagonal_entries + shape.off_diagonal_entries;
+  report(state, 2 * 8.0 * entries + 4 * 8.0 * 3 * double(n), 2 * 2 * 3 * entries, t);
+  state.counters["factor_entries"] = entries;
+}
+
+/// One local/global iteration of fast-mass-spring (local step over the springs, then the global
+/// solve above): the springs' data and positions, the right-hand side, and the solve's bytes.
+void BM_LocalGlobalIteration(benchmark::State& state) {
+  const int t = threads(state);
+  Fixture& fx = fixture();
+  hooke::FastMassSpringOptions o;
+  o.iterations = 10;
+  hooke::FastMassSpringStepper fms(*fx.undamped.system, o);
+  hooke::State s0 = fx.undamped.initial, s1;
+  fms.step(s0, kH, s1);  // factors
+  std::swap(s0, s1);
+  for (auto _ : state) {
+    const double t0 = omp_get_wtime();
+    fms.step(s0, kH, s1);
+    state.SetIterationTime((omp_get_wtime() - t0) / o.iterations);
+    std::swap(s0, s1);
+  }
+  const auto shape = fx.sn->shape();
+  const double entries = shape.diagonal_entries + shape.off_diagonal_entries;
+  const double springs = double(fx.undamped.edges.size()), n = double(fms.global_matrix().rows());
+  report(state, 2 * 8.0 * entries + 4 * 8.0 * 3 * n + 24.0 * springs + 6 * 8.0 * 3 * n,
+         2 * 2 * 3 * entries + 40.0 * springs, t);
+}
+
+const int registered = [] {
+  for (const char* v : {"OPENBLAS_CORETYPE", "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"}) {
+    const char* value = std::getenv(v);
+    benchmark::AddCustomContext(v, value ? value : "(unset)");
+  }
+  auto both = [](benchmark::internal::Benchmark* b) {
+    b->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();
+  };
+  both(benchmark::RegisterBenchmark("Roofline/Triad", BM_Triad));
+  both(benchmark::RegisterBenchmark("Roofline/ForceEvaluation", BM_ForceEvaluation));
+  both(benchmark::RegisterBenchmark("Roofline/JacobianAssembly", BM_JacobianAssembly));
+  both(benchmark::RegisterBenchmark("Roofline/OperatorProduct", BM_OperatorProduct));
+  both(benchmark::RegisterBenchmark("Roofline/PcgIteration", BM_PcgIteration));
+  both(benchmark::RegisterBenchmark("Roofline/TriangularSolves3", BM_TriangularSolves3));
+  benchmark::RegisterBenchmark("Roofline/LocalGlobalIteration", BM_LocalGlobalIteration)
+      ->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(3);
+  return 0;
+}();
+
+}  // namespace
+
+BENCHMARK_MAIN();
