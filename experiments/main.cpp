@@ -22,6 +22,7 @@
 #include "experiments/info_command.hpp"
 #include "experiments/resolution_study.hpp"
 #include "experiments/run_command.hpp"
+#include "experiments/scaling_study.hpp"
 #include "experiments/step_convergence_command.hpp"
 #include "experiments/stability_map.hpp"
 #include "experiments/study_methods.hpp"
@@ -177,6 +178,24 @@ int main(int argc, char** argv) {
   resolution->add_option("--out", out_dir, "output directory (default out/resolution)");
   resolution->add_flag("--no-plot", no_plot, "write the CSV only");
 
+  hooke::ScalingOptions scal;
+  std::string scal_springs, scal_methods, scal_threads;
+  auto* scaling = app.add_subcommand(
+      "scaling", "Scaling study: time per step and per iteration against springs (cloth grids of 1e4 "
+                 "to 1e6 springs, 6e6 with --full) per method, on 1 and 2 threads, with peak memory; "
+                 "writes scaling.csv, scaling.png and scaling.md (fitted exponents)");
+  scaling->add_flag("--full", scal.full, "add 3e6 and 6e6 springs (1000 x 1000 particles)");
+  scaling->add_option("--springs", scal_springs, "comma-separated spring counts (default 1e4,3e4,1e5,3e5,1e6)");
+  scaling->add_option("--methods", scal_methods, "comma-separated: " + [] {
+    std::string all;
+    for (const auto& m : hooke::scaling_methods()) all += (all.empty() ? "" : ",") + m;
+    return all;
+  }() + " (default: all)");
+  scaling->add_option("--threads", scal_threads, "comma-separated thread counts (default 1,2)");
+  scaling->add_option("--steps", scal.steps, "timed steps after one warm-up step (default 2)");
+  scaling->add_option("--out", out_dir, "output directory (default out/scaling)");
+  scaling->add_flag("--no-plot", no_plot, "write the CSV only");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -203,6 +222,24 @@ int main(int argc, char** argv) {
     if (app.got_subcommand("step-convergence")) {
       conv.out_dir = out_dir.empty() ? "out/step-convergence" : out_dir;
       return hooke::run_step_convergence(resolve_scene(conv_scene), conv);
+    }
+    if (app.got_subcommand("scaling")) {
+      for (double v : parse_numbers(scal_springs, "--springs")) {
+        if (!(v >= 10.0 && v <= 1e8)) throw hooke::InputError("<command line>", "--springs", "spring counts in [10, 1e8]");
+        scal.springs.push_back(v);
+      }
+      if (!scal_threads.empty()) {
+        scal.threads.clear();
+        for (double v : parse_numbers(scal_threads, "--threads")) {
+          if (v != std::floor(v) || v < 1 || v > 256) throw hooke::InputError("<command line>", "--threads", "thread counts are integers in [1, 256]");
+          scal.threads.push_back(int(v));
+        }
+      }
+      if (scal.steps < 1) throw hooke::InputError("<command line>", "--steps", "must be >= 1");
+      scal.methods = hooke::split_list(scal_methods);
+      if (!out_dir.empty()) scal.out_dir = out_dir;
+      scal.plot = !no_plot;
+      return hooke::run_scaling(scal);
     }
     if (app.got_subcommand("resolution")) {
       for (double v : parse_numbers(res_n, "--n")) {

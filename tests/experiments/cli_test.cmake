@@ -204,6 +204,28 @@ elseif(CASE STREQUAL "step_convergence")
     endif()
   endforeach()
 
+elseif(CASE STREQUAL "scaling")
+  # Two small grids, every method, 1 and 2 threads: one CSV row each, all "ok", and the plot
+  # script's figure and table of fitted exponents. An unknown method is an input error.
+  hooke_exec(scaling --springs 2000,8000 --steps 1 --out "${OUT}")
+  expect_rc(0)
+  expect_csv("${OUT}/scaling.csv"
+             "method,threads,springs,particles,steps,step_s,iterations_per_step,iteration_s,assembly_s,factor_s,solve_s,local_s,global_s,setup_s,peak_mib,status"
+             25)
+  file(READ "${OUT}/scaling.csv" text)
+  if(text MATCHES "failed")
+    message(FATAL_ERROR "a scaling run failed${report}")
+  endif()
+  foreach(m symplectic-euler xpbd fast-mass-spring implicit-pcg implicit-pcg-cholmod implicit-cholmod)
+    expect_contains("${text}" "${m},2,7846,1369," "scaling.csv")
+  endforeach()
+  expect_file("${OUT}/scaling.png")
+  file(READ "${OUT}/scaling.md" md)
+  expect_contains("${md}" "| fast-mass-spring | 2 | 2 |" "scaling.md")
+  hooke_exec(scaling --springs 2000 --methods nonsense --out "${OUT}/bad")
+  expect_rc(2)
+  expect_contains("${err}" "--methods" "stderr")
+
 elseif(CASE STREQUAL "stability")
   hooke_exec(stability --cases two_particle --methods symplectic-euler,implicit-b1 --k 1e4
              --bisections 3 --out "${OUT}")

@@ -1,0 +1,206 @@
+// `hooke scaling`: how time per step and per iteration grow with the cloth, per method and thread
+// count. Each run builds the grid through the scene layer (what users run), takes one untimed
+// warm-up step (analysis and first factorization) and times `steps` more.
+//
+// Methods (label: configuration; the size limit keeps each run within minutes and 16 GiB):
+//   symplectic-euler   explicit; an iteration is a step
+//   xpbd               10 substeps of one Gauss-Seidel sweep; an iteration is a step
+//   fast-mass-spring   10 local/global iterations per step (METIS, hooke's supernodal solves)
+//   implicit-pcg       beta = 1, Jacobi-PCG, tolerance 1e-6, at most 300 iterations per step
+//                      (large cloths need thousands: the time per iteration is what scales)
+//   implicit-pcg-cholmod  beta = 1, PCG preconditioned by a reused CHOLMOD factorization of the
+//                      3n x 3n matrix; up to 1.1e6 springs (its factor grows faster than n)
+//   implicit-cholmod   beta = 1, a CHOLMOD factorization per step; up to 4e5 springs
+// Peak memory: VmHWM of this process, reset before each run (/proc/self/clear_refs).
+#include "experiments/scaling_study.hpp"
+
+#include <omp.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <iomanip>
+#include <iostream>
+#include <sstream>
+
+#include "experiments/plot_script.hpp"
+#include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/integrators/implicit_stepper.hpp"
+#include "hooke/linear/conjugate_gradient.hpp"
+#include "hooke/registry.hpp"
+#include "hooke/simulation.hpp"
+#include "problems/scene.hpp"
+
+namespace hooke {
+
+namespace {
+
+struct MethodSpec {
+  std::string label, integrator;  // integrator: the [integrator] section's keys
+  double max_springs;             // larger grids are skipped (documented above)
+};
+
+const std::vector<MethodSpec>& specs() {
+  static const std::vector<MethodSpec> s = {
+      {"symplectic-euler", "method = \"symplectic-euler\"\n", 1e99},
+      {"xpbd", "method = \"xpbd\"\nsubsteps = 10\n", 1e99},
+      {"fast-mass-spring", "method = \"fast-mass-spring\"\niterations = 10\n", 1e99},
+      {"implicit-pcg",
+       "method = \"implicit\"\nlinear_solver = \"pcg\"\nlinear_tolerance = 1e-6\n"
+       "max_linear_iterations = 300\n",
+       1e99},
+      {"implicit-pcg-cholmod",
+       "method = \"implicit\"\nlinear_solver = \"pcg-cholmod\"\nlinear_tolerance = 1e-6\n", 1.1e6},
+      {"implicit-cholmod", "method = \"implicit\"\nlinear_solver = \"cholmod\"\n", 4e5},
+  };
+  return s;
+}
+
+using Clock = std::chrono::steady_clock;
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+/// Resets the peak resident set size (Linux >= 4.0); false where unsupported.
+bool reset_peak_memory() {
+  std::ofstream f("/proc/self/clear_refs");
+  f << "5";
+  return bool(f);
+}
+
+/// Peak resident set size since the last reset (MiB), or NaN.
+double peak_memory_mib() {
+  std::ifstream f("/proc/self/status");
+  std::string line;
+  while (std::getline(f, line))
+    if (line.rfind("VmHWM:", 0) == 0) return std::stod(line.substr(6)) / 1024.0;
+  return std::nan("");
+}
+
+/// The cloth text for about `springs` springs (6 per particle in the interior).
+std::string cloth_text(long long side, const std::string& integrator) {
+  std::ostringstream os;
+  os << "[mesh]\ntype = \"grid\"\nnx = " << side << "\nny = " << side
+     << "\norientation = \"vertical\"\ntotal_mass = 1.0\n"
+     << "[springs]\nstructural_stiffness = 1e4\nshear_stiffness = 1e3\nflexion_stiffness = 1e2\n"
+     << "[forces]\ngravity = [0.0, -9.81, 0.0]\n[integrator]\n" << integrator
+     << "[time]\ndt = 0.01\nduration = 1.0\n[run]\nallow_not_converged = true\n";
+  return os.str();
+}
+
+struct Row {
+  std::string method;
+  int threads = 1;
+  long long springs = 0, particles = 0;
+  int steps = 0;
+  double step_s = 0, iterations_per_step = 0, iteration_s = 0;
+  double assembly_s = 0, factor_s = 0, solve_s = 0, local_s = 0, global_s = 0;
+  double setup_s = 0, peak_mib = 0;
+  std::string status = "ok";
+};
+
+Row run_one(const MethodSpec& m, long long side, int threads, int steps) {
+  Row r;
+  r.method = m.label;
+  r.threads = threads;
+  omp_set_num_threads(threads);
+  reset_peak_memory();
+  const auto t_setup = Clock::now();
+  const Scene scene = load_scene_from_string(cloth_text(side, m.integrator),
+                                             "scaling-" + m.label + "-" + std::to_string(side));
+  r.springs = static_cast<long long>(scene.edges.size());
+  r.particles = scene.system->num_particles();
+  auto stepper = make_stepper(scene.integrator.method, *scene.system, scene.integrator.options);
+  const auto* implicit = dynamic_cast<const ImplicitStepper*>(stepper.get());
+  const auto* fms = dynamic_cast<const FastMassSpringStepper*>(stepper.get());
+  Simulation sim(*scene.system, std::move(stepper), scene.initial);
+  const double h = scene.time.dt;
+  StepSummary s = sim.advance(h);  // warm-up: analysis, first factorization
+  r.setup_s = since(t_setup);
+  if (s.status == Status::BrokeDown || s.status == Status::Fatal) {
+    r.status = "failed: " + s.message;
+    return r;
+  }
+  const double asm0 = implicit ? implicit->assembly_seconds() : 0.0;
+  const LinearSummary lin0 = implicit ? implicit->linear_totals() : LinearSummary{};
+  const double local0 = fms ? fms->local_seconds() : 0.0, global0 = fms ? fms->global_seconds() : 0.0;
+  long long iterations = 0;
+  const auto t0 = Clock::now();
+  for (int k = 0; k < steps; ++k) {
+    s = sim.advance(h);
+    if (s.status == Status::BrokeDown || s.status == Status::Fatal) {
+      r.status = "failed: " + s.message;
+      return r;
+    }
+    iterations += std::max(1, s.iterations);
+  }
+  const double total = since(t0);
+  r.steps = steps;
+  r.step_s = total / steps;
+  r.iterations_per_step = double(iterations) / steps;
+  // An iteration: a PCG iteration, a local/global iteration, or (explicit, XPBD) a step.
+  r.iteration_s = total / double(iterations);
+  if (implicit) {
+    r.assembly_s = (implicit->assembly_seconds() - asm0) / steps;
+    r.factor_s = (implicit->linear_totals().factor_seconds - lin0.factor_seconds) / steps;
+    r.solve_s = (implicit->linear_totals().solve_seconds - lin0.solve_seconds) / steps;
+  }
+  if (fms) {
+    r.local_s = (fms->local_seconds() - local0) / steps;
+    r.global_s = (fms->global_seconds() - global0) / steps;
+  }
+  r.peak_mib = peak_memory_mib();
+  return r;
+}
+
+}  // namespace
+
+std::vector<std::string> scaling_methods() {
+  std::vector<std::string> v;
+  for (const auto& m : specs()) v.push_back(m.label);
+  return v;
+}
+
+int run_scaling(const ScalingOptions& options) {
+  std::vector<double> springs = options.springs;
+  if (springs.empty()) {
+    springs = {1e4, 3e4, 1e5, 3e5, 1e6};
+    if (options.full) springs.insert(springs.end(), {3e6, 6e6});
+  }
+  for (const auto& name : options.methods)
+    if (std::none_of(specs().begin(), specs().end(), [&](const MethodSpec& m) { return m.label == name; }))
+      throw InputError("<command line>", "--methods", "unknown method '" + name + "'");
+  std::filesystem::create_directories(options.out_dir);
+  const std::string csv_path = options.out_dir + "/scaling.csv";
+  std::ofstream csv(csv_path);
+  csv << "method,threads,springs,particles,steps,step_s,iterations_per_step,iteration_s,"
+         "assembly_s,factor_s,solve_s,local_s,global_s,setup_s,peak_mib,status\n";
+  csv << std::setprecision(6);
+  for (const MethodSpec& m : specs()) {
+    if (!options.methods.empty() &&
+        std::find(options.methods.begin(), options.methods.end(), m.label) == options.methods.end())
+      continue;
+    for (const double target : springs) {
+      const long long side = std::max(3LL, std::llround(std::sqrt(target / 6.0)));
+      if (6.0 * double(side) * double(side) > 1.05 * m.max_springs) continue;
+      for (const int t : options.threads) {
+        const Row r = run_one(m, side, t, options.steps);
+        csv << r.method << ',' << r.threads << ',' << r.springs << ',' << r.particles << ','
+            << r.steps << ',' << r.step_s << ',' << r.iterations_per_step << ',' << r.iteration_s
+            << ',' << r.assembly_s << ',' << r.factor_s << ',' << r.solve_s << ',' << r.local_s
+            << ',' << r.global_s << ',' << r.setup_s << ',' << r.peak_mib << ",\"" << r.status
+            << "\"\n";
+        csv.flush();
+        std::cout << std::left << std::setw(22) << r.method << " threads " << r.threads
+                  << "  springs " << std::setw(9) << r.springs << " step " << std::setw(10)
+                  << r.step_s << " s  iteration " << std::setw(10) << r.iteration_s
+                  << " s  peak " << std::setw(8) << r.peak_mib << " MiB  " << r.status << std::endl;
+      }
+    }
+  }
+  std::cout << "wrote " << csv_path << "\n";
+  if (options.plot) run_plot_script("scaling.py", options.out_dir);
+  return 0;
+}
+
+}  // namespace hooke

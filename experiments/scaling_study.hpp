@@ -1,0 +1,29 @@
+#pragma once
+#include <string>
+#include <vector>
+
+namespace hooke {
+
+/// Options of `hooke scaling`.
+struct ScalingOptions {
+  std::vector<double> springs;  ///< target spring counts (empty: 1e4 .. 1e6; full: to 6e6)
+  std::vector<int> threads = {1, 2};
+  std::vector<std::string> methods;  ///< labels of scaling_methods() (empty: all)
+  int steps = 2;                     ///< timed steps after one untimed warm-up step
+  bool full = false;
+  bool plot = true;
+  std::string out_dir = "out/scaling";
+};
+
+/// The labels `hooke scaling` knows, in table order.
+std::vector<std::string> scaling_methods();
+
+/// `hooke scaling`: cloth grids (structural 1e4, shear 1e3, flexion 1e2 N/m, 1 kg, two corners
+/// pinned, gravity, h = 0.01 s) from about 1e4 to 1e6 springs (6e6 with --full: 1000 x 1000), per
+/// method and thread count: time per step and per iteration, split into force and Jacobian
+/// assembly, factorization, solve, local and global steps; peak resident memory of each run.
+/// Writes OUT/scaling.csv and (experiments/plot/scaling.py) OUT/scaling.png and OUT/scaling.md
+/// with the fitted exponent of time per iteration against springs. Returns the exit code.
+int run_scaling(const ScalingOptions& options);
+
+}  // namespace hooke
