@@ -17,6 +17,7 @@
 
 #include "bench/cloth_fixture.hpp"
 #include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/integrators/implicit_operator.hpp"
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/linear/cholmod_solver.hpp"
 #include "hooke/linear/iterative_common.hpp"
@@ -154,6 +155,27 @@ void BM_OperatorProduct(benchmark::State& state) {
   report(state, 12.0 * nnz + 4.0 * double(n) + 2 * 8.0 * double(n), 2.0 * nnz, t);
 }
 
+/// The same operator matrix-free (ImplicitOperator: each spring's and damper's Jacobian blocks
+/// recomputed from x and v and applied to p): x, v and p read and y written (3n doubles each),
+/// plus the scatter into the full-length scratch and back (4 x 3n), and 24 bytes of data per spring
+/// and per damper. About 60 flops per spring (its block and the product) and 40 per damper.
+void BM_MatrixFreeOperator(benchmark::State& state) {
+  const int t = threads(state);
+  Fixture& fx = fixture();
+  hooke::ImplicitOperator op(*fx.scene.system);
+  hooke::JacobianOptions opt;
+  opt.damping_position_terms = false;  // what the implicit steps on SPD backends use
+  op.set(fx.scene.initial.x, fx.scene.initial.v, kH, kH * kH, opt);
+  const hooke::Vec x = hooke::Vec::Ones(op.free_dofs());
+  hooke::Vec y(op.free_dofs());
+  for (auto _ : state) {
+    op.apply(x, y);
+    benchmark::DoNotOptimize(y.data());
+  }
+  const double springs = double(fx.scene.edges.size()), dofs = double(fx.scene.system->dofs());
+  report(state, 8 * 8.0 * dofs + 2 * 24.0 * springs, 100.0 * springs, t);
+}
+
 /// One Jacobi-PCG iteration on A: the operator product plus z = D^-1 r and the vector updates
 /// (x, r, p updates and two dot products): the product's bytes plus 9 vectors of 3n doubles moved;
 /// its flops plus 12 per row.
@@ -235,6 +257,7 @@ const int registered = [] {
   both(benchmark::RegisterBenchmark("Roofline/ForceEvaluation", BM_ForceEvaluation));
   both(benchmark::RegisterBenchmark("Roofline/JacobianAssembly", BM_JacobianAssembly));
   both(benchmark::RegisterBenchmark("Roofline/OperatorProduct", BM_OperatorProduct));
+  both(benchmark::RegisterBenchmark("Roofline/MatrixFreeOperator", BM_MatrixFreeOperator));
   both(benchmark::RegisterBenchmark("Roofline/PcgIteration", BM_PcgIteration));
   both(benchmark::RegisterBenchmark("Roofline/TriangularSolves3", BM_TriangularSolves3));
   benchmark::RegisterBenchmark("Roofline/LocalGlobalIteration", BM_LocalGlobalIteration)

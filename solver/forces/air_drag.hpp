@@ -22,6 +22,8 @@ class AirDrag final : public Force {
   void bind(const BlockPattern& p) override;
   void add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options, SparseMatrix& K,
                      SparseMatrix& D) const override;
+  bool add_jacobian_product(ConstRef x, ConstRef v, const JacobianOptions& options, ConstRef p,
+                            double cv, double cx, VecRef y) const override;
 
  private:
   Index m_n;

@@ -15,6 +15,11 @@ class Gravity final : public Force {
   double potential_energy(ConstRef x) const override;
   void add_jacobians(ConstRef, ConstRef, const JacobianOptions&, SparseMatrix&,
                      SparseMatrix&) const override {}
+  /// Constant force: no Jacobian, nothing to add.
+  bool add_jacobian_product(ConstRef, ConstRef, const JacobianOptions&, ConstRef, double, double,
+                            VecRef) const override {
+    return true;
+  }
 
  private:
   Vec m_masses;

@@ -1,6 +1,7 @@
 #include "hooke/forces/hooke_spring.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <limits>
 
 namespace hooke {
@@ -39,6 +40,32 @@ void HookeSpring::add_jacobians(ConstRef x, ConstRef /*v*/, const JacobianOption
                                              s.rest_length[n], options.clamp_compressed);
     s.add_spring_block(K, n, B);
   });
+}
+
+bool HookeSpring::add_jacobian_product(ConstRef x, ConstRef /*v*/, const JacobianOptions& options,
+                                       ConstRef p, double /*cv*/, double cx, VecRef y) const {
+  // The blocks [[B, -B], [-B, B]] of add_jacobians applied to p: B (p_a - p_b) at a, minus at b.
+  // B dp = -k [t dp + (1 - t) u (u . dp)] with t = 1 - L/l (clamped): the block is never formed.
+  const SpringSet& s = m_springs;
+  const bool clamp = options.clamp_compressed;
+  s.for_each([&](size_t n) {
+    const int a = s.i[n], b = s.j[n];
+    const Vec3 d = spring_vector(x, a, b);
+    const Vec3 dp = p.segment<3>(3 * a) - p.segment<3>(3 * b);
+    const double l2 = d.squaredNorm(), k = cx * s.coeff[n];
+    Vec3 q;
+    if (l2 == 0.0) {
+      q = -k * dp;  // the surrogate B = -k I of dfdx at l = 0
+    } else {
+      const double l = std::sqrt(l2);
+      double t = 1.0 - s.rest_length[n] / l;
+      if (clamp && t < 0.0) t = 0.0;
+      q = -k * (t * dp + ((1.0 - t) * d.dot(dp) / l2) * d);
+    }
+    y.segment<3>(3 * a) += q;
+    y.segment<3>(3 * b) -= q;
+  });
+  return true;
 }
 
 double HookeSpring::max_strain(ConstRef x) const {

@@ -50,6 +50,8 @@ class HookeSpring final : public Force {
   void bind(const BlockPattern& p) override { m_springs.bind(p); }
   void add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options, SparseMatrix& K,
                      SparseMatrix& D) const override;
+  bool add_jacobian_product(ConstRef x, ConstRef v, const JacobianOptions& options, ConstRef p,
+                            double cv, double cx, VecRef y) const override;
   double max_strain(ConstRef x) const override;
   double energy_scale() const override;
 

@@ -46,6 +46,8 @@ class SpringDamper final : public Force {
   void bind(const BlockPattern& p) override { m_springs.bind(p); }
   void add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options, SparseMatrix& K,
                      SparseMatrix& D) const override;
+  bool add_jacobian_product(ConstRef x, ConstRef v, const JacobianOptions& options, ConstRef p,
+                            double cv, double cx, VecRef y) const override;
 
  private:
   SpringSet m_springs;

@@ -35,6 +35,7 @@
 #include "hooke/linear/linear_solver.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/registry.hpp"
+#include "support/random.hpp"
 #include "support/registry.hpp"
 #include "support/systems.hpp"
 
@@ -107,13 +108,7 @@ const StepMatrix& cloth_problem() {
   return *m;
 }
 
-Vec random_vector(Index n, unsigned seed) {
-  std::mt19937 rng(seed);
-  std::uniform_real_distribution<double> u(-1.0, 1.0);
-  Vec v(n);
-  for (Index i = 0; i < n; ++i) v[i] = u(rng);
-  return v;
-}
+using hooke::test::random_vector;
 
 double relative_distance(const Vec& a, const Vec& ref) { return (a - ref).norm() / ref.norm(); }
 

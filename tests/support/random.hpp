@@ -26,4 +26,10 @@ inline Vec random_vec(Eigen::Index size, double lo, double hi, std::mt19937& rng
   return v;
 }
 
+/// random_vec(size, -1, 1) from a generator seeded with `seed`.
+inline Vec random_vector(Eigen::Index size, unsigned seed) {
+  std::mt19937 rng(seed);
+  return random_vec(size, -1.0, 1.0, rng);
+}
+
 }  // namespace hooke::test
