@@ -20,7 +20,9 @@ struct CholmodOptions {
 /// Sparse Cholesky LL^T of symmetric positive definite A through SuiteSparse CHOLMOD, with the
 /// long-index API (cholmod_l_*: the int API overflows on large cloth factors). analyze() does the
 /// ordering and symbolic factorization once per pattern; factor() refactorizes new values on it;
-/// solve() uses cholmod_l_solve2 with workspace kept between calls, so it does not allocate.
+/// solve() runs hooke's SupernodalSolver on a supernodal factor (see solve_interleaved; its
+/// packed copy of the factor is made after each factorization) and cholmod_l_solve2 on a
+/// simplicial one, with workspace kept between calls, so it does not allocate.
 /// A not positive definite gives Status::BrokeDown naming the failing column.
 /// Ignores LinearSolveOptions::tolerance, max_iterations and warm_start (direct method).
 class CholmodSolver final : public LinearSolver {
