@@ -142,8 +142,14 @@ std::string backend_label(const Scene& scene) {
 int run_mass_spring(Scene& scene, const std::string& dir, const RunOptions& options,
                     const Checkpoint* resume) {
   const MassSpringSystem& sys = *scene.system;
-  Simulation sim(sys, make_stepper(scene.integrator.method, sys, scene.integrator.options),
-                 resume ? resume->state : scene.initial);
+  std::unique_ptr<Stepper> stepper;
+  try {
+    stepper = make_stepper(scene.integrator.method, sys, scene.integrator.options);
+  } catch (const SetupError& e) {  // e.g. a factorization above the memory budget: refused up front
+    const bool implicit = method_info(scene.integrator.method).kind == MethodKind::Implicit;
+    throw InputError(scene.file, implicit ? "integrator.linear_solver" : "integrator.method", e.what());
+  }
+  Simulation sim(sys, std::move(stepper), resume ? resume->state : scene.initial);
   sim.set_accept_not_converged(scene.run.allow_not_converged);
   const std::string checkpoint_path = dir + "/checkpoint.bin";
   long long first_step = 1, not_converged = 0, halved_steps = 0;

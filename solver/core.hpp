@@ -36,6 +36,14 @@ class UnknownName : public std::invalid_argument {
   using std::invalid_argument::invalid_argument;
 };
 
+/// Thrown when a stepper cannot be set up for a system, e.g. because the sparse factorization it
+/// needs would exceed the memory budget (memory_budget()); the message says why, with the numbers.
+/// Front ends report it as an input error of the scene's integrator settings.
+class SetupError : public std::runtime_error {
+ public:
+  using std::runtime_error::runtime_error;
+};
+
 /// Outcome of a numerical solve (linear solve, nonlinear step, whole step). Recoverable cases
 /// (NotConverged) let the caller shrink h or report; BrokeDown means the method met something it
 /// cannot handle (e.g. CG on an indefinite matrix); Fatal means the result must not be used.
@@ -51,6 +59,17 @@ inline const char* to_string(Status s) {
   }
   return "unknown";
 }
+
+/// The memory budget (bytes) that solvers check before a large allocation they can estimate in
+/// advance, such as a sparse Cholesky factor after its symbolic analysis; 0 (the default) means
+/// no budget. The scene loader sets it to its own budget (problems/scene.hpp), so a scene whose
+/// factorization would not fit is refused with the estimate instead of being killed.
+inline double& memory_budget_slot() {
+  static double budget = 0.0;
+  return budget;
+}
+inline double memory_budget() { return memory_budget_slot(); }
+inline void set_memory_budget(double bytes) { memory_budget_slot() = bytes; }
 
 /// True if a loop over `work` items should run in an OpenMP parallel region: large enough
 /// (work >= threshold) to pay for the threads, and more than one thread available. Loops branch on

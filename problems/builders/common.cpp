@@ -56,12 +56,14 @@ double& memory_limit_slot() {
 double scene_memory_limit() {
   double& limit = memory_limit_slot();
   if (limit <= 0.0) limit = default_memory_limit();
+  set_memory_budget(limit);  // the solvers check their own large allocations against it
   return limit;
 }
 
 void set_scene_memory_limit(double bytes) {
   HOOKE_ASSERT(bytes > 0.0 && std::isfinite(bytes), "memory limit must be > 0, got " << bytes);
   memory_limit_slot() = bytes;
+  set_memory_budget(bytes);
 }
 
 void check_size(TableReader& mesh, const std::string& key, double particles, double springs) {

@@ -101,7 +101,7 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
   m_chol = std::make_unique<CholmodSolver>(chol_options);
   if (nf > 0) {
     const LinearSummary a = m_chol->analyze(m_A);
-    if (a.status != Status::Converged) throw std::runtime_error("fast-mass-spring: " + a.message);
+    if (a.status != Status::Converged) throw SetupError("fast-mass-spring: " + a.message);
   }
 
   const Index dofs = 3 * n;

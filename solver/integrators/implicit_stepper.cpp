@@ -49,7 +49,7 @@ ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme 
   m_rhs_free.setZero(nf);
   m_delta.setZero(nf);
   const LinearSummary a = m_solver->analyze(m_A.matrix());
-  HOOKE_ASSERT(a.status == Status::Converged, "linear backend analyze failed: " << a.message);
+  if (a.status != Status::Converged) throw SetupError(a.message);
   accumulate(m_totals, a);
 }
 

@@ -3,6 +3,7 @@
 #include <cholmod.h>
 
 #include <array>
+#include <sstream>
 #include <chrono>
 #include <vector>
 
@@ -104,6 +105,22 @@ LinearSummary CholmodSolver::analyze(const SparseMatrix& A) {
     s.status = Status::Fatal;
     s.message = "cholmod: analyze failed with CHOLMOD status " + std::to_string(m->c.status) +
                 (m->c.status == CHOLMOD_OUT_OF_MEMORY ? " (out of memory)" : "");
+  } else if (const double budget = memory_budget(); budget > 0.0) {
+    // Before the numeric factorization allocates it: the factor's values and indices, CHOLMOD's
+    // workspace, and SupernodalSolver's packed copy (about the factor's size again).
+    const double values = m->L->is_super ? double(m->L->xsize) : m->c.lnz;
+    const double bytes = 2.2 * 8.0 * values + 8.0 * double(m->L->is_super ? m->L->ssize : m->c.lnz);
+    if (bytes > budget) {
+      std::ostringstream os;
+      os.precision(3);
+      os << "cholmod: the factorization of this " << m->n << " x " << m->n
+         << " matrix would need about " << bytes / 1073741824.0 << " GiB (" << values
+         << " factor entries), above the memory budget of " << budget / 1073741824.0
+         << " GiB (HOOKE_MAX_MEMORY_GIB); use an iterative linear solver";
+      s.status = Status::Fatal;
+      s.message = os.str();
+      cholmod_l_free_factor(&m->L, &m->c);
+    }
   }
   m->B.nrow = size_t(m->n);
   m->B.ncol = 1;

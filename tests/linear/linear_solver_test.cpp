@@ -758,6 +758,23 @@ TEST(SupernodalSolve, SameBitsWithOneOrTwoThreads) {
 #endif
 }
 
+TEST(Cholmod, FactorAboveTheMemoryBudgetIsRefusedAtAnalyzeWithTheEstimate) {
+  const SparseMatrix& A = cloth_problem().A();
+  const double saved = hooke::memory_budget();
+  hooke::set_memory_budget(1e5);  // 100 kB: far below this factor
+  hooke::CholmodSolver chol;
+  const LinearSummary a = chol.analyze(A);
+  hooke::set_memory_budget(saved);
+  EXPECT_EQ(a.status, Status::Fatal);
+  EXPECT_NE(a.message.find("would need about"), std::string::npos) << a.message;
+  EXPECT_NE(a.message.find("above the memory budget"), std::string::npos) << a.message;
+  // With room, the same matrix analyses and factors.
+  hooke::set_memory_budget(1e12);
+  const LinearSummary b = setup(chol, A);
+  hooke::set_memory_budget(saved);
+  EXPECT_EQ(b.status, Status::Converged) << describe(b);
+}
+
 TEST(SupernodalSolve, SimplicialFactorTakesCholmodsPath) {
   const SparseMatrix& A = cloth_problem().A();
   hooke::CholmodOptions o;
