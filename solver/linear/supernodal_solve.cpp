@@ -63,9 +63,9 @@ namespace sn_base {
 namespace {
 /// Splits the supernodal tree for two threads: descends from the roots, moving the heaviest
 /// subtree's root into the top while that subtree holds more than half of the work left below,
-/// then deals the remaining subtrees into two bins, heaviest first, lighter bin first. Needs
-/// children numbered before parents (CHOLMOD's postordered supernodes); otherwise everything goes
-/// into the top and the solve is serial.
+/// then deals the remaining subtrees into two bins, heaviest first, lighter bin first. Needs the
+/// supernodes in a postorder of their tree (CHOLMOD's default, checked); otherwise everything
+/// goes into the top and the solve is serial.
 void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<I>& top_row,
                 std::vector<I>& top_supernode, std::vector<I>& range, I (&bin_start)[3]) {
   const I ns = f.nsuper;
@@ -92,6 +92,17 @@ void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<
     work[size_t(p)] += work[size_t(s)];
     count[size_t(p)] += count[size_t(s)];
     children[size_t(p)].push_back(s);
+  }
+  // The bins take subtrees as ranges [x - count[x] + 1, x]: that needs a postorder, in which each
+  // node's children's subtrees tile the range just below it. Check it (CHOLMOD postorders by
+  // default); otherwise everything stays in the serial top.
+  for (I p = 0; postordered && p < ns; ++p) {
+    I next = p - count[size_t(p)] + 1;  // where the first child's subtree must start
+    for (const I c : children[size_t(p)]) {  // ascending: pushed in increasing s
+      postordered = postordered && c - count[size_t(c)] + 1 == next;
+      next = c + 1;
+    }
+    postordered = postordered && next == p;
   }
   std::vector<char> in_top(size_t(ns), postordered ? 0 : 1);
   range.clear();
