@@ -62,7 +62,7 @@ std::string fast_mass_spring_unsupported(const MassSpringSystem& system);
 /// d_s = L_s (x_i - x_j) / |x_i - x_j| (in parallel over particle ranges, deterministic); the global
 /// step solves (M/h^2 + C/h + L) x = M y / h^2 + f_g + C (x0 + h w)/h + J d for the free particles,
 /// with x, y and z as three right-hand sides of one n x n CHOLMOD factorization (METIS nested
-/// dissection ordering: 23% fewer factor entries than AMD on cloth grids), solved by hooke's own
+/// dissection ordering: less fill than AMD on cloth grids), solved by hooke's own
 /// supernodal triangular solves (SupernodalSolver: several times faster than cholmod_l_solve2
 /// here, see bench/fast_mass_spring_bench.cpp). Pinned particles
 /// are eliminated and move with their velocity (x1 = x0 + h v0, v1 = v0).
