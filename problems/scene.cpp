@@ -171,7 +171,7 @@ void read_run_settings(TableReader& root, Scene& scene) {
         "beta", "linear_solver", "newton_iterations", "tolerance", "linear_tolerance",
         "max_linear_iterations", "clamp_compressed", "rtol", "atol", "max_order", "adams",
         "preconditioner", "max_steps", "max_iterations", "iterations", "warm_start", "acceleration",
-        "chebyshev_rho", "chebyshev_delay", "lbfgs_history", "substeps"};
+        "chebyshev_rho", "chebyshev_delay", "lbfgs_history", "global_solver", "substeps"};
     MethodOptions& o = scene.integrator.options;
     std::vector<std::string> own;
     if (kind == MethodKind::Implicit) {
@@ -212,7 +212,7 @@ void read_run_settings(TableReader& root, Scene& scene) {
       w.max_steps = long(r.integer("max_steps", w.max_steps, 1, 1000000000000LL));
     } else if (method == "fast-mass-spring") {
       own = {"iterations", "tolerance", "warm_start", "acceleration", "chebyshev_rho",
-             "chebyshev_delay", "lbfgs_history"};
+             "chebyshev_delay", "lbfgs_history", "global_solver"};
       FastMassSpringOptions& f = o.fast_mass_spring;
       f.iterations = int(r.integer("iterations", f.iterations, 1, 100000000));
       f.tolerance = r.non_negative("tolerance", f.tolerance);
@@ -226,6 +226,10 @@ void read_run_settings(TableReader& root, Scene& scene) {
       f.chebyshev_delay = int(r.integer("chebyshev_delay", f.chebyshev_delay,
                                         f.chebyshev_rho == 0.0 ? 2 : 0, 100000000));
       f.lbfgs_history = int(r.integer("lbfgs_history", f.lbfgs_history, 1, 1000));
+      f.global_solver = r.choice("global_solver", f.global_solver, {"cholmod", "jacobi"});
+      if (f.global_solver == "jacobi" && f.acceleration == "lbfgs")
+        r.fail("global_solver", "'jacobi' cannot take acceleration = \"lbfgs\" (its initial Hessian is "
+                                "the factored matrix); use \"chebyshev\" or \"none\"");
     } else if (method == "xpbd") {
       own = {"substeps", "iterations"};
       o.xpbd.substeps = int(r.integer("substeps", o.xpbd.substeps, 1, 100000000));

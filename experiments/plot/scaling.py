@@ -4,7 +4,8 @@ Usage: /usr/bin/python3 experiments/plot/scaling.py OUT_DIR
 Reads OUT_DIR/scaling.csv; writes OUT_DIR/scaling.png (time per iteration and per step against
 springs, log-log, one colour per method, solid 2 threads, dashed 1 thread) and OUT_DIR/scaling.md
 (the fitted exponent of time per iteration against springs per method and thread count, least
-squares in log-log over the sizes run, and every run's numbers).
+squares in log-log over the sizes run, with the exponent of the factor's entries for methods that
+stream a Cholesky factor, and every run's numbers).
 """
 import math
 import os
@@ -32,16 +33,19 @@ def main(out_dir):
     for m in methods:
         st = style(m, methods)
         for t in threads:
-            pts = sorted((num(r["springs"]), num(r["iteration_s"]), num(r["step_s"]))
+            pts = sorted((num(r["springs"]), num(r["iteration_s"]), num(r["step_s"]),
+                          num(r.get("factor_nnz") or "0"))
                          for r in rows if r["method"] == m and int(r["threads"]) == t)
             if not pts:
                 continue
-            s, it, step = zip(*pts)
+            s, it, step, fill = zip(*pts)
             ls = "-" if t == max(threads) else "--"
             label = f"{m}, {t} thread{'s' if t > 1 else ''}"
             axes[0].loglog(s, it, ls, label=label, **st)
             axes[1].loglog(s, step, ls, label=label, **st)
-            fits.append((m, t, len(s), g3(s[0]), g3(s[-1]), g3(fit_exponent(s, it)), g3(it[-1])))
+            fill_p = fit_exponent(s, fill) if all(f > 0 for f in fill) else math.nan
+            fits.append((m, t, len(s), g3(s[0]), g3(s[-1]), g3(fit_exponent(s, it)), g3(it[-1]),
+                         g3(fill_p)))
     axes[0].set_title("time per iteration (PCG / local-global iteration; a step otherwise)")
     axes[0].set_ylabel("seconds per iteration")
     axes[1].set_title("time per step (h = 0.01 s)")
@@ -53,7 +57,7 @@ def main(out_dir):
     fig.savefig(os.path.join(out_dir, "scaling.png"))
     md = ["Fitted exponent p of time per iteration ~ springs^p (least squares, log-log):\n",
           markdown_table(["method", "threads", "sizes", "smallest", "largest", "exponent p",
-                          "s / iteration at largest"], fits),
+                          "s / iteration at largest", "factor entries: exponent"], fits),
           "\nEvery run (seconds per step, split; peak resident memory of the run):\n",
           markdown_table(["method", "threads", "springs", "s/step", "iterations/step", "s/iteration",
                           "assembly", "factor", "solve", "local", "global", "peak MiB"],

@@ -33,6 +33,11 @@ std::string FastMassSpringOptions::validate() const {
   else if (chebyshev_delay < (chebyshev_rho == 0.0 ? 2 : 0))
     e << "chebyshev_delay = " << chebyshev_delay << ": must be >= 2 when rho is estimated";
   else if (lbfgs_history < 1) e << "lbfgs_history = " << lbfgs_history << ": must be >= 1";
+  else if (global_solver != "cholmod" && global_solver != "jacobi")
+    e << "global_solver = '" << global_solver << "': must be cholmod or jacobi";
+  else if (global_solver == "jacobi" && acceleration == "lbfgs")
+    e << "global_solver = 'jacobi': acceleration = 'lbfgs' needs the factored global matrix "
+         "(global_solver = 'cholmod'); use chebyshev or none";
   return e.str();
 }
 
@@ -96,10 +101,14 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
     }
   }
 
-  CholmodOptions chol_options;
-  chol_options.ordering = "metis";  // nested dissection: the least fill on cloth grids (measured)
-  m_chol = std::make_unique<CholmodSolver>(chol_options);
-  if (nf > 0) {
+  if (m_opt.global_solver == "jacobi") {
+    m_inv_diag.setZero(nf);
+  } else {
+    CholmodOptions chol_options;
+    chol_options.ordering = "metis";  // nested dissection: the least fill on cloth grids (measured)
+    m_chol = std::make_unique<CholmodSolver>(chol_options);
+  }
+  if (m_chol && nf > 0) {
     const LinearSummary a = m_chol->analyze(m_A);
     if (a.status != Status::Converged) throw SetupError("fast-mass-spring: " + a.message);
   }
@@ -115,13 +124,15 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
     m_alpha.assign(size_t(m_opt.lbfgs_history), 0.0);
   }
   size_t groups = 0;
-  for (const SpringSet* s : m_f.springs) groups = std::max(groups, s->group_start.size());
-  m_group_energy.assign(groups + 1, 0.0);
+  for (const SpringSet* s : m_f.springs) groups = std::max(groups, s->num_groups());
+  m_group_energy.assign(groups, 0.0);
 }
 
 FastMassSpringStepper::~FastMassSpringStepper() = default;
 
-double FastMassSpringStepper::factor_nonzeros() const { return m_chol->factor_nonzeros(); }
+double FastMassSpringStepper::factor_nonzeros() const {
+  return m_chol ? m_chol->factor_nonzeros() : 0.0;
+}
 
 void FastMassSpringStepper::prepare(double h) {
   if (h == m_factored_h && m_sys.revision() == m_factored_revision) return;
@@ -141,7 +152,9 @@ void FastMassSpringStepper::prepare(double h) {
   }
   const Vec& m = m_sys.masses();
   for (size_t r = 0; r < m_free.size(); ++r) a[m_diag[r]] += m[m_free[r]] / (h * h) + m_f.drag / h;
-  if (!m_free.empty()) {
+  if (!m_chol) {
+    for (size_t r = 0; r < m_free.size(); ++r) m_inv_diag[Index(r)] = 1.0 / a[m_diag[r]];
+  } else if (!m_free.empty()) {
     const LinearSummary f = m_chol->factor(m_A);
     // M/h^2 > 0 on the diagonal and a spring Laplacian make A symmetric positive definite, so a
     // failure here is a broken invariant (or a non-finite h), not a recoverable outcome.
@@ -176,8 +189,8 @@ double FastMassSpringStepper::local_step(ConstRef x) {
   for (const SpringSet* sp : m_f.springs) {
     const SpringSet& s = *sp;
     // Each spring's best direction d = L (x_i - x_j) / |x_i - x_j| enters b as +k d at i and -k d
-    // at j. Particle ranges run in parallel (SpringSet's partition: no two threads write one
-    // particle), energies are summed per range and then in range order: deterministic.
+    // at j. Spring groups run in parallel (SpringSet's phases: no two threads write one
+    // particle), energies are summed per group and then in group order: deterministic.
     auto body = [&](size_t k) {
       const int i = s.i[k], j = s.j[k];
       const Vec3 e = x.segment<3>(3 * i) - x.segment<3>(3 * j);
@@ -188,19 +201,16 @@ double FastMassSpringStepper::local_step(ConstRef x) {
       m_acc.segment<3>(3 * j) -= c * d;
       return 0.5 * c * (l - L) * (l - L);
     };
-    const long long groups = s.group_start.empty() ? 0 : (long long)s.group_start.size() - 1;
-    if (run_parallel(groups, 2)) {
-#pragma omp parallel for schedule(dynamic, 1)
-      for (long long g = 0; g < groups; ++g) {
-        double e = 0.0;
-        for (size_t k = s.group_start[size_t(g)]; k < s.group_start[size_t(g) + 1]; ++k) e += body(k);
-        m_group_energy[size_t(g)] = e;
-      }
-      for (long long g = 0; g < groups; ++g) energy += m_group_energy[size_t(g)];
-      for (size_t k = s.group_start.back(); k < s.size(); ++k) energy += body(k);
-    } else {
+    if (s.num_groups() == 0) {
       for (size_t k = 0; k < s.size(); ++k) energy += body(k);
+      continue;
     }
+    s.for_each_group([&](size_t g) {
+      double e = 0.0;
+      for (size_t k = s.group_start[g]; k < s.group_start[g + 1]; ++k) e += body(k);
+      m_group_energy[g] = e;
+    });
+    for (size_t g = 0; g < s.num_groups(); ++g) energy += m_group_energy[g];
   }
   for (size_t r = 0; r < m_free.size(); ++r)
     m_B.row(Index(r)) = m_const.row(Index(r)) + m_acc.segment<3>(3 * m_free[r]).transpose();
@@ -250,6 +260,39 @@ void FastMassSpringStepper::gather(ConstRef x, Rows3& X) const {
 
 void FastMassSpringStepper::scatter(const Rows3& X, VecRef x) const {
   for (size_t r = 0; r < m_free.size(); ++r) x.segment<3>(3 * m_free[r]) = X.row(Index(r)).transpose();
+}
+
+void FastMassSpringStepper::jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X) {
+  // A is symmetric with both triangles stored, so column r lists row r's entries. Rows are
+  // independent: the parallel loop gives the same bits on any thread count.
+  const auto t0 = Clock::now();
+  const long long nf = static_cast<long long>(m_free.size());
+  const int* start = m_A.outerIndexPtr();
+  const int* index = m_A.innerIndexPtr();
+  const double* value = m_A.valuePtr();
+  const Index* free = m_free.data();
+  const double* px = x.data();
+  auto row = [&](long long r) {
+    double s0 = 0.0, s1 = 0.0, s2 = 0.0;
+    for (int k = start[r]; k < start[r + 1]; ++k) {
+      const double* xk = px + 3 * free[index[k]];
+      s0 += value[k] * xk[0];
+      s1 += value[k] * xk[1];
+      s2 += value[k] * xk[2];
+    }
+    const double* xr = px + 3 * free[r];
+    const double d = m_inv_diag[Index(r)];
+    X(Index(r), 0) = xr[0] + d * (B(Index(r), 0) - s0);
+    X(Index(r), 1) = xr[1] + d * (B(Index(r), 1) - s1);
+    X(Index(r), 2) = xr[2] + d * (B(Index(r), 2) - s2);
+  };
+  if (run_parallel(nf, 1 << 14)) {
+#pragma omp parallel for schedule(static)
+    for (long long r = 0; r < nf; ++r) row(r);
+  } else {
+    for (long long r = 0; r < nf; ++r) row(r);
+  }
+  m_global_seconds += since(t0);
 }
 
 Status FastMassSpringStepper::global_solve(const Rows3& B, Rows3& X,
@@ -309,8 +352,10 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
         g_prev = g;
       }
       if (k == N) break;
-      // Global step: xhat = A^{-1} b(d(x_k)).
-      if (global_solve(m_B, m_X, out.message) != Status::Converged) {
+      // Global step: xhat = A^{-1} b(d(x_k)), or one Jacobi sweep towards it from x_k.
+      if (!m_chol) {
+        jacobi_sweep(m_B, m_x, m_X);
+      } else if (global_solve(m_B, m_X, out.message) != Status::Converged) {
         out.status = Status::Fatal;
         return out;
       }
@@ -455,9 +500,10 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
 
 std::string FastMassSpringStepper::report() const {
   std::ostringstream r;
-  r << "fast-mass-spring (" << m_opt.acceleration << "): " << m_steps << " steps, " << m_iterations
+  r << "fast-mass-spring (" << m_opt.acceleration << ", " << m_opt.global_solver << "): " << m_steps << " steps, " << m_iterations
     << " iterations (" << (m_steps ? double(m_iterations) / double(m_steps) : 0.0) << " per step), "
-    << m_factorizations << " factorizations (" << m_factor_seconds << " s), local steps "
+    << m_factorizations << (m_chol ? " factorizations (" : " matrix refreshes (") << m_factor_seconds
+    << " s), local steps "
     << m_local_seconds << " s, global solves " << m_global_seconds << " s";
   if (m_opt.acceleration == "lbfgs") r << ", " << m_line_search_trials << " line-search evaluations";
   if (m_opt.acceleration == "chebyshev") r << ", " << m_chebyshev_restarts << " Chebyshev restarts";

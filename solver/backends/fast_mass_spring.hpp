@@ -36,6 +36,13 @@ struct FastMassSpringOptions {
   int chebyshev_delay = 10;
   /// L-BFGS: number of (s, t) pairs kept, >= 1.
   int lbfgs_history = 5;
+  /// How the global step treats A x = b: "cholmod" solves it exactly with the prefactored matrix
+  /// (Liu et al. 2013); "jacobi" takes one Jacobi sweep x <- x + D^-1 (b - A x) from the current
+  /// iterate (Wang 2015, the GPU-friendly variant): no factorization, no fill, cost per iteration
+  /// linear in the springs, but many more iterations, so pair it with acceleration = "chebyshev"
+  /// and a tolerance or a large iteration count. Both converge to the same exact backward-Euler
+  /// step. "jacobi" cannot take acceleration = "lbfgs" (its initial Hessian is A^-1).
+  std::string global_solver = "cholmod";
   /// Called after every iteration with the iteration number (1-based) and the current positions
   /// (3n vector, pinned particles included). For convergence studies; empty = none. Its time is
   /// not counted in report().
@@ -68,7 +75,8 @@ std::string fast_mass_spring_unsupported(const MassSpringSystem& system);
 /// are eliminated and move with their velocity (x1 = x0 + h v0, v1 = v0).
 ///
 /// The matrix is analysed once (its pattern never changes) and factored again only when h or the
-/// system's revision() (a stiffness change) differs from the factored one.
+/// system's revision() (a stiffness change) differs from the factored one. With global_solver =
+/// "jacobi" the global step is one Jacobi sweep instead (see FastMassSpringOptions).
 class FastMassSpringStepper final : public Stepper {
  public:
   /// Free particles x 3, row-major: row r holds x, y, z of free particle r, contiguous (the
@@ -87,18 +95,19 @@ class FastMassSpringStepper final : public Stepper {
 
   /// The objective g(x) of the step from s0 with size h (J, up to a constant), x a 3n vector.
   double objective(const State& s0, double h, ConstRef x) const;
-  /// Numeric factorizations so far (one per distinct h or stiffness revision in a row).
+  /// Numeric factorizations so far (one per distinct h or stiffness revision in a row; with
+  /// global_solver = "jacobi", the matrix value refreshes, which happen at the same times).
   int factorizations() const { return m_factorizations; }
   /// Seconds spent in the last factorization.
   double last_factor_seconds() const { return m_last_factor_seconds; }
   /// Seconds spent so far in local steps (spring directions and right-hand sides) and in global
-  /// solves (the triangular solves with three right-hand sides).
+  /// steps (the triangular solves with three right-hand sides, or the Jacobi sweeps).
   double local_seconds() const { return m_local_seconds; }
   double global_seconds() const { return m_global_seconds; }
   /// The global matrix M/h^2 + C/h + L of the free particles (free x free, both triangles), with
   /// the values of the last factorization.
   const SparseMatrix& global_matrix() const { return m_A; }
-  /// Nonzeros of the Cholesky factor of the global matrix.
+  /// Nonzeros of the Cholesky factor of the global matrix (0 with global_solver = "jacobi").
   double factor_nonzeros() const;
 
  private:
@@ -109,6 +118,8 @@ class FastMassSpringStepper final : public Stepper {
   void gather(ConstRef x, Rows3& X) const;
   void scatter(const Rows3& X, VecRef x) const;
   Status global_solve(const Rows3& B, Rows3& X, std::string& message);
+  /// X = x + D^-1 (B - A x) on the free rows, x the current 3n iterate (global_solver = "jacobi").
+  void jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X);
 
   const MassSpringSystem& m_sys;
   FastMassSpringOptions m_opt;
@@ -124,7 +135,8 @@ class FastMassSpringStepper final : public Stepper {
     size_t set, spring;
   };
   std::vector<PinLink> m_pin_links;
-  std::unique_ptr<CholmodSolver> m_chol;
+  std::unique_ptr<CholmodSolver> m_chol;  // null with global_solver = "jacobi"
+  Vec m_inv_diag;                          // 1 / A_rr (global_solver = "jacobi")
   double m_factored_h = 0.0;
   unsigned long long m_factored_revision = ~0ULL;
   int m_factorizations = 0;

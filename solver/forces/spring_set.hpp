@@ -11,21 +11,26 @@ namespace hooke {
 /// Topology shared by per-spring forces: endpoints, one coefficient and rest length per spring,
 /// and the four block slots (ii, jj, ij, ji) of each spring in the Jacobian pattern.
 ///
-/// bind() also partitions the particles into contiguous id ranges (their number depends on the
-/// system size only, never on the thread count) and reorders the springs stably: first the springs
-/// with both ends in range 0, then in range 1, ..., then the "boundary" springs that join two
-/// ranges. for_each() runs the ranges in parallel (OpenMP), each in spring order, then the boundary
-/// springs serially. Every particle is written by one thread at a time, so scattering forces and
-/// Jacobian blocks needs no atomics; each particle's summation order is fixed, so results are the
-/// same bit for bit for any thread count; and springs keep their mesh order, so memory access stays
-/// as local as the serial loop's (a colouring would scatter it).
+/// bind() also partitions the particles into R contiguous id ranges (R depends on the system size
+/// only, never on the thread count) and reorders the springs stably into groups: first the springs
+/// with both ends in range 0, 1, ..., R-1 (the interior groups); then the springs joining ranges
+/// lo and lo + 1, for even lo, then for odd lo (the boundary groups); last the springs joining two
+/// ranges further apart (the remainder). for_each() runs four phases: the interior groups in
+/// parallel, the even boundary groups in parallel, the odd ones in parallel (groups of one phase
+/// touch disjoint particle ranges), then the remainder serially. Every particle is written by one
+/// thread at a time, so scattering forces and Jacobian blocks needs no atomics; each particle's
+/// summation order is the storage order, so results are the same bit for bit for any thread count;
+/// and springs keep their mesh order within a group, so memory access stays as local as the serial
+/// loop's (a colouring would scatter it). On a cloth grid the remainder is empty, so nothing runs
+/// serially.
 struct SpringSet {
   std::vector<int> i, j;           ///< endpoint particle ids
   std::vector<double> coeff;       ///< stiffness (N/m) or damping (N s/m), per spring
   std::vector<double> rest_length; ///< rest length L (m), per spring
   std::vector<std::array<BlockSlot, 4>> slots;  ///< filled by bind()
-  std::vector<size_t> group_start;  ///< springs inside particle range g: [group_start[g], group_start[g+1]);
-                                   ///< boundary springs: [group_start.back(), size())
+  std::vector<size_t> group_start;  ///< group g holds springs [group_start[g], group_start[g+1])
+  std::array<size_t, 5> phase_start{};  ///< phase p runs groups [phase_start[p], phase_start[p+1]):
+                                        ///< interior, even boundary, odd boundary, remainder
 
   size_t size() const { return i.size(); }
   void add(int a, int b, double c, double L) {
@@ -43,37 +48,63 @@ struct SpringSet {
     for (size_t s = 0; s < size(); ++s)
       slots[s] = {p.slot(i[s], i[s]), p.slot(j[s], j[s]), p.slot(i[s], j[s]), p.slot(j[s], i[s])};
   }
-  /// Calls body(n) for every spring: particle ranges in parallel once bound, then the boundary.
+  /// Number of spring groups (0 before bind()).
+  size_t num_groups() const { return group_start.empty() ? 0 : group_start.size() - 1; }
+  /// Calls body(g) for every group g in the phase order of the class comment: groups of the first
+  /// three phases in parallel once bound (body must then write only the particles of group g's
+  /// springs, or per-group slots), the remainder serially. Unbound: body(0) is not called; use
+  /// for_each.
+  template <typename GroupBody>
+  void for_each_group(GroupBody&& body) const {
+    const long long groups = static_cast<long long>(num_groups());
+    if (!run_parallel(static_cast<long long>(phase_start[1]), 2)) {  // serial: the groups in storage (= phase) order
+      for (long long g = 0; g < groups; ++g) body(size_t(g));
+      return;
+    }
+#pragma omp parallel
+    for (int p = 0; p < 3; ++p) {
+#pragma omp for schedule(dynamic, 1)
+      for (long long g = (long long)phase_start[size_t(p)]; g < (long long)phase_start[size_t(p) + 1]; ++g)
+        body(size_t(g));
+    }
+    for (size_t g = phase_start[3]; g < phase_start[4]; ++g) body(g);
+  }
+  /// Calls body(n) for every spring: in storage order when unbound, else group by group as
+  /// for_each_group does.
   template <typename Body>
   void for_each(Body&& body) const {
-    const long long groups =
-        group_start.empty() ? 0 : static_cast<long long>(group_start.size()) - 1;
-    if (!run_parallel(groups, 2)) {  // serial: spring order within the one range, then the boundary
+    if (group_start.empty()) {
       for (size_t n = 0; n < size(); ++n) body(n);
       return;
     }
-#pragma omp parallel for schedule(dynamic, 1)
-    for (long long g = 0; g < groups; ++g)
-      for (size_t n = group_start[size_t(g)]; n < group_start[size_t(g) + 1]; ++n) body(n);
-    for (size_t n = group_start.back(); n < size(); ++n) body(n);
+    for_each_group([&](size_t g) {
+      for (size_t n = group_start[g]; n < group_start[g + 1]; ++n) body(n);
+    });
   }
   /// Splits particles into ranges of about 8192 ids (at most 256 ranges) and reorders the springs
-  /// stably by range, boundary springs last (setup time only).
+  /// stably into the groups of the class comment (setup time only).
   void partition(long long num_particles) {
     const size_t m = size();
-    const long long ranges = std::clamp(num_particles / 8192, 1LL, 256LL);
-    const long long width = (num_particles + ranges - 1) / ranges;
-    std::vector<long long> key(m);  // range of an interior spring, or `ranges` for boundary ones
+    const long long R = std::clamp(num_particles / 8192, 1LL, 256LL);
+    const long long width = std::max(1LL, (num_particles + R - 1) / R);
+    const long long even = R / 2;  // boundaries lo = 0, 2, 4, ... < R - 1
+    std::vector<long long> key(m);
     for (size_t n = 0; n < m; ++n) {
-      const long long ra = i[n] / width, rb = j[n] / width;
-      key[n] = ra == rb ? ra : ranges;
+      const long long ra = i[n] / width, rb = j[n] / width, lo = std::min(ra, rb);
+      if (ra == rb)
+        key[n] = ra;
+      else if (std::max(ra, rb) == lo + 1)
+        key[n] = R + (lo % 2 == 0 ? lo / 2 : even + lo / 2);
+      else
+        key[n] = 2 * R - 1;
     }
-    group_start.assign(size_t(ranges) + 2, 0);
+    const size_t groups = size_t(2 * R);
+    phase_start = {0, size_t(R), size_t(R + even), size_t(2 * R - 1), groups};
+    group_start.assign(groups + 1, 0);
     for (size_t n = 0; n < m; ++n) group_start[size_t(key[n]) + 1]++;
-    for (long long g = 0; g <= ranges; ++g) group_start[size_t(g) + 1] += group_start[size_t(g)];
+    for (size_t g = 0; g < groups; ++g) group_start[g + 1] += group_start[g];
     std::vector<size_t> next(group_start.begin(), group_start.end() - 1), order(m);
     for (size_t n = 0; n < m; ++n) order[next[size_t(key[n])]++] = n;
-    group_start.pop_back();  // the last entry now marks the start of the boundary springs
     auto permute = [&](auto& v) {
       auto old = v;
       for (size_t n = 0; n < m; ++n) v[n] = old[order[n]];

@@ -413,16 +413,18 @@ TEST(Allocation, CholmodAllocatesOnlyInFactor) {
 
 // The same claim for the local/global and XPBD steppers, on the cloth without spring dampers
 // (which they refuse): after 2 warm-up steps (the first one factors the global matrix once), 50
-// steps of every fast-mass-spring variant, with fixed iterations and with the tolerance stop, and
-// of XPBD allocate nothing.
+// steps of every fast-mass-spring variant (accelerations, factored and Jacobi global steps), with
+// fixed iterations and with the tolerance stop, and of XPBD allocate nothing.
 TEST(Allocation, LocalGlobalAndXpbdStepsDoNotAllocate) {
   auto sys = make_cloth(false);
   const double h = 1e-3;
   std::vector<std::pair<std::string, hooke::MethodOptions>> runs;
-  for (const char* a : {"none", "chebyshev", "lbfgs"})
+  for (const char* a : {"none", "chebyshev", "lbfgs", "none/jacobi", "chebyshev/jacobi"})
     for (double tol : {0.0, 1e-6}) {
       hooke::MethodOptions o;
-      o.fast_mass_spring.acceleration = a;
+      const std::string variant = a;
+      o.fast_mass_spring.acceleration = variant.substr(0, variant.find('/'));
+      if (variant.find("/jacobi") != std::string::npos) o.fast_mass_spring.global_solver = "jacobi";
       o.fast_mass_spring.tolerance = tol;
       o.fast_mass_spring.iterations = 20;
       o.fast_mass_spring.chebyshev_delay = 4;
@@ -432,7 +434,8 @@ TEST(Allocation, LocalGlobalAndXpbdStepsDoNotAllocate) {
     }
   runs.emplace_back("xpbd", hooke::MethodOptions{});
   for (const auto& [name, opt] : runs) {
-    const std::string label = name + " / " + opt.fast_mass_spring.acceleration + " / tol " +
+    const std::string label = name + " / " + opt.fast_mass_spring.acceleration + " / " +
+                              opt.fast_mass_spring.global_solver + " / tol " +
                               std::to_string(opt.fast_mass_spring.tolerance);
     hooke::Simulation sim(*sys, hooke::make_stepper(name, *sys, opt), cloth_state());
     for (int k = 0; k < 2; ++k) ASSERT_NE(sim.advance(h).status, hooke::Status::Fatal) << label;
