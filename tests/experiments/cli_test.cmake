@@ -223,13 +223,13 @@ elseif(CASE STREQUAL "scaling")
   expect_rc(0)
   expect_csv("${OUT}/scaling.csv"
              "method,threads,springs,particles,steps,step_s,iterations_per_step,iteration_s,assembly_s,factor_s,solve_s,local_s,global_s,setup_s,peak_mib,factor_nnz,status"
-             29)
+             33)
   file(READ "${OUT}/scaling.csv" text)
   if(text MATCHES "failed")
     message(FATAL_ERROR "a scaling run failed${report}")
   endif()
   foreach(m symplectic-euler xpbd fast-mass-spring fast-mass-spring-jacobi implicit-pcg
-            implicit-pcg-cholmod implicit-cholmod)
+            implicit-pcg-cholmod implicit-pcg-nodal implicit-cholmod)
     expect_contains("${text}" "${m},2,7846,1369," "scaling.csv")
   endforeach()
   expect_file("${OUT}/scaling.png")

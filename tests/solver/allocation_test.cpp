@@ -298,7 +298,7 @@ int openmp_threads() {
 TEST(Allocation, ImplicitStepsDoNotAllocate) {
   auto sys = make_cloth();
   const double h = 1e-3;
-  int runs = 0;
+  int runs = 0, refactoring_runs = 0;  // refactoring_runs: a reused factorization was renewed
   for (const auto& method : hooke::methods()) {
     if (method.kind != hooke::MethodKind::Implicit) continue;
     for (const auto& backend : hooke::linear_solvers()) {
@@ -338,17 +338,19 @@ TEST(Allocation, ImplicitStepsDoNotAllocate) {
         EXPECT_FALSE(messages) << label;
         EXPECT_TRUE(sim.state().is_finite()) << label;
         EXPECT_NEAR(sim.state().t, 52 * h, 1e-12) << label;
-        if (std::string(backend.name) == "cholmod" || reuses) {
+        int factored = 0;
+        for (int k = 0; k < 50; ++k) factored += factorizations[size_t(k)];
+        // A reused factorization may stay good for all 50 steps (pcg-nodal on this small cloth):
+        // then no step may allocate at all, which the else branch checks.
+        if (std::string(backend.name) == "cholmod" || (reuses && factored > 0)) {
           // Only steps that run CHOLMOD's numeric factorization allocate (inside CHOLMOD), the
           // same count per factorization every time; every other step allocates nothing.
           long per_factor = -1;
-          int factored = 0;
-          for (int k = 0; k < 50; ++k) {
-            factored += factorizations[size_t(k)];
+          for (int k = 0; k < 50; ++k)
             if (per_factor < 0 && factorizations[size_t(k)] > 0)
               per_factor = per_step[size_t(k)] / factorizations[size_t(k)];
-          }
           ASSERT_GT(factored, 0) << label;
+          refactoring_runs += reuses;
           std::printf("[ alloc    ] %-40s %ld allocations per CHOLMOD factorization, %d in 50 steps\n",
                       label.c_str(), per_factor, factored);
           for (int k = 0; k < 50; ++k)
@@ -364,6 +366,12 @@ TEST(Allocation, ImplicitStepsDoNotAllocate) {
     }
   }
   EXPECT_EQ(runs, 3 * 2 * int(hooke::linear_solvers().size()));
+  // pcg-cholmod renews its factorization within the 50 steps: the per-factorization check ran.
+  bool reusing = false;
+  for (const auto& b : hooke::linear_solvers()) reusing = reusing || std::string(b.name) == "pcg-cholmod";
+  if (reusing) {
+    EXPECT_GT(refactoring_runs, 0);
+  }
 }
 
 // Where CHOLMOD's allocations come from: on a warmed-up backend, solve() allocates nothing (its
