@@ -40,7 +40,7 @@ bool SpringDamper::add_jacobian_product(ConstRef x, ConstRef v, const JacobianOp
     Vec3 q = (-cv * s.coeff[n] * d.dot(dp) / l2) * d;
     if (options.damping_position_terms) {
       const Vec3 w = v.segment<3>(3 * a) - v.segment<3>(3 * b);
-      q += cx * (spring_damper_kernel::dfdx(d, w, s.coeff[n]) * dp);
+      q += cx * spring_damper_kernel::dfdx_times(d, w, s.coeff[n], dp);
     }
     y.segment<3>(3 * a) += q;
     y.segment<3>(3 * b) -= q;

@@ -1,4 +1,6 @@
 #pragma once
+#include <cmath>
+
 #include "hooke/forces/force.hpp"
 #include "hooke/forces/spring_set.hpp"
 
@@ -11,24 +13,33 @@ namespace hooke {
 ///   df_a/dx_a    -(c / l) [ u (P w)^T + (u . w) P ]   (not symmetric)
 /// and the (a, b) blocks are the negatives. At l = 0 the force and both blocks are zero.
 namespace spring_damper_kernel {
+// u (u . w) = d (d . w) / l^2: the force and df/dv need no square root and one division.
 inline Vec3 force(const Vec3& d, const Vec3& w, double c) {
-  const double l = d.norm();
-  if (l == 0.0) return Vec3::Zero();
-  const Vec3 u = d / l;
-  return (-c * u.dot(w)) * u;
+  const double l2 = d.squaredNorm();
+  if (l2 == 0.0) return Vec3::Zero();
+  return (-c * d.dot(w) / l2) * d;
 }
 inline Mat3 dfdv(const Vec3& d, double c) {
-  const double l = d.norm();
-  if (l == 0.0) return Mat3::Zero();
-  const Vec3 u = d / l;
-  return -c * (u * u.transpose());
+  const double l2 = d.squaredNorm();
+  if (l2 == 0.0) return Mat3::Zero();
+  return (-c / l2) * (d * d.transpose());
 }
 inline Mat3 dfdx(const Vec3& d, const Vec3& w, double c) {
   const double l = d.norm();
   if (l == 0.0) return Mat3::Zero();
-  const Vec3 u = d / l;
+  const Vec3 u = (1.0 / l) * d;
   const Mat3 P = Mat3::Identity() - u * u.transpose();
   return (-c / l) * (u * (P * w).transpose() + u.dot(w) * P);
+}
+/// dfdx(d, w, c) p without forming the block: -(c / l) [u (P w . p) + (u . w) P p].
+inline Vec3 dfdx_times(const Vec3& d, const Vec3& w, double c, const Vec3& p) {
+  const double l2 = d.squaredNorm();
+  if (l2 == 0.0) return Vec3::Zero();
+  const double inv_l = 1.0 / std::sqrt(l2);
+  const Vec3 u = inv_l * d;
+  const double uw = u.dot(w), up = u.dot(p);
+  const Vec3 Pw = w - uw * u, Pp = p - up * u;
+  return (-c * inv_l) * (Pw.dot(p) * u + uw * Pp);
 }
 }  // namespace spring_damper_kernel
 

@@ -59,13 +59,21 @@ std::unique_ptr<Step> make_step(int n, double stiffness_scale, double h) {
   return s;
 }
 
+/// The preconditioner analysed and factored on A (the call results are checked).
+std::unique_ptr<hooke::NodalPreconditioner> factored(const SparseMatrix& A) {
+  auto pre = std::make_unique<hooke::NodalPreconditioner>();
+  const hooke::LinearSummary a = pre->analyze(A);
+  EXPECT_EQ(a.status, Status::Converged) << a.message;
+  const hooke::LinearSummary f = pre->factor(A);
+  EXPECT_EQ(f.status, Status::Converged) << f.message;
+  return pre;
+}
+
 TEST(NodalPreconditioner, NodalMatrixIsTheMeanOfTheCoordinateSubmatrices) {
   const auto step = make_step(8, 1.0, 1e-2);
   const SparseMatrix& A = step->reduced->matrix();
-  hooke::NodalPreconditioner pre;
-  ASSERT_EQ(pre.analyze(A).status, Status::Converged);
-  ASSERT_EQ(pre.factor(A).status, Status::Converged);
-  const Eigen::MatrixXd Ad(A), Nd(pre.nodal_matrix());
+  const auto pre = factored(A);
+  const Eigen::MatrixXd Ad(A), Nd(pre->nodal_matrix());
   const Index n = A.rows() / 3;
   ASSERT_EQ(Nd.rows(), n);
   int compared = 0, nonzero = 0;
@@ -86,21 +94,19 @@ TEST(NodalPreconditioner, NodalMatrixIsTheMeanOfTheCoordinateSubmatrices) {
 TEST(NodalPreconditioner, SolveAppliesTheInverseOfNTimesIdentity3) {
   const auto step = make_step(12, 1.0, 1e-2);
   const SparseMatrix& A = step->reduced->matrix();
-  hooke::NodalPreconditioner pre;
-  ASSERT_EQ(pre.analyze(A).status, Status::Converged);
-  ASSERT_EQ(pre.factor(A).status, Status::Converged);
-  const SparseMatrix& N = pre.nodal_matrix();
+  const auto pre = factored(A);
+  const SparseMatrix& N = pre->nodal_matrix();
   for (unsigned seed : {1u, 2u}) {
     const Vec b = hooke::test::random_vector(A.rows(), seed);
     Vec x(b.size());
-    ASSERT_EQ(pre.solve(b, x, {}).status, Status::Converged);
+    ASSERT_EQ(pre->solve(b, x, {}).status, Status::Converged);
     // (N (x) I3) x: coordinate c of particle p is sum_q N_pq x[3q + c].
     const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> X(x.data(), 3, N.rows());
     const Eigen::MatrixXd back = X * N;  // N symmetric: (N X^T)^T = X N
     const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> B(b.data(), 3, N.rows());
     EXPECT_LT((back - B).norm(), 1e-10 * B.norm()) << "seed " << seed;
     Vec y = b;  // in place
-    ASSERT_EQ(pre.solve(y, y, {}).status, Status::Converged);
+    ASSERT_EQ(pre->solve(y, y, {}).status, Status::Converged);
     EXPECT_LT((y - x).norm(), 1e-14 * x.norm());
   }
 }
