@@ -500,11 +500,11 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
 
 std::string FastMassSpringStepper::report() const {
   std::ostringstream r;
-  r << "fast-mass-spring (" << m_opt.acceleration << ", " << m_opt.global_solver << "): " << m_steps << " steps, " << m_iterations
-    << " iterations (" << (m_steps ? double(m_iterations) / double(m_steps) : 0.0) << " per step), "
-    << m_factorizations << (m_chol ? " factorizations (" : " matrix refreshes (") << m_factor_seconds
-    << " s), local steps "
-    << m_local_seconds << " s, global solves " << m_global_seconds << " s";
+  r << "fast-mass-spring (" << m_opt.acceleration << ", " << m_opt.global_solver << "): " << m_steps
+    << " steps, " << m_iterations << " iterations ("
+    << (m_steps ? double(m_iterations) / double(m_steps) : 0.0) << " per step), " << m_factorizations
+    << (m_chol ? " factorizations (" : " matrix refreshes (") << m_factor_seconds << " s), local steps "
+    << m_local_seconds << " s, global steps " << m_global_seconds << " s";
   if (m_opt.acceleration == "lbfgs") r << ", " << m_line_search_trials << " line-search evaluations";
   if (m_opt.acceleration == "chebyshev") r << ", " << m_chebyshev_restarts << " Chebyshev restarts";
   return r.str();

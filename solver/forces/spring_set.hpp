@@ -57,7 +57,8 @@ struct SpringSet {
   template <typename GroupBody>
   void for_each_group(GroupBody&& body) const {
     const long long groups = static_cast<long long>(num_groups());
-    if (!run_parallel(static_cast<long long>(phase_start[1]), 2)) {  // serial: the groups in storage (= phase) order
+    // Serial (fewer than two interior groups, or one thread): the groups in storage = phase order.
+    if (!run_parallel(static_cast<long long>(phase_start[1]), 2)) {
       for (long long g = 0; g < groups; ++g) body(size_t(g));
       return;
     }
