@@ -192,7 +192,7 @@ int main(int argc, char** argv) {
     return all;
   }() + " (default: all)");
   scaling->add_option("--threads", scal_threads, "comma-separated thread counts (default 1,2)");
-  scaling->add_option("--steps", scal.steps, "timed steps after one warm-up step (default 2)");
+  scaling->add_option("--steps", scal.steps, "timed steps after one warm-up step (default 4)");
   scaling->add_option("--out", out_dir, "output directory (default out/scaling)");
   scaling->add_flag("--no-plot", no_plot, "write the CSV only");
 
