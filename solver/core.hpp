@@ -85,6 +85,19 @@ inline bool run_parallel(long long work, long long threshold) {
 #endif
 }
 
+/// Calls body(i) for i in [0, n): in a static-schedule OpenMP loop when run_parallel(n, threshold),
+/// else serially. For per-particle loops whose iterations write disjoint entries, so the result
+/// does not depend on the thread count.
+template <typename Body>
+inline void parallel_for(long long n, long long threshold, Body&& body) {
+  if (run_parallel(n, threshold)) {
+#pragma omp parallel for schedule(static)
+    for (long long i = 0; i < n; ++i) body(i);
+  } else {
+    for (long long i = 0; i < n; ++i) body(i);
+  }
+}
+
 }  // namespace hooke
 
 /// Checks a programmer-level precondition (sizes, invariants) and throws hooke::InternalError with

@@ -3,7 +3,8 @@
 namespace hooke {
 
 void AirDrag::add_forces(ConstRef /*x*/, ConstRef v, VecRef f) const {
-  for (Index i = 0; i < m_n; ++i) f.segment<3>(3 * i) -= m_c * (v.segment<3>(3 * i) - m_wind);
+  parallel_for(m_n, 1 << 15,
+               [&](long long i) { f.segment<3>(3 * i) -= m_c * (v.segment<3>(3 * i) - m_wind); });
 }
 
 void AirDrag::bind(const BlockPattern& p) {

@@ -3,7 +3,7 @@
 namespace hooke {
 
 void Gravity::add_forces(ConstRef /*x*/, ConstRef /*v*/, VecRef f) const {
-  for (Index i = 0; i < m_masses.size(); ++i) f.segment<3>(3 * i) += m_masses[i] * m_g;
+  parallel_for(m_masses.size(), 1 << 15, [&](long long i) { f.segment<3>(3 * i) += m_masses[i] * m_g; });
 }
 
 double Gravity::potential_energy(ConstRef x) const {

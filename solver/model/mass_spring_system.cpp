@@ -45,7 +45,7 @@ void MassSpringSystem::compute_forces(ConstRef x, ConstRef v, VecRef f) const {
   HOOKE_ASSERT(x.size() == dofs() && v.size() == dofs() && f.size() == dofs(),
                "compute_forces: sizes " << x.size() << ", " << v.size() << ", " << f.size()
                                         << " for " << dofs() << " dofs");
-  f.setZero();
+  parallel_for(num_particles(), 1 << 15, [&](long long p) { f.segment<3>(3 * p).setZero(); });
   for (const auto& force : m_forces) force->add_forces(x, v, f);
 }
 
