@@ -272,7 +272,7 @@ void FastMassSpringStepper::jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X) {
   const double* value = m_A.valuePtr();
   const Index* free = m_free.data();
   const double* px = x.data();
-  auto row = [&](long long r) {
+  parallel_for(nf, 1 << 14, [&](long long r) {
     double s0 = 0.0, s1 = 0.0, s2 = 0.0;
     for (int k = start[r]; k < start[r + 1]; ++k) {
       const double* xk = px + 3 * free[index[k]];
@@ -285,13 +285,7 @@ void FastMassSpringStepper::jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X) {
     X(Index(r), 0) = xr[0] + d * (B(Index(r), 0) - s0);
     X(Index(r), 1) = xr[1] + d * (B(Index(r), 1) - s1);
     X(Index(r), 2) = xr[2] + d * (B(Index(r), 2) - s2);
-  };
-  if (run_parallel(nf, 1 << 14)) {
-#pragma omp parallel for schedule(static)
-    for (long long r = 0; r < nf; ++r) row(r);
-  } else {
-    for (long long r = 0; r < nf; ++r) row(r);
-  }
+  });
   m_global_seconds += since(t0);
 }
 

@@ -34,28 +34,15 @@ void ImplicitOperator::apply(ConstRef p, VecRef y) {
   const long long nf = static_cast<long long>(m_free.size());
   const int* free = m_free.data();
   // P = p on the free DOFs (pinned stay 0), Y = M P.
-  if (run_parallel(nf, 1 << 16)) {
-#pragma omp parallel for schedule(static)
-    for (long long k = 0; k < nf; ++k) {
-      m_P[free[k]] = p[k];
-      m_Y[free[k]] = m_mass[free[k]] * p[k];
-    }
-  } else {
-    for (long long k = 0; k < nf; ++k) {
-      m_P[free[k]] = p[k];
-      m_Y[free[k]] = m_mass[free[k]] * p[k];
-    }
-  }
+  parallel_for(nf, 1 << 16, [&](long long k) {
+    m_P[free[k]] = p[k];
+    m_Y[free[k]] = m_mass[free[k]] * p[k];
+  });
   for (const int d : m_pinned) m_Y[d] = 0.0;  // rows that are dropped; keep them bounded
   const Index n3 = m_P.size();
   const Eigen::Map<const Vec> x(m_x, n3), v(m_v, n3);
   for (const auto& f : m_sys.forces()) f->add_jacobian_product(x, v, m_options, m_P, -m_a, -m_b, m_Y);
-  if (run_parallel(nf, 1 << 16)) {
-#pragma omp parallel for schedule(static)
-    for (long long k = 0; k < nf; ++k) y[k] = m_Y[free[k]];
-  } else {
-    for (long long k = 0; k < nf; ++k) y[k] = m_Y[free[k]];
-  }
+  parallel_for(nf, 1 << 16, [&](long long k) { y[k] = m_Y[free[k]]; });
 }
 
 }  // namespace hooke

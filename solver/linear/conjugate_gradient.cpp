@@ -106,12 +106,9 @@ void ConjugateGradientSolver::apply_preconditioner(const Vec& r, Vec& z) const {
     case Preconditioner::Jacobi: z = m_inv_diag.cwiseProduct(r); break;
     case Preconditioner::BlockJacobi: {
       const Index nb = r.size() / 3;
-      if (run_parallel(nb, 4096)) {
-#pragma omp parallel for schedule(static)
-        for (Index b = 0; b < nb; ++b) z.segment<3>(3 * b) = m_inv_blocks[size_t(b)] * r.segment<3>(3 * b);
-      } else {
-        for (Index b = 0; b < nb; ++b) z.segment<3>(3 * b) = m_inv_blocks[size_t(b)] * r.segment<3>(3 * b);
-      }
+      parallel_for(nb, 4096, [&](long long b) {
+        z.segment<3>(3 * b) = m_inv_blocks[size_t(b)] * r.segment<3>(3 * b);
+      });
       break;
     }
   }

@@ -78,12 +78,9 @@ LinearSummary JacobiSolver::factor(const SparseMatrix& A) {
 void JacobiSolver::sweep(ConstRef /*b*/, VecRef x) {
   // m_r holds b - A x from the residual check of the previous iteration.
   const Index nb = x.size() / 3;
-  if (run_parallel(nb, 4096)) {
-#pragma omp parallel for schedule(static)
-    for (Index i = 0; i < nb; ++i) x.segment<3>(3 * i) += m_inv_blocks[size_t(i)] * m_r.segment<3>(3 * i);
-  } else {
-    for (Index i = 0; i < nb; ++i) x.segment<3>(3 * i) += m_inv_blocks[size_t(i)] * m_r.segment<3>(3 * i);
-  }
+  parallel_for(nb, 4096, [&](long long i) {
+    x.segment<3>(3 * i) += m_inv_blocks[size_t(i)] * m_r.segment<3>(3 * i);
+  });
 }
 
 // ---- Gauss-Seidel ----
