@@ -21,12 +21,12 @@ namespace {
 
 void BM_ImplicitStep(benchmark::State& state, std::string backend) {
   const hooke::Scene scene = hooke::bench::make_cloth(state.range(0));
-  hooke::MethodOptions options;
+  hooke::ImplicitOptions options;
   options.linear_solver = backend;
-  options.implicit.beta = 1.0;
-  options.implicit.linear_tolerance = 1e-6;
+  options.beta = 1.0;
+  options.linear_tolerance = 1e-6;
   const bool stationary = backend == "jacobi" || backend.find("gauss-seidel") != std::string::npos;
-  options.implicit.max_linear_iterations = stationary ? 2000 : 20000;
+  options.max_linear_iterations = stationary ? 2000 : 20000;
   auto stepper = hooke::make_stepper("implicit", *scene.system, options);
   auto* implicit = dynamic_cast<hooke::ImplicitStepper*>(stepper.get());
   hooke::Simulation sim(*scene.system, std::move(stepper), scene.initial);

@@ -34,7 +34,7 @@ std::string scene_path(const char* name) { return std::string(HOOKE_BENCH_SCENES
 
 void BM_LocalGlobal411(benchmark::State& state) {
   const hooke::Scene scene = hooke::load_scene(scene_path("target_local_global_411.toml"));
-  const hooke::FastMassSpringOptions& o = scene.integrator.options.fast_mass_spring;
+  const auto o = scene.integrator.options.as<hooke::FastMassSpringOptions>("fast-mass-spring");
   const double h = scene.time.dt;
   auto t0 = Clock::now();
   hooke::FastMassSpringStepper fms(*scene.system, o);

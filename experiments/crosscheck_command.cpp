@@ -58,7 +58,7 @@ int run_crosscheck(const Scene& scene, const CrosscheckOptions& options) {
   limits.energy_limit = divergence_energy_limit(sys, scene.initial, scene.run.energy_growth_limit);
   for (const auto& name : names) {
     std::cerr << "crosscheck: " << name << " ...\n";
-    const Trajectory tr = run_trajectory(scene, name, scene.integrator.options, samples, false, limits);
+    const Trajectory tr = run_trajectory(scene, name, options_for(name, scene.integrator.options), samples, false, limits);
     const Errors e = compare(tr, ref.trajectory);
     double drift = NAN;
     if (tr.complete) {

@@ -138,9 +138,9 @@ int run_resolution(const ResolutionOptions& options, const std::string& scenes_d
       }
       const double period = failure.empty() ? first_period(y, options.h, 0.2, 0.01) : NAN;
       // Static sag: backward Euler at a large step from the end of the dynamic run.
-      MethodOptions settle = scene.integrator.options;
-      settle.implicit.beta = 1.0;
-      settle.implicit.newton_iterations = 1;
+      ImplicitOptions settle = scene.integrator.options.as<ImplicitOptions>("implicit");
+      settle.beta = 1.0;
+      settle.newton_iterations = 1;
       Simulation st(sys, make_stepper("implicit", sys, settle), dyn.state());
       double speed = NAN;
       for (int s = 0; s < 400 && failure.empty(); ++s) {

@@ -128,12 +128,15 @@ std::string backend_label(const Scene& scene) {
   std::string label = "method " + m;
   try {
     const MethodKind kind = method_info(m).kind;
-    if (kind == MethodKind::Implicit)
-      label += ", linear solver " + (scene.integrator.options.linear_solver.empty()
-                                         ? default_linear_solver()
-                                         : scene.integrator.options.linear_solver);
-    else if (m == "cvode" || m == "ida")
-      label += " (" + scene.integrator.options.whole_step.sundials_linear_solver + ")";
+    const MethodOptions& o = scene.integrator.options;
+    if (kind == MethodKind::Implicit) {
+      const std::string ls = o.as<ImplicitOptions>(m.c_str()).linear_solver;
+      label += ", linear solver " + (ls.empty() ? default_linear_solver() : ls);
+    } else if (const auto* c = o.get<CvodeOptions>()) {
+      label += std::string(" (") + to_string(c->linear_solver) + ")";
+    } else if (const auto* i = o.get<IdaOptions>()) {
+      label += std::string(" (") + to_string(i->linear_solver) + ")";
+    }
   } catch (const UnknownName&) {
   }
   return label;

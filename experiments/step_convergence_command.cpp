@@ -86,10 +86,10 @@ int run_step_convergence(const std::string& scene_path, const StepConvergenceOpt
       Scene scene = load_scene(scene_path, sets);
       const MassSpringSystem& sys = *scene.system;
       // The start of the step: 3 converged backward-Euler steps from rest.
-      MethodOptions newton;
-      newton.implicit.newton_iterations = 100;
-      newton.implicit.newton_tolerance = 1e-13;
-      newton.implicit.linear_tolerance = 1e-14;
+      ImplicitOptions newton;
+      newton.newton_iterations = 100;
+      newton.newton_tolerance = 1e-13;
+      newton.linear_tolerance = 1e-14;
       State s0 = scene.initial, s1;
       {
         auto be = make_stepper("implicit", sys, newton);
@@ -102,8 +102,8 @@ int run_step_convergence(const std::string& scene_path, const StepConvergenceOpt
       State exact, newton_step;
       make_stepper("implicit", sys, newton)->step(s0, h, newton_step);
 #if HOOKE_WITH_CERES
-      MethodOptions ceres;
-      ceres.whole_step.max_iterations = 200;
+      CeresImplicitOptions ceres;
+      ceres.max_iterations = 200;
       make_stepper("ceres-implicit", sys, ceres)->step(s0, h, exact);
 #else
       exact = newton_step;
@@ -118,11 +118,11 @@ int run_step_convergence(const std::string& scene_path, const StepConvergenceOpt
 
       std::map<std::string, std::vector<Sample>> curves;
       // Local/global and its accelerations: one traced step after a warm-up step that factors.
-      for (const char* a : {"none", "chebyshev", "lbfgs"}) {
+      for (const Acceleration a : {Acceleration::None, Acceleration::Chebyshev, Acceleration::Lbfgs}) {
         FastMassSpringOptions o;
         o.acceleration = a;
         o.iterations = max_iterations;
-        std::vector<Sample>& curve = curves[std::string("fast-mass-spring/") + a];
+        std::vector<Sample>& curve = curves[std::string("fast-mass-spring/") + to_string(a)];
         Clock::time_point t0;
         double excluded = 0.0;
         bool done = false;
@@ -147,9 +147,9 @@ int run_step_convergence(const std::string& scene_path, const StepConvergenceOpt
       // Newton on beta = 1 with n iterations, n = 1 the linearised step; each run timed whole
       // (assembly, factorization and solve in every iteration).
       for (int n = 1; n <= 12; ++n) {
-        MethodOptions o = newton;
-        o.implicit.newton_iterations = n;
-        o.implicit.newton_tolerance = 1e-300;  // exactly n iterations
+        ImplicitOptions o = newton;
+        o.newton_iterations = n;
+        o.newton_tolerance = 1e-300;  // exactly n iterations
         auto st = make_stepper("implicit", sys, o);
         st->step(s0, h, s1);  // warm-up: symbolic analysis
         const auto t0 = Clock::now();
@@ -160,8 +160,8 @@ int run_step_convergence(const std::string& scene_path, const StepConvergenceOpt
       }
       // XPBD: substeps 1 .. 256, one step each, for the same wall-time axis.
       for (int sub = 1; sub <= 256; sub *= 2) {
-        MethodOptions o;
-        o.xpbd.substeps = sub;
+        XpbdOptions o;
+        o.substeps = sub;
         auto st = make_stepper("xpbd", sys, o);
         const auto t0 = Clock::now();
         st->step(s0, h, s1);

@@ -121,17 +121,30 @@ Errors max_errors(const Errors& a, const Errors& b) {
           mx(a.max_traj, b.max_traj)};
 }
 
-MethodOptions reference_options(const Scene& scene, double rtol, double atol) {
-  MethodOptions o = scene.integrator.options;
-  o.whole_step.rtol = rtol;
+namespace {
+/// The scene's options of `method` (or its defaults) with the reference's tolerances set.
+template <class Options>
+MethodOptions sundials_reference(const Scene& scene, const char* method, double rtol, double atol) {
+  MethodOptions m = options_for(method, scene.integrator.options);
+  Options& o = m.edit<Options>(method);
   double size = 0.0;
   for (Index i = 0; i < scene.initial.x.size(); ++i)
     size = std::max(size, std::abs(scene.initial.x[i]));
-  o.whole_step.atol = atol > 0 ? atol : 1e-3 * rtol * std::max(size, 1.0);
-  o.whole_step.max_steps = 10000000;
-  o.whole_step.sundials_linear_solver = "klu";
-  o.whole_step.preconditioner.clear();
-  return o;
+  o.rtol = rtol;
+  o.atol = atol > 0 ? atol : 1e-3 * rtol * std::max(size, 1.0);
+  o.max_steps = 10000000;
+  o.linear_solver = SundialsLinearSolver::Klu;
+  o.preconditioner.clear();
+  o.preconditioner_tolerance = kDefaultPreconditionerTolerance;
+  return m;
+}
+}  // namespace
+
+MethodOptions reference_options(const Scene& scene, const std::string& method, double rtol,
+                                double atol) {
+  if (method == "ida") return sundials_reference<IdaOptions>(scene, "ida", rtol, atol);
+  HOOKE_ASSERT(method == "cvode", "reference_options: '" << method << "' is not cvode or ida");
+  return sundials_reference<CvodeOptions>(scene, "cvode", rtol, atol);
 }
 
 Reference compute_reference(const Scene& scene, double rtol, double atol,
@@ -139,10 +152,10 @@ Reference compute_reference(const Scene& scene, double rtol, double atol,
   const bool constrained = !scene.system->constraints().empty();
   const RunLimits none;
   Reference ref;
-  ref.trajectory = run_trajectory(scene, "cvode", reference_options(scene, rtol, atol),
+  ref.trajectory = run_trajectory(scene, "cvode", reference_options(scene, "cvode", rtol, atol),
                                   sample_steps, !constrained, none);
   if (!ref.trajectory.complete) return ref;
-  const Trajectory loose = run_trajectory(scene, "cvode", reference_options(scene, 10 * rtol, atol),
+  const Trajectory loose = run_trajectory(scene, "cvode", reference_options(scene, "cvode", 10 * rtol, atol),
                                           sample_steps, !constrained, none);
   ref.own_error = compare(loose, ref.trajectory);
   std::ostringstream how;
@@ -150,7 +163,7 @@ Reference compute_reference(const Scene& scene, double rtol, double atol,
       << " s); its own error is estimated as the larger difference from CVODE at rtol "
       << 10 * rtol;
   if (independent_check) {
-    const Trajectory ida = run_trajectory(scene, "ida", reference_options(scene, rtol, atol),
+    const Trajectory ida = run_trajectory(scene, "ida", reference_options(scene, "ida", rtol, atol),
                                           sample_steps, !constrained, none);
     how << " and from IDA (a different formulation and code) at rtol " << rtol;
     if (ida.complete)

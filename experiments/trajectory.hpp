@@ -45,9 +45,11 @@ Errors compare(const Trajectory& a, const Trajectory& ref);
 /// Elementwise maximum of two error estimates (NaN-aware: a NaN field stays NaN).
 Errors max_errors(const Errors& a, const Errors& b);
 
-/// Options of a CVODE reference at relative tolerance rtol (and atol, or 1e-3 * rtol * the scene's
-/// size if atol <= 0), starting from the scene's own integrator options.
-MethodOptions reference_options(const Scene& scene, double rtol, double atol);
+/// Options of `method` ("cvode" or "ida") at relative tolerance rtol (and atol, or 1e-3 * rtol *
+/// the scene's size if atol <= 0) with KLU, starting from the scene's own options of that method
+/// (options_for) or its defaults.
+MethodOptions reference_options(const Scene& scene, const std::string& method, double rtol,
+                                double atol);
 
 /// A reference solution: CVODE BDF at tight tolerance, and the estimate of its own error.
 struct Reference {

@@ -156,7 +156,7 @@ int run_work_precision(const WorkPrecisionOptions& options, const std::string& s
         // Adaptive methods: atol follows rtol (1e-3 rtol x the scene's size), as for the reference;
         // a fixed tight atol would hide the rtol sweep.
         const MethodOptions opts =
-            rtol > 0 ? reference_options(scene, rtol, 0.0) : scene.integrator.options;
+            rtol > 0 ? reference_options(scene, m.method, rtol, 0.0) : scene.integrator.options;
         const Trajectory tr =
             run_trajectory(scene, m.method, opts, samples, m.sweep == Sweep::Tolerance, limits);
         const Errors e = compare(tr, ref.trajectory);

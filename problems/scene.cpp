@@ -12,9 +12,9 @@
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/forces/spring_damper.hpp"
-#include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "problems/builders/mesh_build.hpp"
+#include "problems/method_readers.hpp"
 #include "problems/ode_problems.hpp"
 
 namespace hooke {
@@ -159,90 +159,13 @@ void read_run_settings(TableReader& root, Scene& scene) {
     auto it = root.table("integrator");
     TableReader& r = *it;
     const std::string method = r.string("method", "symplectic-euler");
-    MethodKind kind = MethodKind::Explicit;
     try {
-      kind = method_info(method).kind;
+      method_info(method);
     } catch (const UnknownName& e) {
       r.fail("method", e.what());
     }
     scene.integrator.method = method;
-    // Every option key of any method; each method reads its own and rejects the others.
-    static const std::vector<std::string> all_keys = {
-        "beta", "linear_solver", "newton_iterations", "tolerance", "linear_tolerance",
-        "max_linear_iterations", "clamp_compressed", "rtol", "atol", "max_order", "adams",
-        "preconditioner", "max_steps", "max_iterations", "iterations", "warm_start", "acceleration",
-        "chebyshev_rho", "chebyshev_delay", "lbfgs_history", "global_solver", "substeps"};
-    MethodOptions& o = scene.integrator.options;
-    std::vector<std::string> own;
-    if (kind == MethodKind::Implicit) {
-      own = {"linear_solver", "newton_iterations", "tolerance", "linear_tolerance",
-             "max_linear_iterations", "clamp_compressed"};
-      if (method == "implicit") {
-        own.push_back("beta");
-        o.implicit.beta = r.number("beta", 1.0);
-        if (!(o.implicit.beta >= 0.0 && o.implicit.beta <= 1.0))
-          r.fail("beta", "must be in [0, 1], got " + std::to_string(o.implicit.beta));
-      }
-      o.linear_solver = r.string("linear_solver", default_linear_solver());
-      try {
-        make_linear_solver(o.linear_solver);  // validates the name (or names the missing package)
-      } catch (const UnknownName& e) {
-        r.fail("linear_solver", e.what());
-      }
-      o.implicit.newton_iterations = int(r.integer("newton_iterations", 1, 1, 100000));
-      o.implicit.newton_tolerance = r.positive("tolerance", o.implicit.newton_tolerance);
-      o.implicit.linear_tolerance = r.positive("linear_tolerance", o.implicit.linear_tolerance);
-      o.implicit.max_linear_iterations =
-          int(r.integer("max_linear_iterations", o.implicit.max_linear_iterations, 1, 1000000000));
-      o.implicit.clamp_compressed = r.boolean("clamp_compressed", true);
-    } else if (method == "cvode" || method == "ida") {
-      own = {"rtol", "atol", "max_order", "linear_solver", "preconditioner", "max_steps"};
-      WholeStepOptions& w = o.whole_step;
-      w.rtol = r.positive("rtol", w.rtol);
-      w.atol = r.positive("atol", w.atol);
-      if (method == "cvode") {
-        own.push_back("adams");
-        w.adams = r.boolean("adams", false);
-      }
-      w.max_order = int(r.integer("max_order", w.adams ? 12 : 5, 1, w.adams ? 12 : 5));
-      w.sundials_linear_solver = r.choice("linear_solver", "klu", {"klu", "spgmr"});
-      w.preconditioner = r.string("preconditioner", "");
-      if (w.sundials_linear_solver == "klu" && !w.preconditioner.empty())
-        r.fail("preconditioner", "only linear_solver = \"spgmr\" takes a preconditioner");
-      w.max_steps = long(r.integer("max_steps", w.max_steps, 1, 1000000000000LL));
-    } else if (method == "fast-mass-spring") {
-      own = {"iterations", "tolerance", "warm_start", "acceleration", "chebyshev_rho",
-             "chebyshev_delay", "lbfgs_history", "global_solver"};
-      FastMassSpringOptions& f = o.fast_mass_spring;
-      f.iterations = int(r.integer("iterations", f.iterations, 1, 100000000));
-      f.tolerance = r.non_negative("tolerance", f.tolerance);
-      if (f.tolerance >= 1.0) r.fail("tolerance", "must be < 1 (a relative objective decrease), got " +
-                                                      std::to_string(f.tolerance));
-      f.warm_start = r.choice("warm_start", f.warm_start, {"inertial", "previous"});
-      f.acceleration = r.choice("acceleration", f.acceleration, {"none", "chebyshev", "lbfgs"});
-      f.chebyshev_rho = r.non_negative("chebyshev_rho", f.chebyshev_rho);
-      if (f.chebyshev_rho >= 1.0)
-        r.fail("chebyshev_rho", "must be in [0, 1) (0 = estimate), got " + std::to_string(f.chebyshev_rho));
-      f.chebyshev_delay = int(r.integer("chebyshev_delay", f.chebyshev_delay,
-                                        f.chebyshev_rho == 0.0 ? 2 : 0, 100000000));
-      f.lbfgs_history = int(r.integer("lbfgs_history", f.lbfgs_history, 1, 1000));
-      f.global_solver = r.choice("global_solver", f.global_solver, {"cholmod", "jacobi"});
-      if (f.global_solver == "jacobi" && f.acceleration == "lbfgs")
-        r.fail("global_solver", "'jacobi' cannot take acceleration = \"lbfgs\" (its initial Hessian is "
-                                "the factored matrix); use \"chebyshev\" or \"none\"");
-    } else if (method == "xpbd") {
-      own = {"substeps", "iterations"};
-      o.xpbd.substeps = int(r.integer("substeps", o.xpbd.substeps, 1, 100000000));
-      o.xpbd.iterations = int(r.integer("iterations", o.xpbd.iterations, 1, 100000000));
-    } else if (method == "ceres-implicit") {
-      own = {"max_iterations"};
-      o.whole_step.max_iterations = int(r.integer("max_iterations", 100, 1, 100000000));
-    }
-    for (const auto& key : all_keys)
-      if (std::find(own.begin(), own.end(), key) == own.end())
-        r.reject_if_present(key, "method '" + method + "' does not use it" +
-                                     (kind == MethodKind::Explicit ? " (explicit methods take no options)" : ""));
-    r.finish();
+    scene.integrator.options = read_method_options(r, method);
   }
   {
     auto it = root.table("time");

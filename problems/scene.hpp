@@ -18,7 +18,7 @@ namespace hooke {
 /// [integrator]: the time-stepping method and its options.
 struct IntegratorSettings {
   std::string method = "symplectic-euler";  ///< registry name (hooke::methods())
-  MethodOptions options;                     ///< implicit methods only
+  MethodOptions options;                     ///< the method's own Options (empty for explicit ones)
 };
 
 /// [time]: step size and simulated duration.

@@ -1,6 +1,7 @@
 #include "problems/table_reader.hpp"
 
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 namespace hooke {
@@ -278,7 +279,20 @@ void TableReader::reject_if_present(const std::string& key, const std::string& r
   if (m_tbl.contains(key)) fail(key, reason);
 }
 
-void TableReader::finish() const {
+int TableReader::int_field(const std::string& key, int def) {
+  return static_cast<int>(integer(key, def, std::numeric_limits<int>::min(), std::numeric_limits<int>::max()));
+}
+
+void TableReader::check(const OptionError& err,
+                        const std::vector<std::pair<std::string, std::string>>& keys) const {
+  if (err.ok()) return;
+  std::string key = err.field;
+  for (const auto& [field, scene_key] : keys)
+    if (field == err.field) key = scene_key;
+  fail(key, err.message);
+}
+
+void TableReader::finish(const std::string& why) const {
   for (const auto& [k, v] : m_tbl) {
     (void)v;
     const std::string key(k.str());
@@ -287,7 +301,8 @@ void TableReader::finish() const {
     names.insert(m_known.begin(), m_known.end());
     std::string known;
     for (const auto& u : names) known += (known.empty() ? "" : ", ") + u;
-    fail(key, "unknown key" + (known.empty() ? std::string() : "; known keys here: " + known));
+    fail(key, (why.empty() ? "unknown key" : why) +
+                  (known.empty() ? std::string() : "; known keys here: " + known));
   }
 }
 

@@ -7,6 +7,7 @@
 #include <toml++/toml.h>
 
 #include "hooke/core.hpp"
+#include "hooke/options.hpp"
 #include "problems/input_error.hpp"
 
 namespace hooke {
@@ -42,6 +43,18 @@ class TableReader {
   /// A string from `allowed`; the message lists them.
   std::string choice(const std::string& key, std::optional<std::string> def,
                      const std::vector<std::string>& allowed);
+  /// A choice of the enum class E by its name (EnumNames<E>); the message lists the names.
+  template <class E>
+  E choice(const std::string& key, E def) {
+    const auto& names = EnumNames<E>::names;
+    return *from_string<E>(choice(key, std::string(to_string(def)),
+                                  std::vector<std::string>(names.begin(), names.end())));
+  }
+  /// An integer that fits an int (an options field whose rules its validate() checks).
+  int int_field(const std::string& key, int def);
+  /// Reports an Options struct's validate() result: fails at the key of the field that breaks a
+  /// rule (keys maps field names to scene keys where they differ); returns if err.ok().
+  void check(const OptionError& err, const std::vector<std::pair<std::string, std::string>>& keys = {}) const;
   /// An array of exactly 3 finite numbers.
   Vec3 vec3(const std::string& key, std::optional<Vec3> def = std::nullopt);
   /// An array of finite numbers (empty allowed).
@@ -60,8 +73,9 @@ class TableReader {
   std::optional<TableReader> table(const std::string& key);
   /// Throws if key is present: reason says why it does not apply.
   void reject_if_present(const std::string& key, const std::string& reason) const;
-  /// Throws for the first key no getter asked for, listing the known keys of this table.
-  void finish() const;
+  /// Throws for the first key no getter asked for, listing the known keys of this table; `why`, if
+  /// given, replaces "unknown key" as the reason (e.g. "method 'rk4' takes no options").
+  void finish(const std::string& why = "") const;
 
  private:
   const toml::node& node(const std::string& key) const;

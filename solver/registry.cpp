@@ -62,67 +62,44 @@ struct WholeStepEntry {
   MethodInfo info;
   std::function<std::unique_ptr<Stepper>(const MassSpringSystem&, const MethodOptions&)> make;
   std::function<std::string(const MassSpringSystem&)> unsupported;
+  const std::type_info* options_type;  ///< the Options type the stepper takes
 };
 
-// Whole-step backends, each under its build option.
+/// The entry of a whole-step method whose stepper T is constructed from (system, T::Options).
+template <class T>
+WholeStepEntry whole_step(const char* name, const char* description,
+                          std::string (*unsupported)(const MassSpringSystem&) = nullptr) {
+  auto make = [name](const MassSpringSystem& sys, const MethodOptions& m) -> std::unique_ptr<Stepper> {
+    return std::make_unique<T>(sys, m.as<typename T::Options>(name));
+  };
+  return {{name, MethodKind::WholeStep, description}, make, unsupported,
+          &typeid(typename T::Options)};
+}
+
+// Whole-step methods, each under its build option.
 const std::vector<WholeStepEntry>& whole_step_table() {
   static const std::vector<WholeStepEntry> table = {
 #if HOOKE_WITH_SUNDIALS
-      {{"cvode", MethodKind::WholeStep,
-        "SUNDIALS CVODE: adaptive BDF (or Adams) on x' = v, M v' = f, analytic Jacobian"},
-       [](const MassSpringSystem& sys, const MethodOptions& m) -> std::unique_ptr<Stepper> {
-         const WholeStepOptions& w = m.whole_step;
-         CvodeOptions o;
-         o.rtol = w.rtol;
-         o.atol = w.atol;
-         o.max_order = w.max_order;
-         o.adams = w.adams;
-         o.linear_solver = w.sundials_linear_solver;
-         o.preconditioner = w.preconditioner;
-         o.max_steps = w.max_steps;
-         return std::make_unique<CvodeStepper>(sys, o);
-       },
-       nullptr},
-      {{"ida", MethodKind::WholeStep,
-        "SUNDIALS IDA: adaptive BDF on the residual F(t, y, y') = 0, analytic Jacobian"},
-       [](const MassSpringSystem& sys, const MethodOptions& m) -> std::unique_ptr<Stepper> {
-         const WholeStepOptions& w = m.whole_step;
-         IdaOptions o;
-         o.rtol = w.rtol;
-         o.atol = w.atol;
-         o.max_order = w.max_order;
-         o.linear_solver = w.sundials_linear_solver;
-         o.preconditioner = w.preconditioner;
-         o.max_steps = w.max_steps;
-         return std::make_unique<IdaStepper>(sys, o);
-       },
-       nullptr},
+      whole_step<CvodeStepper>(
+          "cvode", "SUNDIALS CVODE: adaptive BDF (or Adams) on x' = v, M v' = f, analytic Jacobian"),
+      whole_step<IdaStepper>(
+          "ida", "SUNDIALS IDA: adaptive BDF on the residual F(t, y, y') = 0, analytic Jacobian"),
 #endif
 #if HOOKE_WITH_CERES
-      {{"ceres-implicit", MethodKind::WholeStep,
-        "backward Euler solved exactly as nonlinear least squares with Ceres"},
-       [](const MassSpringSystem& sys, const MethodOptions& m) -> std::unique_ptr<Stepper> {
-         CeresImplicitOptions o;
-         o.max_iterations = m.whole_step.max_iterations;
-         return std::make_unique<CeresImplicitStepper>(sys, o);
-       },
-       [](const MassSpringSystem& sys) { return ceres_implicit_unsupported(sys); }},
+      whole_step<CeresImplicitStepper>(
+          "ceres-implicit", "backward Euler solved exactly as nonlinear least squares with Ceres",
+          ceres_implicit_unsupported),
 #endif
 #if HOOKE_WITH_CHOLMOD
-      {{"fast-mass-spring", MethodKind::WholeStep,
-        "Liu et al. 2013 local/global backward Euler on a prefactored CHOLMOD matrix "
-        "(Chebyshev or L-BFGS acceleration)"},
-       [](const MassSpringSystem& sys, const MethodOptions& m) -> std::unique_ptr<Stepper> {
-         return std::make_unique<FastMassSpringStepper>(sys, m.fast_mass_spring);
-       },
-       [](const MassSpringSystem& sys) { return fast_mass_spring_unsupported(sys); }},
+      whole_step<FastMassSpringStepper>(
+          "fast-mass-spring",
+          "Liu et al. 2013 local/global backward Euler on a prefactored CHOLMOD matrix "
+          "(Chebyshev or L-BFGS acceleration)",
+          fast_mass_spring_unsupported),
 #endif
-      {{"xpbd", MethodKind::WholeStep,
-        "extended position-based dynamics with substeps (Macklin et al. 2019), compliance 1/k"},
-       [](const MassSpringSystem& sys, const MethodOptions& m) -> std::unique_ptr<Stepper> {
-         return std::make_unique<XpbdStepper>(sys, m.xpbd);
-       },
-       [](const MassSpringSystem& sys) { return xpbd_unsupported(sys); }},
+      whole_step<XpbdStepper>(
+          "xpbd", "extended position-based dynamics with substeps (Macklin et al. 2019), compliance 1/k",
+          xpbd_unsupported),
   };
   return table;
 }
@@ -180,13 +157,11 @@ std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringS
                                       const MethodOptions& options) {
   for (const auto& e : implicit_table())
     if (name == e.info.name) {
-      const std::string err = options.implicit.validate();
-      if (!err.empty()) throw std::invalid_argument(err);
-      return std::make_unique<ImplicitStepper>(
-          system, e.scheme,
-          make_linear_solver(options.linear_solver.empty() ? default_linear_solver()
-                                                           : options.linear_solver),
-          options.implicit);
+      ImplicitOptions o = options.as<ImplicitOptions>(e.info.name);
+      if (const OptionError err = o.validate(); !err.ok()) throw std::invalid_argument(err.message);
+      if (o.linear_solver.empty()) o.linear_solver = default_linear_solver();
+      auto solver = make_linear_solver(o.linear_solver);
+      return std::make_unique<ImplicitStepper>(system, e.scheme, std::move(solver), o);
     }
   for (const auto& e : whole_step_table())
     if (name == e.info.name) {
@@ -196,7 +171,18 @@ std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringS
       }
       return e.make(system, options);
     }
-  return std::make_unique<ExplicitMassSpringStepper>(system, make_explicit_stepper(name));
+  auto method = make_explicit_stepper(name);
+  if (!options.empty())
+    throw std::invalid_argument("method '" + name + "' is explicit and takes no options");
+  return std::make_unique<ExplicitMassSpringStepper>(system, std::move(method));
+}
+
+MethodOptions options_for(const std::string& name, const MethodOptions& options) {
+  const MethodKind kind = method_info(name).kind;  // throws for unknown names
+  const std::type_info* takes = kind == MethodKind::Implicit ? &typeid(ImplicitOptions) : nullptr;
+  for (const auto& e : whole_step_table())
+    if (name == e.info.name) takes = e.options_type;
+  return takes && options.type() == *takes ? options : MethodOptions{};
 }
 
 std::string method_unsupported(const std::string& name, const MassSpringSystem& system) {

@@ -1,10 +1,16 @@
 #pragma once
+#include <any>
 #include <memory>
 #include <stdexcept>
 #include <string>
+#include <type_traits>
+#include <typeinfo>
 #include <vector>
 
+#include "hooke/backends/ceres_implicit_stepper.hpp"
+#include "hooke/backends/cvode_stepper.hpp"
 #include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/backends/ida_stepper.hpp"
 #include "hooke/backends/xpbd.hpp"
 #include "hooke/integrators/explicit_stepper.hpp"
 #include "hooke/integrators/implicit_stepper.hpp"
@@ -13,34 +19,57 @@
 
 namespace hooke {
 
-/// Kinds of time-stepping method; scenes use the kind to decide which options apply.
+/// Kinds of time-stepping method.
 enum class MethodKind {
   Explicit,   ///< runs on any OdeSystem; takes no options
-  Implicit,   ///< Newton on a linear backend; takes MethodOptions::implicit and linear_solver
-  WholeStep,  ///< a solver of its own advances the whole step; takes its own MethodOptions field
+  Implicit,   ///< Newton on a linear backend; takes ImplicitOptions
+  WholeStep,  ///< a solver of its own advances the whole step; takes its own Options type
 };
 
-/// Options of the whole-step backends (cvode, ida, ceres-implicit); each uses the fields that
-/// apply to it (see its own Options struct, to which these are copied).
-struct WholeStepOptions {
-  double rtol = 1e-8;       ///< relative tolerance (cvode, ida)
-  double atol = 1e-10;      ///< absolute tolerance (cvode, ida), metres and m/s
-  int max_order = 5;        ///< maximum BDF (or Adams) order (cvode, ida)
-  bool adams = false;       ///< Adams-Moulton instead of BDF for non-stiff problems (cvode)
-  std::string sundials_linear_solver = "klu";  ///< "klu" (sparse direct) or "spgmr" (cvode, ida)
-  std::string preconditioner;  ///< linear backend preconditioning spgmr ("" = default; cvode, ida)
-  long max_steps = 100000;  ///< internal steps allowed per hooke step (cvode, ida)
-  int max_iterations = 100; ///< nonlinear least-squares iterations per step (ceres-implicit)
-};
+/// The options of one method: a value of that method's own Options type (ImplicitOptions for
+/// implicit, implicit-midpoint and bdf2; CvodeOptions, IdaOptions, CeresImplicitOptions,
+/// FastMassSpringOptions, XpbdOptions for the whole-step methods; explicit methods take none), or
+/// empty for the method's defaults. Scene readers fill it once with the method's type; make_stepper
+/// checks that it holds the type the method takes.
+class MethodOptions {
+ public:
+  MethodOptions() = default;
+  /// Holds `options` (implicit, so that make_stepper("xpbd", sys, XpbdOptions{...}) reads well).
+  template <class T, class = std::enable_if_t<!std::is_same_v<std::decay_t<T>, MethodOptions>>>
+  MethodOptions(T options) : m_value(std::move(options)) {}  // NOLINT(google-explicit-constructor)
+  /// True if no options are held (the method's defaults apply).
+  bool empty() const { return !m_value.has_value(); }
+  /// The type of the options held (typeid(void) when empty).
+  const std::type_info& type() const { return m_value.type(); }
+  /// The options if they are of type T, else nullptr.
+  template <class T>
+  const T* get() const {
+    return std::any_cast<T>(&m_value);
+  }
+  template <class T>
+  T* get() {
+    return std::any_cast<T>(&m_value);
+  }
+  /// The options as T: a copy of the held value, or T{} when empty. Throws std::invalid_argument
+  /// naming `method` if another method's options are held.
+  template <class T>
+  T as(const char* method) const {
+    if (empty()) return T{};
+    if (const T* t = get<T>()) return *t;
+    throw std::invalid_argument(std::string("method '") + method +
+                                "' was given the options of another method");
+  }
+  /// The options as T for editing, created with T's defaults when empty (same throw as as()).
+  template <class T>
+  T& edit(const char* method) {
+    if (empty()) m_value = T{};
+    if (T* t = get<T>()) return *t;
+    throw std::invalid_argument(std::string("method '") + method +
+                                "' was given the options of another method");
+  }
 
-/// Options of the implicit and whole-step methods (explicit methods take none).
-struct MethodOptions {
-  /// Linear backend by name (linear_solvers()); "" = the default: cholmod when built, else pcg-block.
-  std::string linear_solver;
-  ImplicitOptions implicit;
-  WholeStepOptions whole_step;
-  FastMassSpringOptions fast_mass_spring;  ///< fast-mass-spring only
-  XpbdOptions xpbd;                        ///< xpbd only
+ private:
+  std::any m_value;
 };
 
 /// One entry of the method table.
@@ -65,8 +94,13 @@ std::unique_ptr<ExplicitStepper> make_explicit_stepper(const std::string& name);
 std::string default_linear_solver();
 /// "" if the method can run this system, else why not (e.g. ceres-implicit and spring dampers).
 std::string method_unsupported(const std::string& name, const MassSpringSystem& system);
+/// `options` if `name` takes options of their type, else empty (the method's defaults): how one
+/// scene's [integrator] options are passed on to other methods (crosscheck, studies), e.g. an
+/// implicit scene's options to bdf2 but not to cvode. Throws UnknownMethod.
+MethodOptions options_for(const std::string& name, const MethodOptions& options);
 /// A stepper for a finalized mass-spring system (which must outlive it); throws UnknownMethod
-/// (or UnknownName for an unknown linear backend). Explicit methods ignore options.
+/// (or UnknownName for an unknown linear backend), std::invalid_argument for invalid options or
+/// options of another method. Explicit methods take no options (they must be empty).
 std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringSystem& system,
                                       const MethodOptions& options = {});
 

@@ -22,28 +22,9 @@ namespace {
 
 using Clock = std::chrono::steady_clock;
 
-/// The linear solvers of CeresImplicitOptions::linear_solver, by name.
-struct LinearSolverName {
-  const char* name;
-  ceres::LinearSolverType type;
-};
-constexpr LinearSolverName kLinearSolvers[] = {
-    {"sparse-normal-cholesky", ceres::SPARSE_NORMAL_CHOLESKY},
-    {"dense-qr", ceres::DENSE_QR},
-    {"cgnr", ceres::CGNR},
-};
-
-std::string linear_solver_names() {
-  std::string s;
-  for (const auto& e : kLinearSolvers) s += (s.empty() ? "" : ", ") + std::string(e.name);
-  return s;
-}
-
-const LinearSolverName* find_linear_solver(const std::string& name) {
-  for (const auto& e : kLinearSolvers)
-    if (name == e.name) return &e;
-  return nullptr;
-}
+/// Ceres' type for each CeresLinearSolver, in the enum's order.
+constexpr ceres::LinearSolverType kLinearSolverTypes[] = {ceres::SPARSE_NORMAL_CHOLESKY,
+                                                          ceres::DENSE_QR, ceres::CGNR};
 
 /// Ceres' termination type as a lowercase hyphenated word ("no-convergence").
 std::string termination_name(ceres::TerminationType t) {
@@ -203,27 +184,28 @@ class ParticleResidualCost final : public ceres::DynamicCostFunction {
 
 }  // namespace
 
-std::string CeresImplicitOptions::validate() const {
+OptionError CeresImplicitOptions::validate() const {
   std::ostringstream os;
+  std::string field;
   auto bad_tolerance = [](double t) { return !(t >= 0.0) || !std::isfinite(t); };
-  if (formulation != "energy" && formulation != "residual")
-    os << "formulation = '" << formulation << "': unknown; available: energy, residual";
-  else if (max_iterations < 1)
+  const std::pair<const char*, double> tolerances[] = {{"function_tolerance", function_tolerance},
+                                                       {"gradient_tolerance", gradient_tolerance},
+                                                       {"parameter_tolerance", parameter_tolerance},
+                                                       {"residual_tolerance", residual_tolerance}};
+  if (max_iterations < 1) {
+    field = "max_iterations";
     os << "max_iterations = " << max_iterations << ": must be >= 1";
-  else if (bad_tolerance(function_tolerance))
-    os << "function_tolerance = " << function_tolerance << ": must be finite and >= 0";
-  else if (bad_tolerance(gradient_tolerance))
-    os << "gradient_tolerance = " << gradient_tolerance << ": must be finite and >= 0";
-  else if (bad_tolerance(parameter_tolerance))
-    os << "parameter_tolerance = " << parameter_tolerance << ": must be finite and >= 0";
-  else if (!find_linear_solver(linear_solver))
-    os << "linear_solver = '" << linear_solver
-       << "': unknown; available: " << linear_solver_names();
-  else if (bad_tolerance(residual_tolerance))
-    os << "residual_tolerance = " << residual_tolerance << ": must be finite and >= 0";
-  else if (threads < 1)
+  } else if (threads < 1) {
+    field = "threads";
     os << "threads = " << threads << ": must be >= 1";
-  return os.str();
+  } else {
+    for (const auto& [name, value] : tolerances)
+      if (field.empty() && bad_tolerance(value)) {
+        field = name;
+        os << name << " = " << value << ": must be finite and >= 0";
+      }
+  }
+  return {field, os.str()};
 }
 
 std::string ceres_implicit_unsupported(const MassSpringSystem& system) {
@@ -335,7 +317,7 @@ CeresImplicitStepper::Impl::Impl(const MassSpringSystem& s, CeresImplicitOptions
     }
   spring_data.setZero(kSpringData * Index(spring_a.size()));
 
-  if (options.formulation == "energy")
+  if (options.formulation == CeresFormulation::Energy)
     add_energy_blocks();
   else
     add_residual_blocks();
@@ -346,7 +328,7 @@ CeresImplicitStepper::Impl::Impl(const MassSpringSystem& s, CeresImplicitOptions
 
   solver_options.minimizer_type = ceres::TRUST_REGION;
   solver_options.trust_region_strategy_type = ceres::LEVENBERG_MARQUARDT;
-  solver_options.linear_solver_type = find_linear_solver(options.linear_solver)->type;
+  solver_options.linear_solver_type = kLinearSolverTypes[size_t(options.linear_solver)];
   solver_options.max_num_iterations = options.max_iterations;
   solver_options.function_tolerance = options.function_tolerance;
   solver_options.gradient_tolerance = options.gradient_tolerance;
@@ -362,7 +344,7 @@ CeresImplicitStepper::Impl::Impl(const MassSpringSystem& s, CeresImplicitOptions
   std::string error;
   if (!solver_options.IsValid(&error))
     throw std::invalid_argument("ceres-implicit: Ceres rejects the options (linear_solver = '" +
-                                options.linear_solver + "'): " + error);
+                                std::string(to_string(options.linear_solver)) + "'): " + error);
 }
 
 void CeresImplicitStepper::Impl::add_energy_blocks() {
@@ -443,8 +425,8 @@ void CeresImplicitStepper::Impl::set_step_data(const State& s0, double h) {
 CeresImplicitStepper::CeresImplicitStepper(const MassSpringSystem& system,
                                            CeresImplicitOptions options) {
   HOOKE_ASSERT(system.pattern().finalized(), "ceres-implicit: the system must be finalize()d");
-  const std::string err = options.validate();
-  if (!err.empty()) throw std::invalid_argument("ceres-implicit: " + err);
+  if (const OptionError err = options.validate(); !err.ok())
+    throw std::invalid_argument("ceres-implicit: " + err.message);
   const std::string unsupported = ceres_implicit_unsupported(system);
   if (!unsupported.empty()) throw std::invalid_argument(unsupported);
   m_impl = std::make_unique<Impl>(system, std::move(options));

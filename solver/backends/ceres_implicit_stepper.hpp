@@ -5,26 +5,40 @@
 
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "hooke/options.hpp"
 
 namespace hooke {
+
+/// Which least-squares problem CeresImplicitStepper solves (CeresImplicitOptions::formulation).
+enum class CeresFormulation { Residual, Energy };
+template <>
+struct EnumNames<CeresFormulation> {
+  static constexpr std::array<const char*, 2> names = {"residual", "energy"};
+};
+/// Ceres' linear solver of each Levenberg-Marquardt iteration (CeresImplicitOptions::linear_solver).
+enum class CeresLinearSolver { SparseNormalCholesky, DenseQr, Cgnr };
+template <>
+struct EnumNames<CeresLinearSolver> {
+  static constexpr std::array<const char*, 3> names = {"sparse-normal-cholesky", "dense-qr", "cgnr"};
+};
 
 /// Options of CeresImplicitStepper, fixed for its lifetime. Ceres stops at the first of its three
 /// tolerance tests that holds (termination "convergence") or after max_iterations
 /// ("no-convergence"); the step is then checked against residual_tolerance.
 struct CeresImplicitOptions {
   /// Which least-squares problem Ceres solves (see CeresImplicitStepper for the equations):
-  ///   "residual" (default): the backward Euler residual G(x1) = M (v1 - v0)/h - f(x1, v1) itself,
+  ///   Residual (default): the backward Euler residual G(x1) = M (v1 - v0)/h - f(x1, v1) itself,
   ///     one 3-vector residual block per free particle. The problem has zero residual at the
   ///     solution, so Gauss-Newton is Newton's method on the step: 5-8 iterations per step on the
   ///     12x12 cloth, converged to round-off (|G| ~ 2e-12 N).
-  ///   "energy": the incremental potential of Martin et al. 2011 / Liu et al. 2013 as a sum of
+  ///   Energy: the incremental potential of Martin et al. 2011 / Liu et al. 2013 as a sum of
   ///     squares. Gauss-Newton drops the geometric stiffness k (1 - L/l) (I - u u^T) of stretched
   ///     springs, so it converges linearly, slowly where tension is large against m / h^2, and
   ///     Ceres' cost-based step acceptance cannot resolve |G| below about sqrt(2 eps cost m / h^2)
   ///     (~1e-7 N). On the 12x12 cloth held at two corners: 40-80 iterations per step, 40-60% of
   ///     the steps NotConverged (residual_tolerance), v1 within 4e-7 of Newton at h = 1e-2 but
   ///     1e-3 off at h = 1/60. An independent formulation for cross-checks, not a tight reference.
-  std::string formulation = "residual";
+  CeresFormulation formulation = CeresFormulation::Residual;
   /// Largest number of Levenberg-Marquardt iterations per step; >= 1. Reaching it makes the
   /// step NotConverged.
   int max_iterations = 100;
@@ -44,15 +58,15 @@ struct CeresImplicitOptions {
   /// ||f(x1, v1)||_inf) over the free DOFs; otherwise it is NotConverged. Catches a stop away
   /// from the solution (a local minimum of |G|^2, or the energy formulation's floor). Finite, >= 0.
   double residual_tolerance = 1e-6;
-  /// Linear solver of each Levenberg-Marquardt iteration: "sparse-normal-cholesky" (J^T J factored
-  /// by CHOLMOD through Ceres; the default), "dense-qr" (tiny problems only: O(n^3)), "cgnr"
+  /// Linear solver of each Levenberg-Marquardt iteration: SparseNormalCholesky (J^T J factored
+  /// by CHOLMOD through Ceres; the default), DenseQr (tiny problems only: O(n^3)), Cgnr
   /// (conjugate gradients on the normal equations, Jacobi preconditioner; inexact steps, so more
   /// iterations, and poor on the squared conditioning of the residual formulation).
-  std::string linear_solver = "sparse-normal-cholesky";
+  CeresLinearSolver linear_solver = CeresLinearSolver::SparseNormalCholesky;
   /// Threads Ceres uses for Jacobian evaluation and its linear algebra; >= 1.
   int threads = 1;
-  /// "" if valid, else a message naming the field, its value and the rule it breaks.
-  std::string validate() const;
+  /// The first field that breaks a rule, if any (OptionError::ok() when valid).
+  OptionError validate() const;
 };
 
 /// What Ceres reported for the last step (see ceres::Solver::Summary).
@@ -117,6 +131,7 @@ std::string ceres_implicit_unsupported(const MassSpringSystem& system);
 /// for numerical outcomes.
 class CeresImplicitStepper final : public Stepper {
  public:
+  using Options = CeresImplicitOptions;
   /// system must be finalized, outlive the stepper and be supported (ceres_implicit_unsupported
   /// returns ""). Throws std::invalid_argument for invalid options or an unsupported system.
   explicit CeresImplicitStepper(const MassSpringSystem& system, CeresImplicitOptions options = {});

@@ -17,33 +17,27 @@
 
 namespace hooke {
 
-std::string CvodeOptions::validate() const {
-  std::string err = validate_sundials_options("cvode", rtol, atol, linear_solver, preconditioner,
-                                              preconditioner_tolerance, max_steps);
-  if (!err.empty()) return err;
+OptionError CvodeOptions::validate() const {
+  if (OptionError err = validate_shared("cvode"); !err.ok()) return err;
   std::ostringstream os;
   const int max_allowed = adams ? 12 : 5;
   if (max_order < 1 || max_order > max_allowed) {
     os << "cvode: max_order = " << max_order << " must be in 1.." << max_allowed << " for "
        << (adams ? "Adams" : "BDF");
-    return os.str();
+    return {"max_order", os.str()};
   }
-  if (nonlinear_solver != "newton" && nonlinear_solver != "fixed-point") {
-    os << "cvode: nonlinear_solver = '" << nonlinear_solver
-       << "' is unknown; available: newton, fixed-point";
-    return os.str();
+  const bool fixed_point = nonlinear_solver == CvodeNonlinearSolver::FixedPoint;
+  if (fixed_point && !adams)
+    return {"nonlinear_solver",
+            "cvode: nonlinear_solver = 'fixed-point' needs adams = true (functional iteration on "
+            "BDF cannot follow stiff springs); use 'newton'"};
+  if (fixed_point && (linear_solver != SundialsLinearSolver::Klu || !preconditioner.empty())) {
+    os << "cvode: linear_solver = '" << to_string(linear_solver) << "' / preconditioner = '"
+       << preconditioner << "' are unused with nonlinear_solver = 'fixed-point'; leave them at "
+       << "their defaults";
+    return {"nonlinear_solver", os.str()};
   }
-  if (nonlinear_solver == "fixed-point" && !adams) {
-    os << "cvode: nonlinear_solver = 'fixed-point' needs adams = true (functional iteration on "
-          "BDF cannot follow stiff springs); use 'newton'";
-    return os.str();
-  }
-  if (nonlinear_solver == "fixed-point" && (linear_solver != "klu" || !preconditioner.empty())) {
-    os << "cvode: linear_solver = '" << linear_solver << "' / preconditioner = '" << preconditioner
-       << "' are unused with nonlinear_solver = 'fixed-point'; leave them at their defaults";
-    return os.str();
-  }
-  return "";
+  return {};
 }
 
 namespace {
@@ -183,12 +177,12 @@ CvodeStepper::Impl::Impl(const MassSpringSystem& sys, CvodeOptions opt)
   check(CVodeSStolerances(cv, options.rtol, options.atol), "CVodeSStolerances");
   check(CVodeSetMaxOrd(cv, options.max_order), "CVodeSetMaxOrd");
   check(CVodeSetMaxNumSteps(cv, options.max_steps), "CVodeSetMaxNumSteps");
-  if (options.nonlinear_solver == "fixed-point") {
+  if (options.nonlinear_solver == CvodeNonlinearSolver::FixedPoint) {
     nls.reset(
         check_created(SUNNonlinSol_FixedPoint(y.get(), 0, ctx.get()), "SUNNonlinSol_FixedPoint"));
     check(CVodeSetNonlinearSolver(cv, nls.get()), "CVodeSetNonlinearSolver");
   } else {
-    if (options.linear_solver != "klu")
+    if (options.linear_solver != SundialsLinearSolver::Klu)
       prec = make_schur_preconditioner(system, options.preconditioner,
                                        options.preconditioner_tolerance);
     auto lin = sundials_detail::make_linear_system("cvode", options.linear_solver, y.get(),
@@ -223,8 +217,8 @@ void CvodeStepper::Impl::read_counters() {
 }
 
 CvodeStepper::CvodeStepper(const MassSpringSystem& system, CvodeOptions options) {
-  const std::string err = options.validate();
-  if (!err.empty()) throw std::invalid_argument(err);
+  if (const OptionError err = options.validate(); !err.ok())
+    throw std::invalid_argument(err.message);
   m_impl = std::make_unique<Impl>(system, std::move(options));
 }
 

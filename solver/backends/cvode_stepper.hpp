@@ -13,43 +13,26 @@ namespace hooke {
 /// Statistics of a CvodeStepper (cumulative over its lifetime; see SundialsCounters).
 using CvodeCounters = SundialsCounters;
 
-/// Options of CvodeStepper, fixed for its lifetime. Error control is CVODE's: each internal step
-/// keeps the weighted RMS norm of the local error estimate below 1, with weight
-/// 1 / (rtol |y_i| + atol) on each of the 6n components of y = [x; v] (x in m, v in m/s).
-struct CvodeOptions {
-  /// Relative tolerance of the local error test; in (0, 1). The global error is typically 10-100x
-  /// larger after many oscillation periods.
-  double rtol = 1e-8;
-  /// Absolute tolerance (m for positions, m/s for velocities); > 0. Matters for components near 0.
-  double atol = 1e-10;
+/// Nonlinear solver of CVODE's implicit steps (CvodeOptions::nonlinear_solver).
+enum class CvodeNonlinearSolver { Newton, FixedPoint };
+template <>
+struct EnumNames<CvodeNonlinearSolver> {
+  static constexpr std::array<const char*, 2> names = {"newton", "fixed-point"};
+};
+
+/// Options of CvodeStepper, fixed for its lifetime: the shared SUNDIALS ones (tolerances, linear
+/// solver on I - gamma J, preconditioner, max_steps) and CVODE's own.
+struct CvodeOptions : SundialsOptions {
   /// Largest method order: 1..5 for BDF, 1..12 for Adams.
   int max_order = 5;
   /// false: BDF (stiff problems: stiff springs; the default). true: Adams-Moulton (non-stiff
   /// problems only: soft springs, small steps).
   bool adams = false;
-  /// Nonlinear solver of each implicit step: "newton" (uses linear_solver) or "fixed-point"
-  /// (functional iteration, no linear solves; Adams only: on a stiff problem it needs steps below
-  /// the stability limit of the fast springs).
-  std::string nonlinear_solver = "newton";
-  /// Linear solver of the Newton iterations (on I - gamma J, 6n x 6n):
-  ///  - "klu": sparse direct LU (SuiteSparse KLU) of the analytic Jacobian, pattern analysed once,
-  ///    refactored when CVODE updates its Newton matrix; the best direct choice in this build
-  ///    (SuperLU_MT and LAPACK are not built);
-  ///  - "spgmr": restarted GMRES, matrix-free with the analytic product J v, left-preconditioned by
-  ///    SchurPreconditioner (the 3n SPD system M - gamma D - gamma^2 K solved by a hooke linear
-  ///    backend); for large meshes, where the 6n LU costs too much.
-  std::string linear_solver = "klu";
-  /// Linear backend of the SPGMR preconditioner (a name from linear_solvers(), or "none");
-  /// "" = default_sundials_preconditioner(). Must stay "" with "klu" (rejected otherwise).
-  std::string preconditioner;
-  /// Relative residual tolerance of each preconditioner solve, when its backend is iterative; in
-  /// (0, 1). A loose tolerance makes the preconditioner vary between GMRES iterations.
-  double preconditioner_tolerance = kDefaultPreconditionerTolerance;
-  /// Most internal steps per step() call (CVodeSetMaxNumSteps); >= 1. Exceeding it returns
-  /// Status::NotConverged with CV_TOO_MUCH_WORK.
-  long max_steps = 100000;
-  /// "" if valid, else a message naming the field, its value and the rule it breaks.
-  std::string validate() const;
+  /// Newton (uses linear_solver) or FixedPoint (functional iteration, no linear solves; Adams
+  /// only: on a stiff problem it needs steps below the stability limit of the fast springs).
+  CvodeNonlinearSolver nonlinear_solver = CvodeNonlinearSolver::Newton;
+  /// The first field that breaks a rule, if any (OptionError::ok() when valid).
+  OptionError validate() const;
 };
 
 /// Whole steps with CVODE on X = [x; v], X' = [P v; P M^-1 f(x, v)] (6n unknowns; P zeroes the
@@ -85,6 +68,7 @@ struct CvodeOptions {
 /// allocations on that cloth); CHOLMOD as preconditioner allocates in every numeric factorization.
 class CvodeStepper final : public Stepper {
  public:
+  using Options = CvodeOptions;
   /// system: finalized, must outlive the stepper. Throws std::invalid_argument if
   /// options.validate() fails, std::runtime_error if a SUNDIALS constructor fails.
   explicit CvodeStepper(const MassSpringSystem& system, CvodeOptions options = {});

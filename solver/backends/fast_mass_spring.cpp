@@ -20,25 +20,31 @@ using Rows3 = FastMassSpringStepper::Rows3;
 double inner(const Rows3& A, const Rows3& B) { return A.cwiseProduct(B).sum(); }
 }  // namespace
 
-std::string FastMassSpringOptions::validate() const {
+OptionError FastMassSpringOptions::validate() const {
   std::ostringstream e;
-  if (iterations < 1) e << "iterations = " << iterations << ": must be >= 1";
-  else if (!(tolerance >= 0.0 && tolerance < 1.0)) e << "tolerance = " << tolerance << ": must be in [0, 1)";
-  else if (warm_start != "inertial" && warm_start != "previous")
-    e << "warm_start = '" << warm_start << "': must be inertial or previous";
-  else if (acceleration != "none" && acceleration != "chebyshev" && acceleration != "lbfgs")
-    e << "acceleration = '" << acceleration << "': must be one of none, chebyshev, lbfgs";
-  else if (!(chebyshev_rho >= 0.0 && chebyshev_rho < 1.0))
+  std::string field;
+  if (iterations < 1) {
+    field = "iterations";
+    e << "iterations = " << iterations << ": must be >= 1";
+  } else if (!(tolerance >= 0.0 && tolerance < 1.0)) {
+    field = "tolerance";
+    e << "tolerance = " << tolerance << ": must be in [0, 1) (a relative objective decrease)";
+  } else if (!(chebyshev_rho >= 0.0 && chebyshev_rho < 1.0)) {
+    field = "chebyshev_rho";
     e << "chebyshev_rho = " << chebyshev_rho << ": must be in [0, 1) (0 = estimate)";
-  else if (chebyshev_delay < (chebyshev_rho == 0.0 ? 2 : 0))
-    e << "chebyshev_delay = " << chebyshev_delay << ": must be >= 2 when rho is estimated";
-  else if (lbfgs_history < 1) e << "lbfgs_history = " << lbfgs_history << ": must be >= 1";
-  else if (global_solver != "cholmod" && global_solver != "jacobi")
-    e << "global_solver = '" << global_solver << "': must be cholmod or jacobi";
-  else if (global_solver == "jacobi" && acceleration == "lbfgs")
+  } else if (chebyshev_delay < (chebyshev_rho == 0.0 ? 2 : 0)) {
+    field = "chebyshev_delay";
+    e << "chebyshev_delay = " << chebyshev_delay
+      << (chebyshev_rho == 0.0 ? ": must be >= 2 when rho is estimated" : ": must be >= 0");
+  } else if (lbfgs_history < 1 || lbfgs_history > 1000) {
+    field = "lbfgs_history";
+    e << "lbfgs_history = " << lbfgs_history << ": must be in [1, 1000]";
+  } else if (global_solver == GlobalSolver::Jacobi && acceleration == Acceleration::Lbfgs) {
+    field = "global_solver";
     e << "global_solver = 'jacobi': acceleration = 'lbfgs' needs the factored global matrix "
          "(global_solver = 'cholmod'); use chebyshev or none";
-  return e.str();
+  }
+  return {field, e.str()};
 }
 
 std::string fast_mass_spring_unsupported(const MassSpringSystem& system) {
@@ -49,8 +55,8 @@ std::string fast_mass_spring_unsupported(const MassSpringSystem& system) {
 FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
                                              FastMassSpringOptions options)
     : m_sys(system), m_opt(std::move(options)), m_f(system) {
-  if (const std::string err = m_opt.validate(); !err.empty())
-    throw std::invalid_argument("fast-mass-spring: " + err);
+  if (const OptionError err = m_opt.validate(); !err.ok())
+    throw std::invalid_argument("fast-mass-spring: " + err.message);
   if (const std::string why = fast_mass_spring_unsupported(system); !why.empty())
     throw std::invalid_argument("fast-mass-spring: " + why);
 
@@ -101,7 +107,7 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
     }
   }
 
-  if (m_opt.global_solver == "jacobi") {
+  if (m_opt.global_solver == GlobalSolver::Jacobi) {
     m_inv_diag.setZero(nf);
   } else {
     CholmodOptions chol_options;
@@ -117,7 +123,7 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
   for (Vec* v : {&m_y, &m_acc, &m_x, &m_xprev, &m_xhat}) v->setZero(dofs);
   for (Rows3* M : {&m_const, &m_B, &m_X, &m_G, &m_Gnew, &m_D, &m_Xtrial})
     M->setZero(nf, 3);
-  if (m_opt.acceleration == "lbfgs") {
+  if (m_opt.acceleration == Acceleration::Lbfgs) {
     m_s.assign(size_t(m_opt.lbfgs_history), Rows3::Zero(nf, 3));
     m_t = m_s;
     m_rho_lbfgs.assign(size_t(m_opt.lbfgs_history), 0.0);
@@ -303,12 +309,12 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
   StepSummary out;
   prepare(h);
   begin_step(s0, h);
-  m_x = m_opt.warm_start == "inertial" ? m_y : s0.x;
+  m_x = m_opt.warm_start == WarmStart::Inertial ? m_y : s0.x;
   for (Index p = 0; p < m_sys.num_particles(); ++p)  // pinned particles sit at their end position
     if (m_row[size_t(p)] < 0) m_x.segment<3>(3 * p) = m_y.segment<3>(3 * p);
   m_xprev = m_x;
 
-  const bool lbfgs = m_opt.acceleration == "lbfgs", chebyshev = m_opt.acceleration == "chebyshev";
+  const bool lbfgs = m_opt.acceleration == Acceleration::Lbfgs, chebyshev = m_opt.acceleration == Acceleration::Chebyshev;
   const bool want_objective = m_opt.tolerance > 0.0 || lbfgs || chebyshev;
   const int N = m_opt.iterations;
   double g_start = 0.0, g_prev = 0.0, g = 0.0;
@@ -494,13 +500,13 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
 
 std::string FastMassSpringStepper::report() const {
   std::ostringstream r;
-  r << "fast-mass-spring (" << m_opt.acceleration << ", " << m_opt.global_solver << "): " << m_steps
+  r << "fast-mass-spring (" << to_string(m_opt.acceleration) << ", " << to_string(m_opt.global_solver) << "): " << m_steps
     << " steps, " << m_iterations << " iterations ("
     << (m_steps ? double(m_iterations) / double(m_steps) : 0.0) << " per step), " << m_factorizations
     << (m_chol ? " factorizations (" : " matrix refreshes (") << m_factor_seconds << " s), local steps "
     << m_local_seconds << " s, global steps " << m_global_seconds << " s";
-  if (m_opt.acceleration == "lbfgs") r << ", " << m_line_search_trials << " line-search evaluations";
-  if (m_opt.acceleration == "chebyshev") r << ", " << m_chebyshev_restarts << " Chebyshev restarts";
+  if (m_opt.acceleration == Acceleration::Lbfgs) r << ", " << m_line_search_trials << " line-search evaluations";
+  if (m_opt.acceleration == Acceleration::Chebyshev) r << ", " << m_chebyshev_restarts << " Chebyshev restarts";
   return r.str();
 }
 

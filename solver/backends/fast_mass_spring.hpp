@@ -9,10 +9,30 @@
 #include "hooke/forces/spring_set.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "hooke/options.hpp"
 
 namespace hooke {
 
 class CholmodSolver;
+
+/// Where a local/global iteration starts (FastMassSpringOptions::warm_start).
+enum class WarmStart { Inertial, Previous };
+template <>
+struct EnumNames<WarmStart> {
+  static constexpr std::array<const char*, 2> names = {"inertial", "previous"};
+};
+/// How local/global iterations are accelerated (FastMassSpringOptions::acceleration).
+enum class Acceleration { None, Chebyshev, Lbfgs };
+template <>
+struct EnumNames<Acceleration> {
+  static constexpr std::array<const char*, 3> names = {"none", "chebyshev", "lbfgs"};
+};
+/// How the global step treats its linear system (FastMassSpringOptions::global_solver).
+enum class GlobalSolver { Cholmod, Jacobi };
+template <>
+struct EnumNames<GlobalSolver> {
+  static constexpr std::array<const char*, 2> names = {"cholmod", "jacobi"};
+};
 
 /// Options of FastMassSpringStepper fixed for its lifetime.
 struct FastMassSpringOptions {
@@ -24,11 +44,11 @@ struct FastMassSpringOptions {
   /// Evaluating g costs one extra pass over the springs per step.
   double tolerance = 0.0;
   /// Start of the iteration: "inertial" (y = x0 + h v0, the paper's choice) or "previous" (x0).
-  std::string warm_start = "inertial";
+  WarmStart warm_start = WarmStart::Inertial;
   /// "none" (plain local/global, Liu et al. 2013), "chebyshev" (Wang 2015 semi-iterative
   /// acceleration) or "lbfgs" (Liu, Bouaziz and Kavan 2017: L-BFGS whose initial inverse Hessian is
   /// the prefactored global matrix, with an Armijo backtracking line search).
-  std::string acceleration = "none";
+  Acceleration acceleration = Acceleration::None;
   /// Chebyshev: spectral radius rho of the plain iteration in (0, 1); 0 = estimate it in every step
   /// from the ratio of the last two plain update norms before Chebyshev starts.
   double chebyshev_rho = 0.0;
@@ -42,13 +62,13 @@ struct FastMassSpringOptions {
   /// linear in the springs, but many more iterations, so pair it with acceleration = "chebyshev"
   /// and a tolerance or a large iteration count. Both converge to the same exact backward-Euler
   /// step. "jacobi" cannot take acceleration = "lbfgs" (its initial Hessian is A^-1).
-  std::string global_solver = "cholmod";
+  GlobalSolver global_solver = GlobalSolver::Cholmod;
   /// Called after every iteration with the iteration number (1-based) and the current positions
   /// (3n vector, pinned particles included). For convergence studies; empty = none. Its time is
   /// not counted in report().
   std::function<void(int, ConstRef)> on_iteration;
-  /// "" if valid, else a message naming the field, its value and the rule it breaks.
-  std::string validate() const;
+  /// The first field that breaks a rule, if any (OptionError::ok() when valid).
+  OptionError validate() const;
 };
 
 /// "" if FastMassSpringStepper can run the system exactly, else why not. It accepts Hooke springs,
@@ -79,6 +99,7 @@ std::string fast_mass_spring_unsupported(const MassSpringSystem& system);
 /// "jacobi" the global step is one Jacobi sweep instead (see FastMassSpringOptions).
 class FastMassSpringStepper final : public Stepper {
  public:
+  using Options = FastMassSpringOptions;
   /// Free particles x 3, row-major: row r holds x, y, z of free particle r, contiguous (the
   /// interleaved layout CholmodSolver::solve_interleaved streams).
   using Rows3 = Eigen::Matrix<double, Eigen::Dynamic, 3, Eigen::RowMajor>;

@@ -15,13 +15,11 @@
 
 namespace hooke {
 
-std::string IdaOptions::validate() const {
-  std::string err = validate_sundials_options("ida", rtol, atol, linear_solver, preconditioner,
-                                              preconditioner_tolerance, max_steps);
-  if (!err.empty()) return err;
+OptionError IdaOptions::validate() const {
+  if (OptionError err = validate_shared("ida"); !err.ok()) return err;
   if (max_order < 1 || max_order > 5)
-    return "ida: max_order = " + std::to_string(max_order) + " must be in 1..5 (BDF)";
-  return "";
+    return {"max_order", "ida: max_order = " + std::to_string(max_order) + " must be in 1..5 (BDF)"};
+  return {};
 }
 
 namespace {
@@ -174,7 +172,7 @@ IdaStepper::Impl::Impl(const MassSpringSystem& sys, IdaOptions opt)
   check(IDASStolerances(ida, options.rtol, options.atol), "IDASStolerances");
   check(IDASetMaxOrd(ida, options.max_order), "IDASetMaxOrd");
   check(IDASetMaxNumSteps(ida, options.max_steps), "IDASetMaxNumSteps");
-  if (options.linear_solver != "klu")
+  if (options.linear_solver != SundialsLinearSolver::Klu)
     prec =
         make_schur_preconditioner(system, options.preconditioner, options.preconditioner_tolerance);
   auto lin = sundials_detail::make_linear_system("ida", options.linear_solver, y.get(),
@@ -208,8 +206,8 @@ void IdaStepper::Impl::read_counters() {
 }
 
 IdaStepper::IdaStepper(const MassSpringSystem& system, IdaOptions options) {
-  const std::string err = options.validate();
-  if (!err.empty()) throw std::invalid_argument(err);
+  if (const OptionError err = options.validate(); !err.ok())
+    throw std::invalid_argument(err.message);
   m_impl = std::make_unique<Impl>(system, std::move(options));
 }
 

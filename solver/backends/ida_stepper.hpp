@@ -14,30 +14,13 @@ namespace hooke {
 /// counts residual evaluations).
 using IdaCounters = SundialsCounters;
 
-/// Options of IdaStepper, fixed for its lifetime. Error control is IDA's: each internal step
-/// keeps the weighted RMS norm of the local error estimate below 1, with weight
-/// 1 / (rtol |y_i| + atol) on each of the 6n components of y = [x; v] (x in m, v in m/s).
-struct IdaOptions {
-  /// Relative tolerance of the local error test; in (0, 1).
-  double rtol = 1e-8;
-  /// Absolute tolerance (m for positions, m/s for velocities); > 0.
-  double atol = 1e-10;
+/// Options of IdaStepper, fixed for its lifetime: the shared SUNDIALS ones (tolerances, linear
+/// solver on G = dF/dy + cj dF/dy', preconditioner with gamma = 1 / cj, max_steps) and IDA's own.
+struct IdaOptions : SundialsOptions {
   /// Largest BDF order, 1..5.
   int max_order = 5;
-  /// Linear solver of the Newton iterations on G = dF/dy + cj dF/dy' (6n x 6n): "klu" (sparse
-  /// direct LU of the analytic G, pattern analysed once) or "spgmr" (matrix-free GMRES with the
-  /// analytic product G v, left-preconditioned by SchurPreconditioner with gamma = 1 / cj).
-  std::string linear_solver = "klu";
-  /// Linear backend of the SPGMR preconditioner (a name from linear_solvers(), or "none");
-  /// "" = default_sundials_preconditioner(). Must stay "" with "klu" (rejected otherwise).
-  std::string preconditioner;
-  /// Relative residual tolerance of each preconditioner solve (iterative backends); in (0, 1).
-  double preconditioner_tolerance = kDefaultPreconditionerTolerance;
-  /// Most internal steps per step() call (IDASetMaxNumSteps); >= 1. Exceeding it returns
-  /// Status::NotConverged with IDA_TOO_MUCH_WORK.
-  long max_steps = 100000;
-  /// "" if valid, else a message naming the field, its value and the rule it breaks.
-  std::string validate() const;
+  /// The first field that breaks a rule, if any (OptionError::ok() when valid).
+  OptionError validate() const;
 };
 
 /// Whole steps with IDA on y = [x; v] (6n unknowns) and the residual
@@ -64,6 +47,7 @@ struct IdaOptions {
 /// 1/atol), so restarts cost IDA more internal steps than CVODE.
 class IdaStepper final : public Stepper {
  public:
+  using Options = IdaOptions;
   /// system: finalized, must outlive the stepper. Throws std::invalid_argument if
   /// options.validate() fails, std::runtime_error if a SUNDIALS constructor fails.
   explicit IdaStepper(const MassSpringSystem& system, IdaOptions options = {});

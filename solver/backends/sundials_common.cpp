@@ -239,54 +239,40 @@ std::string default_sundials_preconditioner() {
   return HOOKE_WITH_CHOLMOD ? "cholmod" : "pcg-block";
 }
 
-std::string validate_sundials_options(const char* who, double rtol, double atol,
-                                      const std::string& linear_solver,
-                                      const std::string& preconditioner,
-                                      double preconditioner_tolerance, long max_steps) {
+OptionError SundialsOptions::validate_shared(const char* who) const {
   std::ostringstream os;
   os << who << ": ";
+  const bool klu = linear_solver == SundialsLinearSolver::Klu;
+  std::string field;
   if (!(rtol > 0.0 && rtol < 1.0)) {
+    field = "rtol";
     os << "rtol = " << rtol << " must be in (0, 1)";
-    return os.str();
-  }
-  if (!(atol > 0.0 && std::isfinite(atol))) {
+  } else if (!(atol > 0.0 && std::isfinite(atol))) {
+    field = "atol";
     os << "atol = " << atol
        << " must be positive and finite (with atol = 0 the error weight of a zero component, "
           "e.g. a pinned velocity, is infinite)";
-    return os.str();
-  }
-  if (linear_solver != "klu" && linear_solver != "spgmr") {
-    os << "linear_solver = '" << linear_solver << "' is unknown; available: klu, spgmr";
-    return os.str();
-  }
-  if (linear_solver == "klu" && !preconditioner.empty()) {
+  } else if (klu && !preconditioner.empty()) {
+    field = "preconditioner";
     os << "preconditioner = '" << preconditioner
        << "' is only used with linear_solver = 'spgmr' (KLU is a direct solver); leave it empty";
-    return os.str();
-  }
-  if (linear_solver == "klu" && preconditioner_tolerance != kDefaultPreconditionerTolerance) {
+  } else if (klu && preconditioner_tolerance != kDefaultPreconditionerTolerance) {
+    field = "preconditioner_tolerance";
     os << "preconditioner_tolerance = " << preconditioner_tolerance
        << " is only used with linear_solver = 'spgmr'; leave it at its default";
-    return os.str();
-  }
-  if (linear_solver == "spgmr" && !preconditioner.empty() && preconditioner != "none") {
-    bool known = false;
-    for (const auto& info : linear_solvers()) known = known || preconditioner == info.name;
-    if (!known) {
-      os << "preconditioner = '" << preconditioner << "' is unknown; available: none, "
-         << linear_solver_names();
-      return os.str();
-    }
-  }
-  if (!(preconditioner_tolerance > 0.0 && preconditioner_tolerance < 1.0)) {
+  } else if (!klu && !preconditioner.empty() && preconditioner != "none" &&
+             !linear_solver_unknown(preconditioner).empty()) {
+    field = "preconditioner";
+    os << "preconditioner = '" << preconditioner << "' is unknown; available: none, "
+       << linear_solver_names();
+  } else if (!(preconditioner_tolerance > 0.0 && preconditioner_tolerance < 1.0)) {
+    field = "preconditioner_tolerance";
     os << "preconditioner_tolerance = " << preconditioner_tolerance << " must be in (0, 1)";
-    return os.str();
-  }
-  if (max_steps < 1) {
+  } else if (max_steps < 1) {
+    field = "max_steps";
     os << "max_steps = " << max_steps << " must be at least 1";
-    return os.str();
   }
-  return "";
+  return field.empty() ? OptionError{} : OptionError{field, os.str()};
 }
 
 std::unique_ptr<SchurPreconditioner> make_schur_preconditioner(const MassSpringSystem& system,

@@ -18,6 +18,7 @@
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/linear/linear_solver.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "hooke/options.hpp"
 
 namespace hooke {
 
@@ -183,19 +184,50 @@ class SchurPreconditioner {
   Vec m_rhs, m_z;                // free-DOF scratch
 };
 
-/// Default of CvodeOptions / IdaOptions::preconditioner_tolerance (only "spgmr" uses the field).
+/// Default of SundialsOptions::preconditioner_tolerance (only "spgmr" uses the field).
 constexpr double kDefaultPreconditionerTolerance = 1e-10;
+
+/// Linear solver of the Newton iterations of CVODE and IDA (SundialsOptions::linear_solver).
+enum class SundialsLinearSolver { Klu, Spgmr };
+template <>
+struct EnumNames<SundialsLinearSolver> {
+  static constexpr std::array<const char*, 2> names = {"klu", "spgmr"};
+};
+
+/// The options CvodeOptions and IdaOptions share, fixed for a stepper's lifetime. Error control is
+/// SUNDIALS': each internal step keeps the weighted RMS norm of the local error estimate below 1,
+/// with weight 1 / (rtol |y_i| + atol) on each of the 6n components of y = [x; v] (x in m, v in
+/// m/s).
+struct SundialsOptions {
+  /// Relative tolerance of the local error test; in (0, 1). The global error is typically 10-100x
+  /// larger after many oscillation periods.
+  double rtol = 1e-8;
+  /// Absolute tolerance (m for positions, m/s for velocities); > 0. Matters for components near 0.
+  double atol = 1e-10;
+  /// Linear solver of the Newton iterations (6n x 6n):
+  ///  - Klu: sparse direct LU (SuiteSparse KLU) of the analytic Jacobian, pattern analysed once,
+  ///    refactored when the integrator updates its Newton matrix; the best direct choice in this
+  ///    build (SuperLU_MT and LAPACK are not built);
+  ///  - Spgmr: restarted GMRES, matrix-free with the analytic product, left-preconditioned by
+  ///    SchurPreconditioner (the 3n SPD system M - gamma D - gamma^2 K solved by a hooke linear
+  ///    backend); for large meshes, where the 6n LU costs too much.
+  SundialsLinearSolver linear_solver = SundialsLinearSolver::Klu;
+  /// Linear backend of the SPGMR preconditioner (a name from linear_solvers(), or "none");
+  /// "" = default_sundials_preconditioner(). Must stay "" with Klu (rejected otherwise).
+  std::string preconditioner;
+  /// Relative residual tolerance of each preconditioner solve, when its backend is iterative; in
+  /// (0, 1). A loose tolerance makes the preconditioner vary between GMRES iterations.
+  double preconditioner_tolerance = kDefaultPreconditionerTolerance;
+  /// Most internal steps per step() call (CVodeSetMaxNumSteps / IDASetMaxNumSteps); >= 1.
+  /// Exceeding it returns Status::NotConverged with CV_TOO_MUCH_WORK / IDA_TOO_MUCH_WORK.
+  long max_steps = 100000;
+  /// The first shared field that breaks a rule, if any; who ("cvode", "ida") starts the message.
+  OptionError validate_shared(const char* who) const;
+};
 
 /// The linear backend of the preconditioner when options leave it empty: "cholmod" when built
 /// (exact solve of the SPD system, so SPGMR sees a fixed linear preconditioner), else "pcg-block".
 std::string default_sundials_preconditioner();
-
-/// Checks the options CvodeOptions and IdaOptions share; "" if valid, else a message naming the
-/// option (prefixed with who, e.g. "cvode"), its value and the rule it breaks.
-std::string validate_sundials_options(const char* who, double rtol, double atol,
-                                      const std::string& linear_solver,
-                                      const std::string& preconditioner,
-                                      double preconditioner_tolerance, long max_steps);
 
 /// Makes the preconditioner named by an options struct ("" = default_sundials_preconditioner());
 /// nullptr for "none".

@@ -80,11 +80,11 @@ struct LinearSystem {
   SunPtr<SUNLinearSolver> ls{nullptr, free_linear_solver};
   bool klu() const { return A != nullptr; }
 };
-inline LinearSystem make_linear_system(const char* module, const std::string& linear_solver,
+inline LinearSystem make_linear_system(const char* module, SundialsLinearSolver linear_solver,
                                        N_Vector y, Index nonzeros, bool preconditioned,
                                        SUNContext ctx) {
   LinearSystem s;
-  if (linear_solver == "klu") {
+  if (linear_solver == SundialsLinearSolver::Klu) {
     const sunindextype N = N_VGetLength(y);
     s.A.reset(check_created(module, SUNSparseMatrix(N, N, sunindextype(nonzeros), CSC_MAT, ctx),
                             "SUNSparseMatrix"));

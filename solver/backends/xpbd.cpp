@@ -10,11 +10,11 @@
 
 namespace hooke {
 
-std::string XpbdOptions::validate() const {
-  std::ostringstream e;
-  if (substeps < 1) e << "substeps = " << substeps << ": must be >= 1";
-  else if (iterations < 1) e << "iterations = " << iterations << ": must be >= 1";
-  return e.str();
+OptionError XpbdOptions::validate() const {
+  if (substeps < 1) return {"substeps", "substeps = " + std::to_string(substeps) + ": must be >= 1"};
+  if (iterations < 1)
+    return {"iterations", "iterations = " + std::to_string(iterations) + ": must be >= 1"};
+  return {};
 }
 
 std::string xpbd_unsupported(const MassSpringSystem& system) {
@@ -24,7 +24,8 @@ std::string xpbd_unsupported(const MassSpringSystem& system) {
 
 XpbdStepper::XpbdStepper(const MassSpringSystem& system, XpbdOptions options)
     : m_sys(system), m_opt(options), m_f(system) {
-  if (const std::string err = m_opt.validate(); !err.empty()) throw std::invalid_argument("xpbd: " + err);
+  if (const OptionError err = m_opt.validate(); !err.ok())
+    throw std::invalid_argument("xpbd: " + err.message);
   if (const std::string why = xpbd_unsupported(system); !why.empty())
     throw std::invalid_argument("xpbd: " + why);
   const Index n = system.num_particles();

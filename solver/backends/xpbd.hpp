@@ -6,6 +6,7 @@
 #include "hooke/forces/spring_set.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "hooke/options.hpp"
 
 namespace hooke {
 
@@ -15,8 +16,8 @@ struct XpbdOptions {
   int substeps = 10;
   /// Constraint sweeps per substep (the paper uses 1; more approach the exact compliant solve).
   int iterations = 1;
-  /// "" if valid, else a message naming the field, its value and the rule it breaks.
-  std::string validate() const;
+  /// The first field that breaks a rule, if any (OptionError::ok() when valid).
+  OptionError validate() const;
 };
 
 /// "" if XpbdStepper can run the system, else why not (Hooke springs, gravity and air drag only).
@@ -35,6 +36,7 @@ std::string xpbd_unsupported(const MassSpringSystem& system);
 /// The sweep is serial (Gauss-Seidel order is part of the method), hence deterministic.
 class XpbdStepper final : public Stepper {
  public:
+  using Options = XpbdOptions;
   /// system must be finalized, outlive the stepper, and pass xpbd_unsupported().
   XpbdStepper(const MassSpringSystem& system, XpbdOptions options = {});
 

@@ -18,25 +18,38 @@ void accumulate(LinearSummary& total, const LinearSummary& s) {
 }
 }  // namespace
 
-std::string ImplicitOptions::validate() const {
+OptionError ImplicitOptions::validate() const {
   std::ostringstream os;
-  if (!(beta >= 0.0 && beta <= 1.0)) os << "beta = " << beta << ": must be in [0, 1]";
-  else if (newton_iterations < 1) os << "newton_iterations = " << newton_iterations << ": must be >= 1";
-  else if (!(newton_tolerance > 0.0) || !std::isfinite(newton_tolerance))
+  std::string field;
+  if (!(beta >= 0.0 && beta <= 1.0)) {
+    field = "beta";
+    os << "beta = " << beta << ": must be in [0, 1]";
+  } else if (newton_iterations < 1 || newton_iterations > 100000) {
+    field = "newton_iterations";
+    os << "newton_iterations = " << newton_iterations << ": must be in [1, 100000]";
+  } else if (!(newton_tolerance > 0.0) || !std::isfinite(newton_tolerance)) {
+    field = "newton_tolerance";
     os << "newton_tolerance = " << newton_tolerance << ": must be finite and > 0";
-  else if (!(linear_tolerance > 0.0) || !std::isfinite(linear_tolerance))
+  } else if (!(linear_tolerance > 0.0) || !std::isfinite(linear_tolerance)) {
+    field = "linear_tolerance";
     os << "linear_tolerance = " << linear_tolerance << ": must be finite and > 0";
-  else if (max_linear_iterations < 1)
+  } else if (max_linear_iterations < 1) {
+    field = "max_linear_iterations";
     os << "max_linear_iterations = " << max_linear_iterations << ": must be >= 1";
-  return os.str();
+  }
+  return {field, os.str()};
 }
 
 ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme scheme,
                                  std::unique_ptr<LinearSolver> solver, ImplicitOptions options)
     : m_system(system), m_scheme(scheme), m_solver(std::move(solver)), m_options(options),
       m_J(system.make_jacobians()), m_A(system) {
-  const std::string err = m_options.validate();
-  HOOKE_ASSERT(err.empty(), "ImplicitOptions: " << err);
+  const OptionError err = m_options.validate();
+  HOOKE_ASSERT(err.ok(), "ImplicitOptions: " << err.message);
+  HOOKE_ASSERT(m_options.linear_solver.empty() || m_options.linear_solver == m_solver->name(),
+               "ImplicitOptions::linear_solver is '" << m_options.linear_solver
+                                                     << "' but the backend given is '"
+                                                     << m_solver->name() << "'");
   m_jac_options.clamp_compressed = m_options.clamp_compressed;
   // Leave the damper's non-symmetric df/dx out of A for every backend: A then stays symmetric
   // (and SPD with the clamp), which CG and Cholesky need and under which Jacobi and Gauss-Seidel

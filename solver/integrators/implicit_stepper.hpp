@@ -5,6 +5,7 @@
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/linear/linear_solver.hpp"
+#include "hooke/options.hpp"
 
 namespace hooke {
 
@@ -24,8 +25,12 @@ enum class ImplicitScheme {
   Bdf2,
 };
 
-/// Options of ImplicitStepper, fixed for its lifetime.
+/// Options of the implicit methods (implicit, implicit-midpoint, bdf2), fixed for a stepper's
+/// lifetime.
 struct ImplicitOptions {
+  /// Linear backend by name (linear_solvers()); "" = default_linear_solver(). The registry makes
+  /// the backend from it; ImplicitStepper checks that the backend it is given has this name.
+  std::string linear_solver;
   /// beta in [0, 1] (Beta scheme only).
   double beta = 1.0;
   /// Maximum Newton iterations per step; 1 gives the linearised step (no convergence test).
@@ -40,8 +45,9 @@ struct ImplicitOptions {
   /// guaranteed to converge for it. Off exposes the exact linearisation (backends then report a
   /// breakdown when A is indefinite).
   bool clamp_compressed = true;
-  /// "" if valid, else a message naming the field, its value and the rule it breaks.
-  std::string validate() const;
+  /// The first field that breaks a rule, if any (OptionError::ok() when valid). The linear
+  /// backend's name is checked by the registry that makes it.
+  OptionError validate() const;
 };
 
 /// Implicit time steps on a pluggable linear backend. All three schemes are one-leg Newton

@@ -70,13 +70,19 @@ std::string linear_solver_names() {
   return s;
 }
 
+std::string linear_solver_unknown(const std::string& name) {
+  for (const auto& e : table())
+    if (name == e.info.name) return "";
+  if (name == "cholmod" || name == "pcg-cholmod" || name == "pcg-nodal")
+    return "linear solver '" + name + "' is not built: install libsuitesparse-dev and "
+           "reconfigure with -DHOOKE_WITH_CHOLMOD=ON";
+  return "unknown linear solver '" + name + "'; available: " + linear_solver_names();
+}
+
 std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name) {
   for (const auto& e : table())
     if (name == e.info.name) return e.make();
-  if (name == "cholmod")
-    throw UnknownName("linear solver 'cholmod' is not built: install libsuitesparse-dev and "
-                      "reconfigure with -DHOOKE_WITH_CHOLMOD=ON");
-  throw UnknownName("unknown linear solver '" + name + "'; available: " + linear_solver_names());
+  throw UnknownName(linear_solver_unknown(name));
 }
 
 }  // namespace hooke

@@ -17,6 +17,9 @@ struct LinearSolverInfo {
 const std::vector<LinearSolverInfo>& linear_solvers();
 /// Comma-separated names, for messages.
 std::string linear_solver_names();
+/// "" if name is a backend of this build, else why not: the available names, or the CMake option
+/// and Debian package of a known backend this build lacks (the message make_linear_solver throws).
+std::string linear_solver_unknown(const std::string& name);
 /// Creates a backend by name; throws UnknownName listing the available names, or naming the CMake
 /// option and Debian package of a known backend this build lacks.
 std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name);

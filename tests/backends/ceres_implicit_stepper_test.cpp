@@ -51,7 +51,7 @@ std::string sci(double v) {
 
 CeresImplicitOptions with_formulation(const char* formulation) {
   CeresImplicitOptions o;
-  o.formulation = formulation;
+  o.formulation = hooke::from_string<hooke::CeresFormulation>(formulation).value();
   return o;
 }
 
@@ -360,7 +360,7 @@ TEST(CeresImplicitStepper, LinearSolversGiveTheSameStep) {
   for (const char* name : {"dense-qr", "cgnr"}) {
     SCOPED_TRACE(name);
     CeresImplicitOptions o;
-    o.linear_solver = name;
+    o.linear_solver = hooke::from_string<hooke::CeresLinearSolver>(name).value();
     CeresImplicitStepper stepper(*scene.system, o);
     const StepSummary r = stepper.step(s0, h, other);
     EXPECT_EQ(r.status, Status::Converged) << r.message;
@@ -390,14 +390,13 @@ TEST(CeresImplicitStepper, SpringDamperIsReportedUnsupported) {
 }
 
 TEST(CeresImplicitStepper, OptionsValidateRejectsBadValues) {
-  EXPECT_EQ(CeresImplicitOptions{}.validate(), "");
-  EXPECT_EQ(with_formulation("energy").validate(), "");
+  EXPECT_EQ(CeresImplicitOptions{}.validate().message, "");
+  EXPECT_EQ(with_formulation("energy").validate().message, "");
   struct Case {
     const char* field;
     void (*spoil)(CeresImplicitOptions&);
   };
   const Case cases[] = {
-      {"formulation", [](CeresImplicitOptions& o) { o.formulation = "newton"; }},
       {"max_iterations", [](CeresImplicitOptions& o) { o.max_iterations = 0; }},
       {"function_tolerance", [](CeresImplicitOptions& o) { o.function_tolerance = -1e-3; }},
       {"gradient_tolerance", [](CeresImplicitOptions& o) { o.gradient_tolerance = std::nan(""); }},
@@ -406,21 +405,21 @@ TEST(CeresImplicitStepper, OptionsValidateRejectsBadValues) {
          o.parameter_tolerance = std::numeric_limits<double>::infinity();
        }},
       {"residual_tolerance", [](CeresImplicitOptions& o) { o.residual_tolerance = -1.0; }},
-      {"linear_solver", [](CeresImplicitOptions& o) { o.linear_solver = "cholesky"; }},
       {"threads", [](CeresImplicitOptions& o) { o.threads = 0; }},
   };
   const Scene scene = hanging_cloth(3, 0.0);
   for (const Case& c : cases) {
     CeresImplicitOptions o;
     c.spoil(o);
-    const std::string message = o.validate();
+    const std::string message = o.validate().message;
     EXPECT_EQ(message.rfind(c.field, 0), 0u) << c.field << ": " << message;
+    EXPECT_EQ(o.validate().field, c.field);
     EXPECT_THROW(CeresImplicitStepper(*scene.system, o), std::invalid_argument) << c.field;
   }
-  CeresImplicitOptions o;
-  o.linear_solver = "qr";
-  EXPECT_NE(o.validate().find("sparse-normal-cholesky, dense-qr, cgnr"), std::string::npos)
-      << o.validate();
+  // Choices are enums: names that are none of them are refused where text is read (scenes).
+  EXPECT_FALSE(hooke::from_string<hooke::CeresFormulation>("newton"));
+  EXPECT_FALSE(hooke::from_string<hooke::CeresLinearSolver>("qr"));
+  EXPECT_EQ(hooke::choice_names<hooke::CeresLinearSolver>(), "sparse-normal-cholesky, dense-qr, cgnr");
 }
 
 TEST(CeresImplicitStepper, FailureIsAStatusNotAnException) {

@@ -147,9 +147,9 @@ Trajectory run(const Scene& scene, const char* method, const MethodOptions& opti
 /// CVODE (BDF, KLU) at rtol, atol 1e-12, to kT in ten 5 ms calls (it keeps its history across
 /// them).
 Trajectory run_cvode(const Scene& scene, double rtol) {
-  MethodOptions o;
-  o.whole_step.rtol = rtol;
-  o.whole_step.atol = 1e-12;
+  hooke::CvodeOptions o;
+  o.rtol = rtol;
+  o.atol = 1e-12;
   return run(scene, "cvode", o, 10);
 }
 

@@ -80,10 +80,10 @@ TEST(Xpbd, RefusesDampersAndBadOptions) {
   const test::Cloth cloth = test::make_cloth(spec);  // has a SpringDamper
   EXPECT_NE(xpbd_unsupported(*cloth.system).find("spring-damper"), std::string::npos);
   EXPECT_THROW(make_stepper("xpbd", *cloth.system), std::invalid_argument);
-  EXPECT_NE(substeps(0).validate().find("substeps"), std::string::npos);
+  EXPECT_NE(substeps(0).validate().message.find("substeps"), std::string::npos);
   XpbdOptions o;
   o.iterations = 0;
-  EXPECT_NE(o.validate().find("iterations"), std::string::npos);
+  EXPECT_NE(o.validate().message.find("iterations"), std::string::npos);
 }
 
 }  // namespace

@@ -86,14 +86,14 @@ struct ElasticPendulum {
 
 /// Options of the implicit methods: backend "" (default), one Newton step or Newton-converged
 /// (20 iterations, relative tolerance 1e-12), exact Jacobian unless clamp is requested.
-MethodOptions options(double beta, bool converged, const std::string& backend = "") {
-  MethodOptions o;
+ImplicitOptions options(double beta, bool converged, const std::string& backend = "") {
+  ImplicitOptions o;
   o.linear_solver = backend;
-  o.implicit.beta = beta;
-  o.implicit.newton_iterations = converged ? 20 : 1;
-  o.implicit.newton_tolerance = 1e-12;
-  o.implicit.linear_tolerance = 1e-13;
-  o.implicit.clamp_compressed = false;
+  o.beta = beta;
+  o.newton_iterations = converged ? 20 : 1;
+  o.newton_tolerance = 1e-12;
+  o.linear_tolerance = 1e-13;
+  o.clamp_compressed = false;
   return o;
 }
 
@@ -190,10 +190,10 @@ TEST(ImplicitStepper, EveryBackendTakesSameClothStep) {
       continue;
     }
     ++expected;
-    MethodOptions opt = options(1.0, false, name);
-    opt.implicit.linear_tolerance = 1e-12;
-    opt.implicit.max_linear_iterations = 20000;
-    opt.implicit.clamp_compressed = true;
+    ImplicitOptions opt = options(1.0, false, name);
+    opt.linear_tolerance = 1e-12;
+    opt.max_linear_iterations = 20000;
+    opt.clamp_compressed = true;
     auto stepper = hooke::make_stepper("implicit", sys, opt);
     State s1;
     const StepSummary sum = stepper->step(cloth.state, h, s1);
@@ -231,8 +231,8 @@ TEST(ImplicitStepper, BetaZeroOneNewtonStepIsSymplecticEuler) {
   const State se = integrate("symplectic-euler", {}, *cloth.system, cloth.state, 10 * h, 10);
   int backends = 0;
   for (const auto& info : hooke::linear_solvers()) {
-    MethodOptions opt = options(0.0, false, info.name);
-    opt.implicit.linear_tolerance = 1e-15;
+    ImplicitOptions opt = options(0.0, false, info.name);
+    opt.linear_tolerance = 1e-15;
     const State s = integrate("implicit", opt, *cloth.system, cloth.state, 10 * h, 10);
     const double dx = (s.x - se.x).lpNorm<Eigen::Infinity>() / se.x.lpNorm<Eigen::Infinity>();
     const double dv = (s.v - se.v).lpNorm<Eigen::Infinity>() / se.v.lpNorm<Eigen::Infinity>();
@@ -325,7 +325,7 @@ TEST(Bdf2, StartsAndRestartsWithBackwardEulerStep) {
   // The first BDF2 step, and the first after a change of h, are backward Euler steps (the same
   // one-leg coefficients, hence bitwise equal).
   ElasticPendulum p;
-  const MethodOptions opt = options(1.0, true);
+  const ImplicitOptions opt = options(1.0, true);
   auto bdf2 = hooke::make_stepper("bdf2", *p.system, opt);
   auto be = hooke::make_stepper("implicit", *p.system, opt);
   State s0 = p.initial(), a, b;
@@ -405,7 +405,7 @@ TEST_P(PendulumOrder, MatchesMeasuredOrderAgainstFineReference) {
   ElasticPendulum p;
   const double T = 1.0, w = 10.0;  // spring frequency, to scale velocity errors
   const int N0 = 20, Nref = N0 * (1 << kHalvings) * 16;
-  const MethodOptions opt = options(sc.beta, sc.converged);
+  const ImplicitOptions opt = options(sc.beta, sc.converged);
   const State ref = integrate(sc.method, opt, *p.system, p.initial(), T, Nref);
   Vec xv_ref(12);
   xv_ref << ref.x, ref.v;
@@ -441,12 +441,12 @@ TEST(ImplicitStepper, NewtonConvergedStepSolvesBackwardEulerEquations) {
   for (const auto& info : hooke::linear_solvers()) {
     auto probe = hooke::make_linear_solver(info.name);
     if (!probe->requires_spd()) continue;
-    MethodOptions opt = options(1.0, true, info.name);
-    opt.implicit.newton_iterations = 150;
-    opt.implicit.newton_tolerance = 1e-12;
-    opt.implicit.linear_tolerance = 1e-12;
-    opt.implicit.max_linear_iterations = 20000;
-    opt.implicit.clamp_compressed = ImplicitOptions{}.clamp_compressed;  // the default (clamped)
+    ImplicitOptions opt = options(1.0, true, info.name);
+    opt.newton_iterations = 150;
+    opt.newton_tolerance = 1e-12;
+    opt.linear_tolerance = 1e-12;
+    opt.max_linear_iterations = 20000;
+    opt.clamp_compressed = ImplicitOptions{}.clamp_compressed;  // the default (clamped)
     auto stepper = hooke::make_stepper("implicit", sys, opt);
     State s1;
     const StepSummary sum = stepper->step(cloth.state, h, s1);
@@ -474,8 +474,8 @@ TEST(ImplicitStepper, NewtonConvergesQuadraticallyWithExactJacobian) {
   State s0 = p.initial();
   s0.v[3] = 1.0;
   for (const char* method : {"implicit", "implicit-midpoint", "bdf2"}) {
-    MethodOptions opt = options(1.0, true);
-    opt.implicit.newton_tolerance = 1e-12;
+    ImplicitOptions opt = options(1.0, true);
+    opt.newton_tolerance = 1e-12;
     auto stepper = hooke::make_stepper(method, *p.system, opt);
     State s1;
     const StepSummary sum = stepper->step(s0, 0.2, s1);
@@ -487,9 +487,9 @@ TEST(ImplicitStepper, NewtonConvergesQuadraticallyWithExactJacobian) {
 
 TEST(ImplicitStepper, NewtonIterationCapReportsNotConverged) {
   ElasticPendulum p;
-  MethodOptions opt = options(1.0, true);
-  opt.implicit.newton_iterations = 2;
-  opt.implicit.newton_tolerance = 1e-300;
+  ImplicitOptions opt = options(1.0, true);
+  opt.newton_iterations = 2;
+  opt.newton_tolerance = 1e-300;
   for (const char* method : {"implicit", "implicit-midpoint", "bdf2"}) {
     auto stepper = hooke::make_stepper(method, *p.system, opt);
     State s1;
@@ -517,9 +517,9 @@ TEST(ImplicitStepper, IndefiniteNewtonMatrixBreaksDownUnlessClamped) {
   for (const auto& info : hooke::linear_solvers()) {
     auto probe = hooke::make_linear_solver(info.name);
     if (!probe->requires_spd()) continue;
-    MethodOptions opt = options(1.0, false, info.name);
-    opt.implicit.linear_tolerance = 1e-8;
-    opt.implicit.clamp_compressed = false;
+    ImplicitOptions opt = options(1.0, false, info.name);
+    opt.linear_tolerance = 1e-8;
+    opt.clamp_compressed = false;
     auto stepper = hooke::make_stepper("implicit", *cloth.system, opt);
     State s1(3, -1.0);
     const State sentinel = s1;
@@ -529,7 +529,7 @@ TEST(ImplicitStepper, IndefiniteNewtonMatrixBreaksDownUnlessClamped) {
                                                                          << sum.message;
     EXPECT_TRUE(s1 == sentinel) << info.name << ": a broken-down step wrote a state";
 
-    opt.implicit.clamp_compressed = ImplicitOptions{}.clamp_compressed;  // the default: clamped
+    opt.clamp_compressed = ImplicitOptions{}.clamp_compressed;  // the default: clamped
     auto clamped = hooke::make_stepper("implicit", *cloth.system, opt);
     const StepSummary ok = clamped->step(cloth.state, h, s1);
     EXPECT_EQ(ok.status, Status::Converged) << info.name << ": " << ok.message;
@@ -545,37 +545,38 @@ TEST(ImplicitStepper, IndefiniteNewtonMatrixBreaksDownUnlessClamped) {
 // ---- Options ----
 
 TEST(ImplicitOptions, ValidateRejectsBadValues) {
-  EXPECT_EQ(ImplicitOptions{}.validate(), "");
+  EXPECT_EQ(ImplicitOptions{}.validate().message, "");
   EXPECT_TRUE(ImplicitOptions{}.clamp_compressed);  // SPD Newton matrices by default
   const double nan = std::numeric_limits<double>::quiet_NaN();
   for (double beta : {1.5, -0.1, nan}) {
     ImplicitOptions o;
     o.beta = beta;
-    EXPECT_NE(o.validate().find("beta"), std::string::npos) << beta << ": " << o.validate();
+    EXPECT_NE(o.validate().message.find("beta"), std::string::npos) << beta << ": " << o.validate().message;
   }
   for (double beta : {0.0, 0.5, 1.0}) {
     ImplicitOptions o;
     o.beta = beta;
-    EXPECT_EQ(o.validate(), "") << beta;
+    EXPECT_EQ(o.validate().message, "") << beta;
   }
   ImplicitOptions o;
   o.newton_iterations = 0;
-  EXPECT_NE(o.validate().find("newton_iterations"), std::string::npos) << o.validate();
+  EXPECT_EQ(o.validate().field, "newton_iterations") << o.validate().message;
+  EXPECT_NE(o.validate().message.find("newton_iterations"), std::string::npos) << o.validate().message;
   o = {};
   o.newton_tolerance = 0.0;
-  EXPECT_NE(o.validate().find("newton_tolerance"), std::string::npos) << o.validate();
+  EXPECT_NE(o.validate().message.find("newton_tolerance"), std::string::npos) << o.validate().message;
   o = {};
   o.linear_tolerance = -1e-8;
-  EXPECT_NE(o.validate().find("linear_tolerance"), std::string::npos) << o.validate();
+  EXPECT_NE(o.validate().message.find("linear_tolerance"), std::string::npos) << o.validate().message;
   o = {};
   o.max_linear_iterations = 0;
-  EXPECT_NE(o.validate().find("max_linear_iterations"), std::string::npos) << o.validate();
+  EXPECT_NE(o.validate().message.find("max_linear_iterations"), std::string::npos) << o.validate().message;
   // make_stepper refuses them.
   TwoParticleSpring sp(kSpringStiffness);
-  MethodOptions mo;
-  mo.implicit.beta = 1.5;
+  ImplicitOptions mo;
+  mo.beta = 1.5;
   EXPECT_THROW(hooke::make_stepper("implicit", *sp.system, mo), std::invalid_argument);
-  mo.implicit.beta = 1.0;
-  mo.implicit.newton_iterations = 0;
+  mo.beta = 1.0;
+  mo.newton_iterations = 0;
   EXPECT_THROW(hooke::make_stepper("bdf2", *sp.system, mo), std::invalid_argument);
 }

@@ -66,11 +66,11 @@ class StepperHistory : public testing::TestWithParam<Case> {
     return c;
   }
   std::unique_ptr<Stepper> stepper(const MassSpringSystem& sys) const {
-    MethodOptions o;
+    hooke::ImplicitOptions o;
     o.linear_solver = GetParam().linear_solver;
-    o.implicit.newton_iterations = 2;
-    o.implicit.max_linear_iterations = 5;  // pcg stops early: the warm start then matters
-    return make_stepper(GetParam().method, sys, o);
+    o.newton_iterations = 2;
+    o.max_linear_iterations = 5;  // pcg stops early: the warm start then matters
+    return make_stepper(GetParam().method, sys, hooke::options_for(GetParam().method, o));
   }
   static constexpr double kH = 1e-4;
 };

@@ -826,7 +826,7 @@ TEST(LinearRegistry, UnknownNameThrowsListingNames) {
   ClothSpec spec = cloth_spec();
   spec.n = 3;
   const Cloth cloth = make_cloth(spec);
-  hooke::MethodOptions opt;
+  hooke::ImplicitOptions opt;
   opt.linear_solver = "no-such-backend";
   EXPECT_THROW(hooke::make_stepper("implicit", *cloth.system, opt), hooke::UnknownName);
 }

@@ -305,9 +305,9 @@ TEST(Allocation, ImplicitStepsDoNotAllocate) {
       for (int newton : {1, 10}) {
         const std::string label = std::string(method.name) + " / " + backend.name +
                                   " / newton " + std::to_string(newton);
-        hooke::MethodOptions opt;
+        hooke::ImplicitOptions opt;
         opt.linear_solver = backend.name;
-        opt.implicit.newton_iterations = newton;
+        opt.newton_iterations = newton;
         hooke::Simulation sim(*sys, hooke::make_stepper(method.name, *sys, opt), cloth_state());
         for (int k = 0; k < 2; ++k) {
           const hooke::StepSummary warm = sim.advance(h);
@@ -426,25 +426,26 @@ TEST(Allocation, CholmodAllocatesOnlyInFactor) {
 TEST(Allocation, LocalGlobalAndXpbdStepsDoNotAllocate) {
   auto sys = make_cloth(false);
   const double h = 1e-3;
-  std::vector<std::pair<std::string, hooke::MethodOptions>> runs;
+  struct Run {
+    std::string name, label;
+    hooke::MethodOptions options;
+  };
+  std::vector<Run> runs;
   for (const char* a : {"none", "chebyshev", "lbfgs", "none/jacobi", "chebyshev/jacobi"})
     for (double tol : {0.0, 1e-6}) {
-      hooke::MethodOptions o;
+      hooke::FastMassSpringOptions o;
       const std::string variant = a;
-      o.fast_mass_spring.acceleration = variant.substr(0, variant.find('/'));
-      if (variant.find("/jacobi") != std::string::npos) o.fast_mass_spring.global_solver = "jacobi";
-      o.fast_mass_spring.tolerance = tol;
-      o.fast_mass_spring.iterations = 20;
-      o.fast_mass_spring.chebyshev_delay = 4;
+      o.acceleration = *hooke::from_string<hooke::Acceleration>(variant.substr(0, variant.find('/')));
+      if (variant.find("/jacobi") != std::string::npos) o.global_solver = hooke::GlobalSolver::Jacobi;
+      o.tolerance = tol;
+      o.iterations = 20;
+      o.chebyshev_delay = 4;
       if (hooke::method_unsupported("fast-mass-spring", *sys).empty() &&
           std::string(hooke::method_names()).find("fast-mass-spring") != std::string::npos)
-        runs.emplace_back("fast-mass-spring", o);
+        runs.push_back({"fast-mass-spring", "fast-mass-spring / " + variant + " / tol " + std::to_string(tol), o});
     }
-  runs.emplace_back("xpbd", hooke::MethodOptions{});
-  for (const auto& [name, opt] : runs) {
-    const std::string label = name + " / " + opt.fast_mass_spring.acceleration + " / " +
-                              opt.fast_mass_spring.global_solver + " / tol " +
-                              std::to_string(opt.fast_mass_spring.tolerance);
+  runs.push_back({"xpbd", "xpbd", {}});
+  for (const auto& [name, label, opt] : runs) {
     hooke::Simulation sim(*sys, hooke::make_stepper(name, *sys, opt), cloth_state());
     for (int k = 0; k < 2; ++k) ASSERT_NE(sim.advance(h).status, hooke::Status::Fatal) << label;
     const long before = g_allocations.load();

@@ -83,13 +83,13 @@ inline Scene stiff_chain(int n) {
 /// Tolerance 1e-12 on ||delta v|| relative to ||v||: 1e-13 is not reached on the first step from
 /// rest (round-off), though the step is then equally converged.
 inline std::unique_ptr<Stepper> newton_backward_euler(const MassSpringSystem& system) {
-  MethodOptions o;
+  ImplicitOptions o;
   o.linear_solver = test::has_backend("cholmod") ? "cholmod" : "pcg-block";
-  o.implicit.beta = 1.0;
-  o.implicit.newton_iterations = 100;
-  o.implicit.newton_tolerance = 1e-12;
-  o.implicit.linear_tolerance = 1e-14;
-  o.implicit.clamp_compressed = false;
+  o.beta = 1.0;
+  o.newton_iterations = 100;
+  o.newton_tolerance = 1e-12;
+  o.linear_tolerance = 1e-14;
+  o.clamp_compressed = false;
   return make_stepper("implicit", system, o);
 }
 
