@@ -3,21 +3,16 @@
 #include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
 #include <chrono>
 #include <csignal>
-#include <cstdlib>
-#include <functional>
-#include <cinttypes>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
-#include <iostream>
 #include <memory>
 
 #include "experiments/checkpoint.hpp"
 #include "experiments/divergence.hpp"
-#include "experiments/output/png_writer.hpp"
-#include "experiments/output/vtk_writer.hpp"
+#include "experiments/run_output.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
 
@@ -27,26 +22,6 @@ namespace {
 
 namespace fs = std::filesystem;
 using Clock = std::chrono::steady_clock;
-
-/// A CSV file written with full precision that is flushed on every row count threshold and closed
-/// (flushed) on destruction, so an interrupted or diverged run keeps its rows.
-class CsvFile {
- public:
-  explicit CsvFile(const std::string& path, bool append = false)
-      : m_path(path), m_f(std::fopen(path.c_str(), append ? "a" : "w")) {
-    if (!m_f) throw std::runtime_error("cannot write " + path);
-  }
-  ~CsvFile() {
-    if (m_f) std::fclose(m_f);
-  }
-  CsvFile(const CsvFile&) = delete;
-  CsvFile& operator=(const CsvFile&) = delete;
-  FILE* get() { return m_f; }
-
- private:
-  std::string m_path;
-  FILE* m_f;
-};
 
 /// A one-line progress display on a terminal, refreshed at most 4 times a second.
 class Progress {
@@ -72,23 +47,6 @@ class Progress {
   long long m_total;
   Clock::time_point m_start = Clock::now(), m_last = Clock::now() - std::chrono::seconds(1);
 };
-
-void write_resolved_scene(const Scene& scene, const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error("cannot write " + path);
-  out << "# Resolved scene: " << scene.file << " with every default filled in (written by hooke run).\n"
-      << scene.resolved << "\n";
-}
-
-void write_final_csv(const std::string& path, const State& s) {
-  CsvFile f(path + ".tmp");
-  std::fprintf(f.get(), "id,x,y,z,vx,vy,vz\n");
-  for (Index i = 0; i < s.num_particles(); ++i)
-    std::fprintf(f.get(), "%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", (long long)i, s.x[3 * i],
-                 s.x[3 * i + 1], s.x[3 * i + 2], s.v[3 * i], s.v[3 * i + 1], s.v[3 * i + 2]);
-  std::fflush(f.get());
-  fs::rename(path + ".tmp", path);
-}
 
 /// Set by the SIGINT / SIGTERM handler; the run loops poll it after every step.
 volatile std::sig_atomic_t g_signal = 0;
@@ -142,245 +100,225 @@ std::string backend_label(const Scene& scene) {
   return label;
 }
 
-int run_mass_spring(Scene& scene, const std::string& dir, const RunOptions& options,
-                    const Checkpoint* resume) {
-  const MassSpringSystem& sys = *scene.system;
-  std::unique_ptr<Stepper> stepper;
+/// One mass-spring run from its first step (or a checkpoint) to the end: the simulation, its
+/// output files, the divergence rule and the counters a checkpoint carries. run() returns the
+/// process exit code.
+class MassSpringRun {
+ public:
+  MassSpringRun(const Scene& scene, const std::string& dir, const RunOptions& options,
+                const Checkpoint* resume);
+  int run();
+
+ private:
+  static std::unique_ptr<Stepper> make_scene_stepper(const Scene& scene);
+  void restore(const Checkpoint& c);
+  /// After a successful step: log row, divergence check, frame, progress, stop request and
+  /// periodic checkpoint. Returns an exit code to stop with, or -1 to go on.
+  int after_step(long long step, const StepSummary& sum);
+  int report_failure(long long step, const StepSummary& sum);
+  int report_divergence(long long step, double E);
+  int stop(long long step, int sig);
+  void checkpoint(long long step);
+  int finish();
+
+  const Scene& m_scene;
+  const MassSpringSystem& m_sys;
+  const RunOptions& m_options;
+  const std::string m_dir;
+  const std::string m_label;  // backend_label(scene)
+  const long long m_steps;
+  Simulation m_sim;
+  long long m_first_step = 1, m_not_converged = 0;
+  long long m_step = 0;  // the step being taken (for messages)
+  double m_wall = 0.0;
+  std::unique_ptr<RunOutput> m_out;
+  double m_E0 = 0.0, m_scale = 0.0, m_E_limit = 0.0;
+  Progress m_progress;
+  Clock::time_point m_last_checkpoint = Clock::now();
+};
+
+std::unique_ptr<Stepper> MassSpringRun::make_scene_stepper(const Scene& scene) {
   try {
-    stepper = make_stepper(scene.integrator.method, sys, scene.integrator.options);
+    return make_stepper(scene.integrator.method, *scene.system, scene.integrator.options);
   } catch (const SetupError& e) {  // e.g. a factorization above the memory budget: refused up front
     const bool implicit = method_info(scene.integrator.method).kind == MethodKind::Implicit;
     throw InputError(scene.file, implicit ? "integrator.linear_solver" : "integrator.method", e.what());
   }
-  Simulation sim(sys, std::move(stepper), resume ? resume->state : scene.initial);
-  sim.set_accept_not_converged(scene.run.allow_not_converged);
-  const std::string checkpoint_path = dir + "/checkpoint.bin";
-  long long first_step = 1, not_converged = 0, halved_steps = 0;
-  double wall = 0.0;
-  std::vector<std::pair<double, std::string>> frames;
-  if (resume) {
-    if (resume->method != scene.integrator.method)
-      throw InputError(checkpoint_path, "checkpoint",
-                       "was written by method '" + resume->method + "' but " + dir +
-                           "/scene.toml asks for '" + scene.integrator.method + "'");
-    if (resume->state.x.size() != sys.dofs())
-      throw InputError(checkpoint_path, "checkpoint",
-                       "holds " + std::to_string(resume->state.x.size() / 3) + " particles; " + dir +
-                           "/scene.toml has " + std::to_string(sys.num_particles()));
-    try {
-      sim.stepper().restore_history(resume->history);
-    } catch (const InternalError& e) {
-      throw InputError(checkpoint_path, "checkpoint", std::string("stepper history: ") + e.what());
-    }
-    first_step = resume->step + 1;
-    not_converged = resume->not_converged;
-    halved_steps = resume->halved_steps;
-    wall = resume->wall;
-    frames = resume->frames;
-    if (!sim.stepper().exact_resume())
-      std::fprintf(stderr,
-                   "note: %s keeps an internal history that a checkpoint cannot hold: it restarts at "
-                   "step %lld, so the result agrees with an uninterrupted run to the solver's "
-                   "tolerance, not bit for bit\n",
-                   scene.integrator.method.c_str(), resume->step);
-  } else {
-    fs::remove(checkpoint_path);  // a stale checkpoint of an earlier run must not be resumed
-  }
-  const long long N = scene.time.steps();
-  if (resume && resume->step > N)
-    throw InputError(checkpoint_path, "checkpoint",
-                     "is at step " + std::to_string(resume->step) + " but the scene has only " +
-                         std::to_string(N) + " steps");
-  const std::string frames_dir = dir + "/frames";
-  if (scene.output.vtk) {
-    fs::create_directories(frames_dir);
-    // A fresh run removes every frame; a resumed one those written after its checkpoint.
-    for (const auto& e : fs::directory_iterator(frames_dir)) {
-      if (e.path().extension() != ".vtk") continue;
-      const std::string stem = e.path().stem().string();
-      const long long frame_step = stem.rfind("frame_", 0) == 0 ? std::atoll(stem.c_str() + 6) : -1;
-      if (!resume || frame_step > resume->step) fs::remove(e.path());
-    }
-  }
-  auto frame = [&](long long step) {
-    if (!scene.output.vtk) return;
-    char name[64];
-    std::snprintf(name, sizeof name, "frame_%08lld.vtk", step);
-    write_vtk_frame(frames_dir + "/" + name, sim.state(), sys.pinned(), scene.edges);
-    frames.emplace_back(sim.state().t, std::string("frames/") + name);
-    write_pvd(dir + "/frames.pvd", frames);
-  };
+}
 
-  const std::string log_path = dir + "/log.csv";
-  if (resume) {
-    // Cut log.csv back to the checkpointed step: rows written after it are written again.
-    std::error_code ec;
-    const auto size = fs::file_size(log_path, ec);
-    if (ec || static_cast<long long>(size) < resume->log_bytes)
-      throw InputError(log_path, "log", "is shorter than the checkpoint says (" +
-                                            std::to_string(resume->log_bytes) + " bytes): it was "
-                                            "changed after the run stopped");
-    fs::resize_file(log_path, static_cast<std::uintmax_t>(resume->log_bytes));
-  }
-  CsvFile log(log_path, resume != nullptr);
-  const bool has_exact = static_cast<bool>(scene.exact);
-  if (!resume)
-    std::fprintf(log.get(), "step,t,kinetic,potential,total,max_strain,iterations,residual,wall_time%s\n",
-                 has_exact ? ",error" : "");
-  State exact = scene.initial;
-  int iterations = 0;
-  double residual = 0.0;
-  const double E0 = sys.kinetic_energy(scene.initial.v) + sys.potential_energy(scene.initial.x);
-  const double scale = std::max({divergence_energy_scale(sys, scene.initial), std::abs(E0), 1e-30});
-  const double E_limit = E0 + scene.run.energy_growth_limit * scale;
-
-  auto log_row = [&](long long step) -> double {
-    const State& s = sim.state();
-    const double K = sys.kinetic_energy(s.v), U = sys.potential_energy(s.x);
-    std::fprintf(log.get(), "%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%.6g,%.6g", step, s.t, K, U, K + U,
-                 sys.max_strain(s.x), iterations, residual, wall);
-    if (has_exact) {
-      scene.exact(s.t, exact);
-      std::fprintf(log.get(), ",%.17g", (s.x - exact.x).lpNorm<Eigen::Infinity>());
-    }
-    std::fprintf(log.get(), "\n");
-    return K + U;
-  };
-  auto checkpoint = [&](long long step) {
-    Checkpoint c;
-    c.method = scene.integrator.method;
-    c.step = step;
-    std::fflush(log.get());
-    c.log_bytes = std::ftell(log.get());
-    c.not_converged = not_converged;
-    c.halved_steps = halved_steps;
-    c.wall = wall;
-    c.state = sim.state();
-    c.history = sim.stepper().history();
-    c.frames = frames;
-    write_checkpoint(checkpoint_path, c);
-  };
-  const auto ok = [&](const StepSummary& s) {
-    return s.status == Status::Converged ||
-           (s.status == Status::NotConverged && scene.run.allow_not_converged);
-  };
-  double fail_t = 0.0, fail_h = 0.0;  // start and size of the last failed (sub)step
-  // One step of size h; a failure is retried as two steps of h/2 (each retried in turn) while
-  // depth < max_step_halvings. The last summary is returned, its iterations summed.
-  std::function<StepSummary(long long, double, int)> advance = [&](long long step, double h,
-                                                                   int depth) -> StepSummary {
-    const double t_end = sim.state().t + h;
-    StepSummary s = sim.advance(h);
-    if (!ok(s)) {
-      fail_t = sim.state().t;
-      fail_h = h;
-    }
-    if (ok(s) || depth >= scene.run.max_step_halvings) return s;
-    if (depth == 0) ++halved_steps;
+MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const RunOptions& options,
+                             const Checkpoint* resume)
+    : m_scene(scene),
+      m_sys(*scene.system),
+      m_options(options),
+      m_dir(dir),
+      m_label(backend_label(scene)),
+      m_steps(scene.time.steps()),
+      m_sim(m_sys, make_scene_stepper(scene), resume ? resume->state : scene.initial),
+      m_progress(options.progress, m_steps) {
+  m_sim.set_accept_not_converged(scene.run.allow_not_converged);
+  m_sim.set_max_step_halvings(scene.run.max_step_halvings);
+  m_sim.set_retry_observer([this](double t, double h, int depth, const StepSummary& s) {
     std::fprintf(stderr,
                  "note: %s: step %lld (t = %.9g, h = %.6g, %s): %s: %s; retrying as two steps of "
                  "h/2 = %.6g (%d of run.max_step_halvings = %d)\n",
-                 scene.file.c_str(), step, sim.state().t, h, backend_label(scene).c_str(),
-                 to_string(s.status), s.message.c_str(), 0.5 * h, depth + 1,
-                 scene.run.max_step_halvings);
-    StepSummary a = advance(step, 0.5 * h, depth + 1);
-    if (!ok(a)) return a;
-    StepSummary b = advance(step, t_end - sim.state().t, depth + 1);
-    b.iterations += a.iterations;
-    b.newton_iterations += a.newton_iterations;
-    return b;
-  };
+                 m_scene.file.c_str(), m_step, t, h, m_label.c_str(), to_string(s.status),
+                 s.message.c_str(), 0.5 * h, depth, m_scene.run.max_step_halvings);
+  });
+  if (resume) restore(*resume);  // checks the checkpoint before any file is touched
+  m_out = std::make_unique<RunOutput>(scene, dir, resume);
+  const State& s0 = scene.initial;
+  m_E0 = m_sys.kinetic_energy(s0.v) + m_sys.potential_energy(s0.x);
+  m_scale = std::max({divergence_energy_scale(m_sys, s0), std::abs(m_E0), 1e-30});
+  m_E_limit = m_E0 + scene.run.energy_growth_limit * m_scale;
+}
 
-  if (!resume) {
-    log_row(0);
-    frame(0);
+void MassSpringRun::restore(const Checkpoint& c) {
+  const std::string path = m_dir + "/checkpoint.bin";
+  const std::string& method = m_scene.integrator.method;
+  if (c.method != method)
+    throw InputError(path, "checkpoint", "was written by method '" + c.method + "' but " + m_dir +
+                                             "/scene.toml asks for '" + method + "'");
+  if (c.state.x.size() != m_sys.dofs())
+    throw InputError(path, "checkpoint",
+                     "holds " + std::to_string(c.state.x.size() / 3) + " particles; " + m_dir +
+                         "/scene.toml has " + std::to_string(m_sys.num_particles()));
+  try {
+    m_sim.stepper().restore_history(c.history);
+  } catch (const InternalError& e) {
+    throw InputError(path, "checkpoint", std::string("stepper history: ") + e.what());
+  }
+  if (c.step > m_steps)
+    throw InputError(path, "checkpoint",
+                     "is at step " + std::to_string(c.step) + " but the scene has only " +
+                         std::to_string(m_steps) + " steps");
+  m_first_step = c.step + 1;
+  m_not_converged = c.not_converged;
+  m_sim.set_halved_steps(c.halved_steps);
+  m_wall = c.wall;
+  if (!m_sim.stepper().exact_resume())
+    std::fprintf(stderr,
+                 "note: %s keeps an internal history that a checkpoint cannot hold: it restarts at "
+                 "step %lld, so the result agrees with an uninterrupted run to the solver's "
+                 "tolerance, not bit for bit\n",
+                 method.c_str(), c.step);
+}
+
+int MassSpringRun::run() {
+  if (m_first_step == 1) {
+    m_out->log_row(0, m_sim.state(), 0, 0.0, m_wall);
+    m_out->frame(0, m_sim.state());
   }
   StopSignals stop_signals;
-  Progress progress(options.progress, N);
-  auto last_checkpoint = Clock::now();
-  for (long long step = first_step; step <= N; ++step) {
-    const double t_start = sim.state().t;
-    const double h = scene.time.step_size(step, t_start);
+  for (long long step = m_first_step; step <= m_steps; ++step) {
+    m_step = step;
+    const double t_start = m_sim.state().t;
     const auto t0 = Clock::now();
-    const StepSummary sum = advance(step, h, 0);
-    wall += std::chrono::duration<double>(Clock::now() - t0).count();
-    iterations = sum.iterations;
-    residual = sum.residual;
-    if (sum.status == Status::NotConverged && ok(sum) && not_converged++ == 0) {
-      progress.done();
+    const StepSummary sum = m_sim.advance(m_scene.time.step_size(step, t_start));
+    m_wall += std::chrono::duration<double>(Clock::now() - t0).count();
+    const bool accepted = sum.status == Status::Converged ||
+                          (sum.status == Status::NotConverged && m_scene.run.allow_not_converged);
+    if (!accepted) return report_failure(step, sum);
+    if (sum.status == Status::NotConverged && m_not_converged++ == 0) {
+      m_progress.done();
       std::fprintf(stderr, "warning: %s: step %lld (t = %.9g, %s): %s (continuing, "
                    "run.allow_not_converged = true; counted below)\n",
-                   scene.file.c_str(), step, t_start, backend_label(scene).c_str(), sum.message.c_str());
+                   m_scene.file.c_str(), step, t_start, m_label.c_str(), sum.message.c_str());
     }
-    if (!ok(sum)) {
-      progress.done();
-      std::fflush(log.get());
-      std::fprintf(stderr,
-                   "error: %s: step %lld failed (t = %.9g, h = %.6g, %s, %d linear iterations, "
-                   "residual %.3g): %s: %s\n"
-                   "  kept: %s/log.csv and the frames written so far; fixes: a smaller time.dt, "
-                   "run.max_step_halvings > 0%s\n",
-                   scene.file.c_str(), step, fail_t, fail_h, backend_label(scene).c_str(), sum.iterations, sum.residual, to_string(sum.status),
-                   sum.message.c_str(), dir.c_str(),
-                   sum.status == Status::NotConverged
-                       ? ", a looser tolerance, more iterations, or run.allow_not_converged = true"
-                       : "");
-      return 3;
-    }
-    const bool last = step == N;
-    if (step % scene.output.log_every == 0 || last) {
-      const double E = log_row(step);
-      if (!(E <= E_limit)) {
-        progress.done();
-        frame(step);
-        std::fflush(log.get());
-        std::fprintf(stderr,
-                     "error: %s: diverged at step %lld (t = %.9g, %s): total energy %.6g J "
-                     "exceeds the initial %.6g J by more than %g x the scene's energy scale %.6g J "
-                     "(run.energy_growth_limit); try a smaller time.dt\n"
-                     "  kept: %s/log.csv and the frames written so far\n",
-                     scene.file.c_str(), step, sim.state().t, backend_label(scene).c_str(), E, E0,
-                     scene.run.energy_growth_limit, scale, dir.c_str());
-        return 3;
-      }
-    }
-    if ((scene.output.every > 0 && step % scene.output.every == 0) || last) frame(step);
-    progress.update(step, sim.state().t);
-    if (last) break;
-    const int sig = g_signal;
-    if (sig != 0 || step == options.stop_after) {
-      checkpoint(step);
-      progress.done();
-      std::fprintf(stderr,
-                   "%s at step %lld of %lld (t = %.9g): wrote %s; continue with: hooke resume %s\n",
-                   sig ? (std::string("interrupted by ") + signal_name(sig)).c_str()
-                       : "stopped (--stop-after)",
-                   step, N, sim.state().t, checkpoint_path.c_str(), dir.c_str());
-      return sig == SIGTERM ? kExitTerminated : kExitInterrupted;
-    }
-    if ((scene.run.checkpoint_every > 0 && step % scene.run.checkpoint_every == 0) ||
-        Clock::now() - last_checkpoint >= std::chrono::duration<double>(scene.run.checkpoint_seconds)) {
-      checkpoint(step);
-      last_checkpoint = Clock::now();
-    }
+    if (const int code = after_step(step, sum); code >= 0) return code;
   }
-  if (N == 0) progress.update(0, 0.0);
-  progress.done();
-  if (not_converged > 0)
+  return finish();
+}
+
+int MassSpringRun::after_step(long long step, const StepSummary& sum) {
+  const bool last = step == m_steps;
+  const State& s = m_sim.state();
+  if (step % m_scene.output.log_every == 0 || last) {
+    const double E = m_out->log_row(step, s, sum.iterations, sum.residual, m_wall);
+    if (!(E <= m_E_limit)) return report_divergence(step, E);
+  }
+  if ((m_scene.output.every > 0 && step % m_scene.output.every == 0) || last) m_out->frame(step, s);
+  m_progress.update(step, s.t);
+  if (last) return -1;
+  if (const int sig = g_signal; sig != 0 || step == m_options.stop_after) return stop(step, sig);
+  if ((m_scene.run.checkpoint_every > 0 && step % m_scene.run.checkpoint_every == 0) ||
+      Clock::now() - m_last_checkpoint >=
+          std::chrono::duration<double>(m_scene.run.checkpoint_seconds)) {
+    checkpoint(step);
+    m_last_checkpoint = Clock::now();
+  }
+  return -1;
+}
+
+int MassSpringRun::report_failure(long long step, const StepSummary& sum) {
+  m_progress.done();
+  m_out->flush();
+  std::fprintf(stderr,
+               "error: %s: step %lld failed (t = %.9g, h = %.6g, %s, %d linear iterations, "
+               "residual %.3g): %s: %s\n"
+               "  kept: %s/log.csv and the frames written so far; fixes: a smaller time.dt, "
+               "run.max_step_halvings > 0%s\n",
+               m_scene.file.c_str(), step, m_sim.failed_t(), m_sim.failed_h(), m_label.c_str(),
+               sum.iterations, sum.residual, to_string(sum.status), sum.message.c_str(),
+               m_dir.c_str(),
+               sum.status == Status::NotConverged
+                   ? ", a looser tolerance, more iterations, or run.allow_not_converged = true"
+                   : "");
+  return 3;
+}
+
+int MassSpringRun::report_divergence(long long step, double E) {
+  m_progress.done();
+  m_out->frame(step, m_sim.state());
+  m_out->flush();
+  std::fprintf(stderr,
+               "error: %s: diverged at step %lld (t = %.9g, %s): total energy %.6g J "
+               "exceeds the initial %.6g J by more than %g x the scene's energy scale %.6g J "
+               "(run.energy_growth_limit); try a smaller time.dt\n"
+               "  kept: %s/log.csv and the frames written so far\n",
+               m_scene.file.c_str(), step, m_sim.state().t, m_label.c_str(), E, m_E0,
+               m_scene.run.energy_growth_limit, m_scale, m_dir.c_str());
+  return 3;
+}
+
+int MassSpringRun::stop(long long step, int sig) {
+  checkpoint(step);
+  m_progress.done();
+  std::fprintf(stderr, "%s at step %lld of %lld (t = %.9g): wrote %s; continue with: hooke resume %s\n",
+               sig ? (std::string("interrupted by ") + signal_name(sig)).c_str()
+                   : "stopped (--stop-after)",
+               step, m_steps, m_sim.state().t, m_out->checkpoint_path().c_str(), m_dir.c_str());
+  return sig == SIGTERM ? kExitTerminated : kExitInterrupted;
+}
+
+void MassSpringRun::checkpoint(long long step) {
+  Checkpoint c;
+  c.method = m_scene.integrator.method;
+  c.step = step;
+  c.not_converged = m_not_converged;
+  c.halved_steps = m_sim.halved_steps();
+  c.wall = m_wall;
+  c.state = m_sim.state();
+  c.history = m_sim.stepper().history();
+  m_out->checkpoint(std::move(c));
+}
+
+int MassSpringRun::finish() {
+  if (m_steps == 0) m_progress.update(0, 0.0);
+  m_progress.done();
+  const std::string& file = m_scene.file;
+  if (m_not_converged > 0)
     std::fprintf(stderr, "warning: %s: %lld of %lld steps did not converge to the requested tolerance\n",
-                 scene.file.c_str(), not_converged, N);
-  if (halved_steps > 0)
-    std::fprintf(stderr, "note: %s: %lld of %lld steps were retried with a smaller h\n",
-                 scene.file.c_str(), halved_steps, N);
-  write_final_csv(dir + "/final.csv", sim.state());
-  fs::remove(checkpoint_path);  // the run is complete: nothing left to resume
-  if (const std::string r = sim.stepper().report(); !r.empty())
-    std::printf("%s: %s\n", scene.integrator.method.c_str(), r.c_str());
-  if (scene.output.png)
-    write_png_picture(dir + "/final.png", sim.state(), sys.pinned(), scene.edges, scene.edge_rest);
+                 file.c_str(), m_not_converged, m_steps);
+  if (m_sim.halved_steps() > 0)
+    std::fprintf(stderr, "note: %s: %lld of %lld steps were retried with a smaller h\n", file.c_str(),
+                 m_sim.halved_steps(), m_steps);
+  m_out->finish(m_sim.state());
+  if (const std::string r = m_sim.stepper().report(); !r.empty())
+    std::printf("%s: %s\n", m_scene.integrator.method.c_str(), r.c_str());
   std::printf("%s: %lld steps of %s to t = %.6g in %.3f s; wrote %s/{scene.toml,log.csv,final.csv%s%s}\n",
-              scene.file.c_str(), N, scene.integrator.method.c_str(), sim.state().t, wall, dir.c_str(),
-              scene.output.vtk ? ",frames/" : "", scene.output.png ? ",final.png" : "");
+              file.c_str(), m_steps, m_scene.integrator.method.c_str(), m_sim.state().t, m_wall,
+              m_dir.c_str(), m_scene.output.vtk ? ",frames/" : "", m_scene.output.png ? ",final.png" : "");
   return 0;
 }
 
@@ -447,7 +385,7 @@ int run_scene(Scene& scene, const RunOptions& options) {
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error("cannot create output directory " + dir + ": " + ec.message());
   write_resolved_scene(scene, dir + "/scene.toml");
-  return scene.is_ode() ? run_ode(scene, dir, options) : run_mass_spring(scene, dir, options, nullptr);
+  return scene.is_ode() ? run_ode(scene, dir, options) : MassSpringRun(scene, dir, options, nullptr).run();
 }
 
 int resume_run(const std::string& dir, const RunOptions& options) {
@@ -459,7 +397,7 @@ int resume_run(const std::string& dir, const RunOptions& options) {
   const Checkpoint c = read_checkpoint(dir + "/checkpoint.bin");
   std::fprintf(stderr, "resuming %s at step %lld of %lld (t = %.9g)\n", dir.c_str(), c.step,
                scene.time.steps(), c.state.t);
-  return run_mass_spring(scene, dir, options, &c);
+  return MassSpringRun(scene, dir, options, &c).run();
 }
 
 }  // namespace hooke

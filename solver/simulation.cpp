@@ -14,7 +14,27 @@ Simulation::Simulation(const MassSpringSystem& system, std::unique_ptr<Stepper> 
                                     << " dofs");
 }
 
-StepSummary Simulation::advance(double h) {
+StepSummary Simulation::advance(double h) { return advance_halving(h, 0); }
+
+StepSummary Simulation::advance_halving(double h, int depth) {
+  const double t_end = m_state.t + h;
+  StepSummary s = advance_once(h);
+  if (accepted(s)) return s;
+  m_failed_t = m_state.t;
+  m_failed_h = h;
+  if (depth >= m_max_halvings) return s;
+  if (depth == 0) ++m_halved_steps;
+  if (m_on_retry) m_on_retry(m_state.t, h, depth + 1, s);
+  StepSummary a = advance_halving(0.5 * h, depth + 1);
+  if (!accepted(a)) return a;
+  // The second half ends exactly at t_end, whatever rounding the first half met.
+  StepSummary b = advance_halving(t_end - m_state.t, depth + 1);
+  b.iterations += a.iterations;
+  b.newton_iterations += a.newton_iterations;
+  return b;
+}
+
+StepSummary Simulation::advance_once(double h) {
   StepSummary s = m_stepper->step(m_state, h, m_next);
   if (s.status != Status::Converged && s.status != Status::NotConverged) return s;
   if (s.status == Status::NotConverged && !m_accept_not_converged) return s;

@@ -1,4 +1,5 @@
 #pragma once
+#include <functional>
 #include <memory>
 
 #include "hooke/integrators/stepper.hpp"
@@ -11,10 +12,30 @@ namespace hooke {
 /// finite; on any failure the current state is left unchanged and the summary says why (a
 /// NotConverged step counts as a failure only after set_accept_not_converged(false)). A step
 /// that stops short of t + h (a whole-step backend giving up) is a failure (Status::Fatal).
+/// With set_max_step_halvings(M) > 0 a failed step is retried as two steps of h/2, each of which
+/// may be halved again, down to h / 2^M.
 class Simulation {
  public:
+  /// Called before each retry of a failed (sub)step: its start time t (s), its size h (s), the
+  /// retry depth (1 = the first halving) and the failed step's summary.
+  using RetryObserver = std::function<void(double t, double h, int depth, const StepSummary& failed)>;
+
   Simulation(const MassSpringSystem& system, std::unique_ptr<Stepper> stepper, State initial);
+  /// One step of size h, retried with halved steps on failure (see the class comment). On success
+  /// the summary is the last substep's, with the iterations of all substeps summed; on failure it
+  /// is the failed substep's, the state stays where the last successful substep left it, and
+  /// failed_t() / failed_h() say which substep failed.
   StepSummary advance(double h);
+  /// How often a failed step is halved (0, the default: never).
+  void set_max_step_halvings(int max_halvings) { m_max_halvings = max_halvings; }
+  /// Called before each retry (e.g. to report it); empty = nobody is told.
+  void set_retry_observer(RetryObserver observer) { m_on_retry = std::move(observer); }
+  /// Start time and size (s) of the last (sub)step that failed.
+  double failed_t() const { return m_failed_t; }
+  double failed_h() const { return m_failed_h; }
+  /// Steps (advance() calls) that needed at least one retry; settable to continue a count.
+  long long halved_steps() const { return m_halved_steps; }
+  void set_halved_steps(long long n) { m_halved_steps = n; }
   /// Whether a NotConverged step is accepted (true, the default: the state advances and the
   /// summary says the step missed its tolerance) or treated like the other failures (false: the
   /// state stays unchanged, so the caller may retry with a smaller h or stop).
@@ -24,10 +45,24 @@ class Simulation {
   Stepper& stepper() { return *m_stepper; }
 
  private:
+  /// One attempt at a step of size h, without retries.
+  StepSummary advance_once(double h);
+  /// advance_once, retried as two half steps while depth < m_max_halvings.
+  StepSummary advance_halving(double h, int depth);
+  /// True if the step advanced the state.
+  bool accepted(const StepSummary& s) const {
+    return s.status == Status::Converged ||
+           (s.status == Status::NotConverged && m_accept_not_converged);
+  }
+
   const MassSpringSystem& m_system;
   std::unique_ptr<Stepper> m_stepper;
   State m_state, m_next;
   bool m_accept_not_converged = true;
+  int m_max_halvings = 0;
+  RetryObserver m_on_retry;
+  double m_failed_t = 0.0, m_failed_h = 0.0;
+  long long m_halved_steps = 0;
 };
 
 }  // namespace hooke
