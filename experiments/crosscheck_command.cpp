@@ -18,7 +18,9 @@
 #include <iostream>
 #include <sstream>
 
+#include "experiments/cli.hpp"
 #include "experiments/divergence.hpp"
+#include "experiments/study_methods.hpp"
 #include "experiments/trajectory.hpp"
 #include "hooke/registry.hpp"
 
@@ -77,3 +79,33 @@ int run_crosscheck(const Scene& scene, const CrosscheckOptions& options) {
 }
 
 }  // namespace hooke
+
+namespace hooke::cli {
+
+Command add_crosscheck_command(CLI::App& app) {
+  struct Args {
+    std::string scene, methods, out;
+    std::vector<std::string> sets;
+    CrosscheckOptions cross;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "crosscheck", "Compare methods with a CVODE reference at tight tolerance on one scene; writes "
+                    "crosscheck.csv and crosscheck.md");
+  add_scene(cmd, a->scene);
+  add_sets(cmd, a->sets);
+  add_list(cmd, "--methods", a->methods, "comma-separated methods (default: all)");
+  cmd->add_option("--reference-rtol", a->cross.reference_rtol, "CVODE reference rtol (default 1e-10)");
+  cmd->add_option("--samples", a->cross.samples, "trajectory samples (default 20)");
+  add_out(cmd, a->out, "out/crosscheck-<scene>");
+  return {cmd, [a] {
+            const Scene scene = load_scene(resolve_scene(a->scene), a->sets);
+            a->cross.methods = split_list(a->methods);
+            if (!(a->cross.reference_rtol > 0.0))
+              throw InputError("<command line>", "--reference-rtol", "must be > 0");
+            a->cross.out_dir = a->out.empty() ? "out/crosscheck-" + scene.name : a->out;
+            return run_crosscheck(scene, a->cross);
+          }};
+}
+
+}  // namespace hooke::cli

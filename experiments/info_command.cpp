@@ -1,8 +1,13 @@
 #include "experiments/info_command.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <fstream>
 #include <iomanip>
+#include <iostream>
 
+#include "experiments/cli.hpp"
 #include "experiments/natural_frequency.hpp"
 #include "hooke/integrators/stability.hpp"
 #include "hooke/registry.hpp"
@@ -53,3 +58,42 @@ void print_scene_info(const Scene& scene, std::ostream& out) {
 }
 
 }  // namespace hooke
+
+namespace hooke::cli {
+
+Command add_info_command(CLI::App& app) {
+  struct Args {
+    std::string scene;
+    std::vector<std::string> sets;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "info", "Sizes, memory, largest natural frequency and explicit step-size limits of a scene");
+  add_scene(cmd, a->scene);
+  add_sets(cmd, a->sets);
+  return {cmd, [a] {
+            print_scene_info(load_scene(resolve_scene(a->scene), a->sets), std::cout);
+            return 0;
+          }};
+}
+
+Command add_scenes_command(CLI::App& app) {
+  auto* cmd = app.add_subcommand("scenes", "List the shipped scenes");
+  return {cmd, [] {
+            std::vector<std::filesystem::path> files;
+            for (const auto& e : std::filesystem::directory_iterator(scenes_dir()))
+              if (e.path().extension() == ".toml") files.push_back(e.path());
+            std::sort(files.begin(), files.end());
+            for (const auto& f : files) {
+              std::ifstream in(f);
+              std::string first;
+              std::getline(in, first);
+              if (first.rfind("#", 0) == 0) first = first.substr(first.find_first_not_of("# "));
+              std::cout << std::left << std::setw(24) << f.stem().string() << " " << first << "\n";
+            }
+            std::cout << "(in " << scenes_dir().string() << "; run one with: hooke run NAME)\n";
+            return 0;
+          }};
+}
+
+}  // namespace hooke::cli

@@ -11,8 +11,10 @@
 #include <memory>
 
 #include "experiments/checkpoint.hpp"
+#include "experiments/cli.hpp"
 #include "experiments/divergence.hpp"
 #include "experiments/run_output.hpp"
+#include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
 
@@ -401,3 +403,50 @@ int resume_run(const std::string& dir, const RunOptions& options) {
 }
 
 }  // namespace hooke
+
+namespace hooke::cli {
+
+Command add_run_command(CLI::App& app) {
+  struct Args {
+    std::string scene;
+    std::vector<std::string> sets;
+    RunOptions run;
+    bool no_progress = false;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "run", "Run a scene and write scene.toml, log.csv, final.csv, frames/*.vtk and final.png");
+  add_scene(cmd, a->scene);
+  add_sets(cmd, a->sets);
+  add_out(cmd, a->run.out_dir, "[output] dir, or out/<scene>");
+  cmd->add_flag("--no-progress", a->no_progress, "never show the progress line");
+  cmd->add_option("--stop-after", a->run.stop_after,
+                  "testing aid: checkpoint after step N and stop as if interrupted (exit 130)");
+  cmd->footer("Methods: " + method_names() + "\nLinear solvers: " + linear_solver_names());
+  return {cmd, [a] {
+            Scene scene = load_scene(resolve_scene(a->scene), a->sets);
+            a->run.progress = !a->no_progress;
+            return run_scene(scene, a->run);
+          }};
+}
+
+Command add_resume_command(CLI::App& app) {
+  struct Args {
+    std::string dir;
+    RunOptions run;
+    bool no_progress = false;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "resume", "Continue a run stopped by SIGINT/SIGTERM (or --stop-after) from DIR/checkpoint.bin");
+  cmd->add_option("dir", a->dir, "output directory of the stopped run")->required();
+  cmd->add_flag("--no-progress", a->no_progress, "never show the progress line");
+  cmd->add_option("--stop-after", a->run.stop_after,
+                  "testing aid: checkpoint after step N and stop as if interrupted (exit 130)");
+  return {cmd, [a] {
+            a->run.progress = !a->no_progress;
+            return resume_run(a->dir, a->run);
+          }};
+}
+
+}  // namespace hooke::cli

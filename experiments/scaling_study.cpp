@@ -21,6 +21,9 @@
 // Peak memory: VmHWM of this process, reset before each run (/proc/self/clear_refs).
 #include "experiments/scaling_study.hpp"
 
+#include "experiments/cli.hpp"
+#include "experiments/study_methods.hpp"
+
 #include <omp.h>
 
 #include <algorithm>
@@ -222,3 +225,41 @@ int run_scaling(const ScalingOptions& options) {
 }
 
 }  // namespace hooke
+
+namespace hooke::cli {
+
+Command add_scaling_command(CLI::App& app) {
+  struct Args {
+    std::string springs, methods, threads, out;
+    ScalingOptions scal;
+  };
+  auto a = std::make_shared<Args>();
+  std::string all;
+  for (const auto& m : scaling_methods()) all += (all.empty() ? "" : ",") + m;
+  auto* cmd = app.add_subcommand(
+      "scaling", "Scaling study: time per step and per iteration against springs (cloth grids of 1e4 "
+                 "to 1e6 springs, 6e6 with --full) per method, on 1 and 2 threads, with peak memory; "
+                 "writes scaling.csv, scaling.png and scaling.md (fitted exponents)");
+  cmd->add_flag("--full", a->scal.full, "add 3e6 and 6e6 springs (1000 x 1000 particles)");
+  add_list(cmd, "--springs", a->springs, "comma-separated spring counts (default 1e4,3e4,1e5,3e5,1e6)");
+  add_list(cmd, "--methods", a->methods, "comma-separated: " + all + " (default: all)");
+  add_list(cmd, "--threads", a->threads, "comma-separated thread counts (default 1,2)");
+  cmd->add_option("--steps", a->scal.steps, "timed steps after one warm-up step (default 4)");
+  add_out(cmd, a->out, "out/scaling");
+  add_no_plot(cmd, a->scal.plot);
+  return {cmd, [a] {
+            ScalingOptions& s = a->scal;
+            for (double v : numbers(a->springs, "--springs")) {
+              if (!(v >= 10.0 && v <= 1e8))
+                throw InputError("<command line>", "--springs", "spring counts in [10, 1e8]");
+              s.springs.push_back(v);
+            }
+            if (!a->threads.empty()) s.threads = integers(a->threads, "--threads", 1, 256);
+            if (s.steps < 1) throw InputError("<command line>", "--steps", "must be >= 1");
+            s.methods = split_list(a->methods);
+            if (!a->out.empty()) s.out_dir = a->out;
+            return run_scaling(s);
+          }};
+}
+
+}  // namespace hooke::cli

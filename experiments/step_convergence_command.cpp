@@ -19,6 +19,8 @@
 //         per method) and DIR/step_convergence.png (through experiments/plot/step_convergence.py).
 #include "experiments/step_convergence_command.hpp"
 
+#include "experiments/cli.hpp"
+
 #include "experiments/plot_script.hpp"
 
 #include <chrono>
@@ -195,3 +197,25 @@ int run_step_convergence(const std::string& scene_path, const StepConvergenceOpt
 }
 
 }  // namespace hooke
+
+namespace hooke::cli {
+
+Command add_step_convergence_command(CLI::App& app) {
+  struct Args {
+    std::string scene = "hanging_cloth_16", out;
+    StepConvergenceOptions conv;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "step-convergence", "Objective error against iterations and wall time of one backward-Euler "
+                          "step: local/global (+ Chebyshev, L-BFGS), Newton, XPBD, vs Ceres");
+  cmd->add_option("scene", a->scene, "cloth scene (default hanging_cloth_16)");
+  cmd->add_flag("--full", a->conv.full, "the paper's size: k = 1e2..1e6, h = 1e-3, 1e-2, 1/30");
+  add_out(cmd, a->out, "out/step-convergence");
+  return {cmd, [a] {
+            a->conv.out_dir = a->out.empty() ? "out/step-convergence" : a->out;
+            return run_step_convergence(resolve_scene(a->scene), a->conv);
+          }};
+}
+
+}  // namespace hooke::cli

@@ -21,6 +21,8 @@
 //         experiments/plot/work_precision.py, DIR/workprecision_<case>.png and .md.
 #include "experiments/work_precision.hpp"
 
+#include "experiments/cli.hpp"
+
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -186,3 +188,36 @@ int run_work_precision(const WorkPrecisionOptions& options, const std::string& s
 }
 
 }  // namespace hooke
+
+namespace hooke::cli {
+
+Command add_workprecision_command(CLI::App& app) {
+  struct Args {
+    std::string cases, methods, rtols, out;
+    WorkPrecisionOptions wp;
+  };
+  auto a = std::make_shared<Args>();
+  auto* cmd = app.add_subcommand(
+      "workprecision", "Work-precision: error against a CVODE reference versus wall time for every "
+                       "method over a range of h (rtol for cvode/ida); writes workprecision.csv, "
+                       "reference.csv and workprecision_<case>.png");
+  cmd->add_flag("--full", a->wp.full, "paper size: 16 x 16 cloths, 6 step sizes 1e-2..3e-5, longer runs");
+  add_list(cmd, "--cases", a->cases, "comma-separated: chain,hanging_cloth,stiff_cloth (default: all)");
+  add_list(cmd, "--methods", a->methods, "comma-separated study labels or method names (default: all)");
+  add_list(cmd, "--rtols", a->rtols, "comma-separated tolerances of cvode/ida (default 1e-3,1e-5,1e-7)");
+  cmd->add_option("--reference-rtol", a->wp.reference_rtol, "CVODE reference rtol (default 1e-10)");
+  cmd->add_option("--samples", a->wp.samples, "trajectory samples (default 10)");
+  add_out(cmd, a->out, "out/workprecision");
+  add_no_plot(cmd, a->wp.plot);
+  return {cmd, [a] {
+            a->wp.cases = split_list(a->cases);
+            a->wp.methods = split_list(a->methods);
+            a->wp.rtols = numbers(a->rtols, "--rtols");
+            if (!(a->wp.reference_rtol > 0.0))
+              throw InputError("<command line>", "--reference-rtol", "must be > 0");
+            if (!a->out.empty()) a->wp.out_dir = a->out;
+            return run_work_precision(a->wp, scenes_dir().string());
+          }};
+}
+
+}  // namespace hooke::cli
