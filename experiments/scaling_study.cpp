@@ -129,10 +129,9 @@ Row run_one(const MethodSpec& m, long long side, int threads, int steps) {
                                              "scaling-" + m.label + "-" + std::to_string(side));
   r.springs = static_cast<long long>(scene.edges.size());
   r.particles = scene.system->num_particles();
-  auto stepper = make_stepper(scene.integrator.method, *scene.system, scene.integrator.options);
-  const auto* implicit = dynamic_cast<const ImplicitStepper*>(stepper.get());
-  const auto* fms = dynamic_cast<const FastMassSpringStepper*>(stepper.get());
-  Simulation sim(*scene.system, std::move(stepper), scene.initial);
+  Simulation sim(*scene.system,
+                 make_stepper(scene.integrator.method, *scene.system, scene.integrator.options),
+                 scene.initial);
   const double h = scene.time.dt;
   StepSummary s = sim.advance(h);  // warm-up: analysis, first factorization
   r.setup_s = since(t_setup);
@@ -140,9 +139,7 @@ Row run_one(const MethodSpec& m, long long side, int threads, int steps) {
     r.status = "failed: " + s.message;
     return r;
   }
-  const double asm0 = implicit ? implicit->assembly_seconds() : 0.0;
-  const LinearSummary lin0 = implicit ? implicit->linear_totals() : LinearSummary{};
-  const double local0 = fms ? fms->local_seconds() : 0.0, global0 = fms ? fms->global_seconds() : 0.0;
+  const StepperStats before = sim.stepper().stats();
   long long iterations = 0;
   const auto t0 = Clock::now();
   for (int k = 0; k < steps; ++k) {
@@ -159,16 +156,13 @@ Row run_one(const MethodSpec& m, long long side, int threads, int steps) {
   r.iterations_per_step = double(iterations) / steps;
   // An iteration: a PCG iteration, a local/global iteration, or (explicit, XPBD) a step.
   r.iteration_s = total / double(iterations);
-  if (implicit) {
-    r.assembly_s = (implicit->assembly_seconds() - asm0) / steps;
-    r.factor_s = (implicit->linear_totals().factor_seconds - lin0.factor_seconds) / steps;
-    r.solve_s = (implicit->linear_totals().solve_seconds - lin0.solve_seconds) / steps;
-  }
-  if (fms) {
-    r.local_s = (fms->local_seconds() - local0) / steps;
-    r.global_s = (fms->global_seconds() - global0) / steps;
-    r.factor_nnz = fms->factor_nonzeros();
-  }
+  const StepperStats after = sim.stepper().stats();
+  r.assembly_s = (after.assembly_seconds - before.assembly_seconds) / steps;
+  r.factor_s = (after.factor_seconds - before.factor_seconds) / steps;
+  r.solve_s = (after.solve_seconds - before.solve_seconds) / steps;
+  r.local_s = (after.local_seconds - before.local_seconds) / steps;
+  r.global_s = (after.global_seconds - before.global_seconds) / steps;
+  r.factor_nnz = after.factor_nonzeros;
   r.peak_mib = peak_memory_mib();
   return r;
 }

@@ -254,6 +254,7 @@ std::string ceres_implicit_unsupported(const MassSpringSystem& system) {
 struct CeresImplicitStepper::Impl {
   const MassSpringSystem& system;
   CeresImplicitOptions options;
+  StepperStats totals;  // over all steps; solve_seconds = time in ceres::Solve
   ceres::Solver::Options solver_options;
   // The unknowns are dx = x - y, the deviation from the inertial prediction y, rather than x:
   // residuals then lose digits relative to themselves, never to |x| (see spring_geometry).
@@ -441,6 +442,8 @@ Index CeresImplicitStepper::num_free_particles() const {
 }
 Index CeresImplicitStepper::num_residuals() const { return m_impl->num_residuals; }
 
+StepperStats CeresImplicitStepper::stats() const { return m_impl->totals; }
+
 StepSummary CeresImplicitStepper::step(const State& s0, double h, State& s1) {
   Impl& d = *m_impl;
   const Index N = d.system.dofs();
@@ -474,6 +477,7 @@ StepSummary CeresImplicitStepper::step(const State& s0, double h, State& s1) {
     rep.termination = termination_name(d.summary.termination_type);
     rep.message = d.summary.message;
   } else {
+    rep = CeresReport{};
     rep.termination = "convergence";
     rep.message = "no free particles";
   }
@@ -501,6 +505,10 @@ StepSummary CeresImplicitStepper::step(const State& s0, double h, State& s1) {
 
   out.iterations = out.newton_iterations = rep.iterations;
   out.residual = residual;
+  ++d.totals.steps;
+  d.totals.iterations += rep.iterations;
+  d.totals.last_residual = residual;
+  d.totals.solve_seconds += rep.seconds;
   const bool usable = rep.termination == "convergence" || rep.termination == "user-success" ||
                       rep.termination == "no-convergence";
   if (!usable || !s1.is_finite())

@@ -142,6 +142,8 @@ class CeresImplicitStepper final : public Stepper {
   const char* name() const override { return "ceres-implicit"; }
   /// One backward Euler step of size h > 0 from s0 (initial guess x1 = y).
   StepSummary step(const State& s0, double h, State& s1) override;
+  /// Steps, Levenberg-Marquardt iterations and the time in ceres::Solve (as solve_seconds).
+  StepperStats stats() const override;
 
   const CeresImplicitOptions& options() const;
   /// Ceres' report of the last step() (default values before the first one).

@@ -92,6 +92,8 @@ class CvodeStepper final : public Stepper {
   /// counters() as one log line.
   std::string counters_line() const;
   std::string report() const override { return counters_line(); }
+  /// The counters as StepperStats: internal steps, Newton and Krylov iterations, linear setups.
+  StepperStats stats() const override { return to_stats(counters()); }
 
   /// Test and debugging hook: ydot = f(y) = [P v; P M^-1 f(x, v)] for y = [x; v] (6n each), the
   /// function CVODE integrates. Not to be called during step().

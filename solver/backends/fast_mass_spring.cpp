@@ -498,6 +498,18 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
   return out;
 }
 
+StepperStats FastMassSpringStepper::stats() const {
+  StepperStats s;
+  s.steps = m_steps;
+  s.iterations = m_iterations;
+  s.factorizations = m_factorizations;
+  s.factor_seconds = m_factor_seconds;
+  s.local_seconds = m_local_seconds;
+  s.global_seconds = m_global_seconds;
+  s.factor_nonzeros = factor_nonzeros();
+  return s;
+}
+
 std::string FastMassSpringStepper::report() const {
   std::ostringstream r;
   r << "fast-mass-spring (" << to_string(m_opt.acceleration) << ", " << to_string(m_opt.global_solver) << "): " << m_steps

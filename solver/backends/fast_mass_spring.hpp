@@ -112,6 +112,8 @@ class FastMassSpringStepper final : public Stepper {
   /// iterations = local/global iterations; residual = last relative objective decrease (when the
   /// objective is evaluated) else 0; NotConverged if tolerance > 0 and was not met.
   StepSummary step(const State& s0, double h, State& s1) override;
+  /// Iterations, factorizations (or matrix refreshes), local / global / factor times, factor size.
+  StepperStats stats() const override;
   std::string report() const override;
 
   /// The objective g(x) of the step from s0 with size h (J, up to a constant), x a 3n vector.

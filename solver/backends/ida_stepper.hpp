@@ -71,6 +71,8 @@ class IdaStepper final : public Stepper {
   /// counters() as one log line.
   std::string counters_line() const;
   std::string report() const override { return counters_line(); }
+  /// The counters as StepperStats: internal steps, Newton and Krylov iterations, linear setups.
+  StepperStats stats() const override { return to_stats(counters()); }
 
   /// Test and debugging hook: F = F(y, yp) = [x' - P v; M v' - P f(x, v)] (6n each), the residual
   /// IDA solves. Not to be called during step().

@@ -23,6 +23,15 @@ std::string SundialsCounters::line() const {
   return buf;
 }
 
+StepperStats to_stats(const SundialsCounters& c) {
+  StepperStats s;
+  s.internal_steps = c.steps;
+  s.iterations = c.nonlinear_iterations;
+  s.linear_iterations = c.linear_iterations;
+  s.factorizations = c.linear_setups;
+  return s;
+}
+
 void SundialsCounters::add_totals(const SundialsCounters& o) {
   steps += o.steps;
   rhs_evals += o.rhs_evals;

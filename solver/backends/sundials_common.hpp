@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "hooke/integrators/reduced_matrix.hpp"
+#include "hooke/integrators/stepper.hpp"
 #include "hooke/linear/linear_solver.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/options.hpp"
@@ -45,6 +46,10 @@ struct SundialsCounters {
   /// Adds the cumulative fields of o (everything except last_step and order).
   void add_totals(const SundialsCounters& o);
 };
+
+/// The counters in the form every stepper reports (steps are step() calls: the restarts' count is
+/// not that, so steps is left 0 unless the caller knows it).
+StepperStats to_stats(const SundialsCounters& c);
 
 /// The last error a SUNDIALS error handler reported, kept in a fixed buffer (the handler runs
 /// inside CVODE / IDA and must not allocate). Warnings are counted, not kept.

@@ -93,6 +93,14 @@ StepSummary XpbdStepper::step(const State& s0, double h, State& s1) {
   return out;
 }
 
+StepperStats XpbdStepper::stats() const {
+  StepperStats s;
+  s.steps = m_steps;
+  s.iterations = m_steps * m_opt.substeps * m_opt.iterations;
+  s.total_seconds = m_seconds;
+  return s;
+}
+
 std::string XpbdStepper::report() const {
   std::ostringstream r;
   r << "xpbd: " << m_steps << " steps of " << m_opt.substeps << " substeps x " << m_opt.iterations

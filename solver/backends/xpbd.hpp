@@ -44,6 +44,8 @@ class XpbdStepper final : public Stepper {
   /// iterations = substeps x sweeps; residual = the largest compliant-constraint residual
   /// |C + alpha~ lambda| met in the last sweep of the last substep, before each update (m).
   StepSummary step(const State& s0, double h, State& s1) override;
+  /// Steps, substeps x sweeps as iterations, and the time in step().
+  StepperStats stats() const override;
   std::string report() const override;
 
  private:

@@ -107,49 +107,32 @@ const char* ImplicitStepper::name() const {
   return "implicit";
 }
 
-StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
-  const Index N = m_system.dofs();
-  HOOKE_ASSERT(s0.x.size() == N && s0.v.size() == N, "state size mismatch");
-  const Vec& mass = m_system.mass_diagonal();
-  const Vec& free_inv = m_system.free_inverse_mass();
-  // Pinned particles never move: their velocity is taken as zero throughout.
-  m_v0 = s0.v.cwiseProduct((free_inv.array() > 0.0).cast<double>().matrix());
-
-  // One-leg coefficients: M (v1 - vb) = hf f(xa + bx v1, va + cv v1), x1 = xe + ex v1.
-  double bx, cv, hf, ex;
+ImplicitStepper::OneLeg ImplicitStepper::set_up(const State& s0, double h) {
   // BDF2 continues only if this step follows the previous one with the same h (to round-off:
   // run loops compute h as differences of step times).
   const bool bdf2 = m_scheme == ImplicitScheme::Bdf2 && m_has_prev &&
                     std::abs(m_prev_h - h) <= 1e-9 * h &&
                     std::abs(m_prev_t1 - s0.t) <= 1e-9 * std::max(h, std::abs(s0.t));
+  OneLeg c;
   if (m_scheme == ImplicitScheme::Beta || (m_scheme == ImplicitScheme::Bdf2 && !bdf2)) {
     const double beta = m_scheme == ImplicitScheme::Beta ? m_options.beta : 1.0;
     m_xa = s0.x;
-    bx = beta * h;
     m_va = (1.0 - beta) * m_v0;
-    cv = beta;
     m_vb = m_v0;
-    hf = h;
     m_xe = s0.x;
-    ex = h;
+    c = {beta * h, beta, h, h};
   } else if (m_scheme == ImplicitScheme::Midpoint) {
     m_xa = s0.x + (0.25 * h) * m_v0;
-    bx = 0.25 * h;
     m_va = 0.5 * m_v0;
-    cv = 0.5;
     m_vb = m_v0;
-    hf = h;
     m_xe = s0.x + (0.5 * h) * m_v0;
-    ex = 0.5 * h;
+    c = {0.25 * h, 0.5, h, 0.5 * h};
   } else {
     m_xa = (4.0 / 3.0) * s0.x - (1.0 / 3.0) * m_prev_x;
-    bx = (2.0 / 3.0) * h;
     m_va.setZero();
-    cv = 1.0;
     m_vb = (4.0 / 3.0) * m_v0 - (1.0 / 3.0) * m_prev_v;
-    hf = (2.0 / 3.0) * h;
     m_xe = m_xa;
-    ex = bx;
+    c = {(2.0 / 3.0) * h, 1.0, (2.0 / 3.0) * h, (2.0 / 3.0) * h};
   }
   if (m_scheme == ImplicitScheme::Bdf2) {
     m_prev_x = s0.x;
@@ -158,6 +141,47 @@ StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
     m_prev_t1 = s0.t + h;
     m_has_prev = true;
   }
+  return c;
+}
+
+void ImplicitStepper::assemble(const OneLeg& c) {
+  const auto ta = Clock::now();
+  m_system.compute_forces(m_xlin, m_vlin, m_f);
+  m_system.assemble_jacobians(m_xlin, m_vlin, m_J, m_jac_options);
+  // rhs = hf (f_lin + K dx + D dv) - M (v1 - vb), with dx, dv the gap between the current
+  // iterate's arguments and the linearisation point (nonzero only in the first iteration).
+  m_dx = m_xa + c.bx * m_v1 - m_xlin;
+  m_dv = m_va + c.cv * m_v1 - m_vlin;
+  m_rhs = m_f;
+  m_tmp.noalias() = m_J.K * m_dx;
+  m_rhs += m_tmp;
+  m_tmp.noalias() = m_J.D * m_dv;
+  m_rhs += m_tmp;
+  m_rhs *= c.hf;
+  m_rhs -= m_system.mass_diagonal().cwiseProduct(m_v1 - m_vb);
+  m_A.assemble(m_J, c.hf * c.cv, c.hf * c.bx);
+  m_A.gather(m_rhs, m_rhs_free);
+  m_assembly_seconds += since(ta);
+}
+
+StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
+  const auto t0 = Clock::now();
+  const StepSummary out = newton(s0, h, s1);
+  ++m_steps;
+  m_newton_iterations += out.newton_iterations;
+  m_last_residual = out.residual;
+  m_total_seconds += since(t0);
+  return out;
+}
+
+StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
+  const Index N = m_system.dofs();
+  HOOKE_ASSERT(s0.x.size() == N && s0.v.size() == N, "state size mismatch");
+  const Vec& free_inv = m_system.free_inverse_mass();
+  // Pinned particles never move: their velocity is taken as zero throughout.
+  m_v0 = s0.v.cwiseProduct((free_inv.array() > 0.0).cast<double>().matrix());
+  // One-leg coefficients: M (v1 - vb) = hf f(xa + bx v1, va + cv v1), x1 = xe + ex v1.
+  const OneLeg c = set_up(s0, h);
 
   StepSummary out;
   LinearSolveOptions lin;
@@ -171,27 +195,10 @@ StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
   bool converged = m_options.newton_iterations == 1;
   for (int k = 0; k < m_options.newton_iterations; ++k) {
     if (k > 0) {
-      m_xlin = m_xa + bx * m_v1;
-      m_vlin = m_va + cv * m_v1;
+      m_xlin = m_xa + c.bx * m_v1;
+      m_vlin = m_va + c.cv * m_v1;
     }
-    const auto ta = Clock::now();
-    m_system.compute_forces(m_xlin, m_vlin, m_f);
-    m_system.assemble_jacobians(m_xlin, m_vlin, m_J, m_jac_options);
-    // rhs = hf (f_lin + K dx + D dv) - M (v1 - vb), with dx, dv the gap between the current
-    // iterate's arguments and the linearisation point (nonzero only in the first iteration).
-    m_dx = m_xa + bx * m_v1 - m_xlin;
-    m_dv = m_va + cv * m_v1 - m_vlin;
-    m_rhs = m_f;
-    m_tmp.noalias() = m_J.K * m_dx;
-    m_rhs += m_tmp;
-    m_tmp.noalias() = m_J.D * m_dv;
-    m_rhs += m_tmp;
-    m_rhs *= hf;
-    m_rhs -= mass.cwiseProduct(m_v1 - m_vb);
-    m_A.assemble(m_J, hf * cv, hf * bx);
-    m_A.gather(m_rhs, m_rhs_free);
-    m_assembly_seconds += since(ta);
-
+    assemble(c);
     const LinearSummary fs = m_solver->factor(m_A.matrix());
     accumulate(m_totals, fs);
     if (fs.status != Status::Converged) {
@@ -233,9 +240,24 @@ StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
     out.message = os.str();
   }
   s1.v = m_v1;
-  s1.x = m_xe + ex * m_v1;
+  s1.x = m_xe + c.ex * m_v1;
   s1.t = s0.t + h;
   return out;
+}
+
+StepperStats ImplicitStepper::stats() const {
+  StepperStats s;
+  s.steps = m_steps;
+  s.iterations = m_newton_iterations;
+  s.linear_iterations = m_totals.iterations;
+  s.factorizations = m_solver->factorizations();
+  s.last_residual = m_last_residual;
+  s.assembly_seconds = m_assembly_seconds;
+  s.analyze_seconds = m_totals.analyze_seconds;
+  s.factor_seconds = m_totals.factor_seconds;
+  s.solve_seconds = m_totals.solve_seconds;
+  s.total_seconds = m_total_seconds;
+  return s;
 }
 
 }  // namespace hooke

@@ -66,9 +66,8 @@ class ImplicitStepper final : public Stepper {
   StepSummary step(const State& s0, double h, State& s1) override;
   const LinearSolver& linear_solver() const { return *m_solver; }
   bool exact_resume() const override { return m_solver->exact_resume(); }
-  /// Summed linear-backend times of all steps so far (analyze, factor, solve), and assembly time.
-  const LinearSummary& linear_totals() const { return m_totals; }
-  double assembly_seconds() const { return m_assembly_seconds; }
+  /// Newton iterations, linear iterations, the backend's factorizations and times by phase.
+  StepperStats stats() const override;
   std::string report() const override;
   /// BDF2's previous state, h and end time, and the last linear correction (the warm start of
   /// iterative backends): [has_prev, prev_h, prev_t1, prev_x (3n), prev_v (3n), delta (free dofs)].
@@ -76,6 +75,17 @@ class ImplicitStepper final : public Stepper {
   void restore_history(const std::vector<double>& history) override;
 
  private:
+  /// Coefficients of the one-leg form M (v1 - vb) = hf f(xa + bx v1, va + cv v1), x1 = xe + ex v1.
+  struct OneLeg {
+    double bx, cv, hf, ex;
+  };
+  /// Sets xa, va, vb, xe for a step of size h from s0 (and BDF2's history); returns the scalars.
+  OneLeg set_up(const State& s0, double h);
+  /// Forces, Jacobians, the Newton matrix A and the free-DOF right-hand side at (xlin, vlin).
+  void assemble(const OneLeg& c);
+  /// The step itself (step() adds the counters).
+  StepSummary newton(const State& s0, double h, State& s1);
+
   const MassSpringSystem& m_system;
   ImplicitScheme m_scheme;
   std::unique_ptr<LinearSolver> m_solver;
@@ -83,8 +93,9 @@ class ImplicitStepper final : public Stepper {
   JacobianOptions m_jac_options;
   Jacobians m_J;
   ReducedMatrix m_A;
-  LinearSummary m_totals;
-  double m_assembly_seconds = 0.0;
+  LinearSummary m_totals;  // summed over all steps: iterations and times
+  double m_assembly_seconds = 0.0, m_total_seconds = 0.0, m_last_residual = 0.0;
+  long long m_steps = 0, m_newton_iterations = 0;
   // Scratch (3n unless noted).
   Vec m_v0, m_vb, m_xa, m_va, m_xe, m_v1, m_xlin, m_vlin, m_f, m_rhs, m_tmp, m_dx, m_dv;
   Vec m_rhs_free, m_delta;  // free DOFs

@@ -17,6 +17,31 @@ struct StepSummary {
   std::string message;    ///< empty on success; says what failed and with which numbers otherwise
 };
 
+/// What a stepper has done since it was made, cumulative over all its steps (in the spirit of
+/// Ceres' Solver::Summary and MuJoCo's timers): one type for every method, so studies and benchmarks
+/// read work and time without knowing the concrete stepper. A field a method has no use for stays 0.
+struct StepperStats {
+  long long steps = 0;              ///< step() calls
+  long long internal_steps = 0;     ///< steps of adaptive integrators (CVODE, IDA); else 0
+  long long iterations = 0;         ///< outer iterations: Newton (implicit methods, CVODE, IDA),
+                                    ///< local/global iterations, XPBD substeps x sweeps, Ceres LM
+  long long linear_iterations = 0;  ///< iterations of iterative linear solvers (CG, GMRES)
+  long long factorizations = 0;     ///< numeric factorizations (or matrix refreshes) of linear solvers
+  double last_residual = 0.0;       ///< residual of the last step's solve (its units: see StepSummary)
+  double assembly_seconds = 0.0;    ///< forces and Jacobian values (s)
+  double analyze_seconds = 0.0;     ///< symbolic analysis of sparsity patterns (s)
+  double factor_seconds = 0.0;      ///< numeric factorizations and preconditioner set-up (s)
+  double solve_seconds = 0.0;       ///< linear solves (s)
+  double local_seconds = 0.0;       ///< local steps of local/global methods (s)
+  double global_seconds = 0.0;      ///< global steps of local/global methods (s)
+  double total_seconds = 0.0;       ///< wall time inside step() (s); 0 if the method does not time it
+  double factor_nonzeros = 0.0;     ///< entries of the current factor (direct global solves)
+};
+
+/// "N steps, I iterations, L linear iterations, F factorizations; assembly a s, ..." with the
+/// fields that are not zero: the line report() prints by default.
+std::string format_stats(const StepperStats& s);
+
 /// Advances a mass-spring state by one step of size h. Implementations hold a reference to their
 /// (read-only) system and own all their scratch; step() must not allocate once warmed up.
 /// Constraints (colliders, strain limiting) are not applied here: Simulation applies them.
@@ -27,9 +52,15 @@ class Stepper {
   virtual const char* name() const = 0;
   /// s1 = one step of size h from s0. s1 may not alias s0; its vectors are resized if needed.
   virtual StepSummary step(const State& s0, double h, State& s1) = 0;
-  /// One line of counters accumulated over all steps so far (solver work, times), for logs;
-  /// "" for methods with nothing to report.
-  virtual std::string report() const { return ""; }
+  /// Work and time over all steps so far (fields the method has no use for stay 0).
+  virtual StepperStats stats() const { return {}; }
+  /// One line of counters accumulated over all steps so far, for logs: format_stats(stats()) by
+  /// default, with method-specific additions where a method has them; "" for methods that count
+  /// nothing (stats().steps == 0).
+  virtual std::string report() const {
+    const StepperStats s = stats();
+    return s.steps == 0 ? std::string() : format_stats(s);
+  }
 
   // Checkpoints. A step may depend on more than its start state: a multistep history (BDF2's
   // previous state) or a warm start (an iterative linear backend's previous correction). A

@@ -31,6 +31,7 @@ struct CholmodSolver::Impl {
   cholmod_dense Bk{};                                      // header over a block of columns
   cholmod_dense *Xk = nullptr, *Yk = nullptr, *Ek = nullptr;  // its workspace
   Index n = 0;
+  long long factorizations = 0;
   bool factored = false;
   std::array<std::unique_ptr<SupernodalSolver>, 4> sn;  // per K, made on first use
   Vec column;                                            // simplicial fallback's one column
@@ -139,6 +140,7 @@ LinearSummary CholmodSolver::factor(const SparseMatrix& A) {
                "cholmod: factor on a pattern other than the analysed one");
   m->A.x = const_cast<double*>(A.valuePtr());
   cholmod_l_factorize(&m->A, m->L, &m->c);
+  ++m->factorizations;
   s.factor_seconds = since(t0);
   m->factored = false;
   if (m->c.status == CHOLMOD_NOT_POSDEF) {
@@ -241,6 +243,8 @@ double CholmodSolver::factor_cost_in_solves() const {
   if (!m->L || !(m->c.lnz > 0.0)) return 0.0;
   return m->c.fl / (4.0 * m->c.lnz) / kRateRatio;
 }
+
+long long CholmodSolver::factorizations() const { return m->factorizations; }
 
 double CholmodSolver::factor_nonzeros() const {
   return m->L ? double(m->c.lnz) : 0.0;

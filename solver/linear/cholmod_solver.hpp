@@ -58,6 +58,8 @@ class CholmodSolver final : public LinearSolver {
   double factor_cost_in_solves() const override;
   /// Nonzeros of the factor L (after factor()).
   double factor_nonzeros() const;
+  /// factor() calls so far.
+  long long factorizations() const override;
 
  private:
   struct Impl;

@@ -40,7 +40,7 @@ class ConjugateGradientSolver final : public LinearSolver {
   const char* name() const override;
   bool exact_resume() const override { return m_pre != Preconditioner::Factorization; }
   /// Factorizations so far (Preconditioner::Factorization).
-  int factorizations() const { return m_factorizations; }
+  long long factorizations() const override { return m_factorizations; }
   /// What one factorization counts for in the renewal rule, in PCG iterations (after analyze()).
   double factor_cost() const { return m_factor_cost; }
   bool requires_spd() const override { return true; }

@@ -54,6 +54,9 @@ class LinearSolver {
   /// Direct backends: the cost of one factor() in units of one solve(), estimated after analyze()
   /// from operation counts (deterministic, no timing); 0 if unknown.
   virtual double factor_cost_in_solves() const { return 0.0; }
+  /// Numeric factorizations (or preconditioner refactorizations) done so far; 0 for backends
+  /// that factor nothing.
+  virtual long long factorizations() const { return 0; }
 };
 
 }  // namespace hooke

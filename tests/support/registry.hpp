@@ -6,12 +6,21 @@
 #include <string>
 
 #include "hooke/linear/linear_registry.hpp"
+#include "hooke/registry.hpp"
 
 namespace hooke::test {
 
 /// True if this build registers the linear backend `name` (e.g. "cholmod" is optional).
 inline bool has_backend(const std::string& name) {
   for (const auto& info : hooke::linear_solvers())
+    if (name == info.name) return true;
+  return false;
+}
+
+/// True if this build registers the method `name` (cvode, ida, ceres-implicit and
+/// fast-mass-spring are optional).
+inline bool has_method(const std::string& name) {
+  for (const auto& info : hooke::methods())
     if (name == info.name) return true;
   return false;
 }

@@ -1,0 +1,33 @@
+#include "hooke/integrators/stepper.hpp"
+
+#include <sstream>
+
+namespace hooke {
+
+std::string format_stats(const StepperStats& s) {
+  std::ostringstream os;
+  os << s.steps << " steps";
+  auto count = [&](long long v, const char* what) {
+    if (v) os << ", " << v << " " << what;
+  };
+  count(s.internal_steps, "internal steps");
+  count(s.iterations, "iterations");
+  count(s.linear_iterations, "linear iterations");
+  count(s.factorizations, "factorizations");
+  const char* sep = "; ";
+  auto time = [&](double v, const char* what) {
+    if (v == 0.0) return;
+    os << sep << what << " " << v << " s";
+    sep = ", ";
+  };
+  time(s.assembly_seconds, "assembly");
+  time(s.analyze_seconds, "analyze");
+  time(s.factor_seconds, "factor");
+  time(s.solve_seconds, "solve");
+  time(s.local_seconds, "local");
+  time(s.global_seconds, "global");
+  time(s.total_seconds, "total");
+  return os.str();
+}
+
+}  // namespace hooke
