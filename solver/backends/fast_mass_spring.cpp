@@ -314,170 +314,11 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
     if (m_row[size_t(p)] < 0) m_x.segment<3>(3 * p) = m_y.segment<3>(3 * p);
   m_xprev = m_x;
 
-  const bool lbfgs = m_opt.acceleration == Acceleration::Lbfgs, chebyshev = m_opt.acceleration == Acceleration::Chebyshev;
-  const bool want_objective = m_opt.tolerance > 0.0 || lbfgs || chebyshev;
-  const int N = m_opt.iterations;
-  double g_start = 0.0, g_prev = 0.0, g = 0.0;
-  bool converged = m_opt.tolerance == 0.0 || m_free.empty();
-  int it = 0;
-  // Chebyshev state (Wang 2015, eq. 11 with gamma = 1): x_{k+1} = x_{k-1} + omega (xhat - x_{k-1}),
-  // with omega = 1 for the first S - 1 iterations after a (re)start, 2 / (2 - rho^2) at the S-th
-  // and 4 / (4 - rho^2 omega) after it. j counts the iterations since the last (re)start.
-  double omega = 1.0, rho = m_opt.chebyshev_rho, prev_update = 0.0;
-  int j = 0;
-
-  if (!m_free.empty() && !lbfgs) {
-    for (int k = 0;; ++k) {
-      // Local step at the current iterate x_k (its objective comes for free with it).
-      if (k == N && !want_objective) break;
-      const double E = local_step(m_x);
-      if (want_objective) {
-        g = quadratic_terms(m_x) + E;
-        if (k == 0) {
-          g_start = g;
-        } else {
-          if (chebyshev && omega != 1.0 && g > g_prev) {
-            // The semi-iteration overshot (rho too large for this stage of a nonlinear
-            // iteration): restart it from x_k with plain iterations, as on entry.
-            j = 0;
-            omega = 1.0;
-            ++m_chebyshev_restarts;
-          }
-          out.residual = (g_start - g) > 0.0 ? (g_prev - g) / (g_start - g) : 0.0;
-          if (m_opt.tolerance > 0.0 && g_prev - g <= m_opt.tolerance * (g_start - g)) {
-            converged = true;
-            break;
-          }
-        }
-        g_prev = g;
-      }
-      if (k == N) break;
-      // Global step: xhat = A^{-1} b(d(x_k)), or one Jacobi sweep towards it from x_k.
-      if (!m_chol) {
-        jacobi_sweep(m_B, m_x, m_X);
-      } else if (global_solve(m_B, m_X, out.message) != Status::Converged) {
-        out.status = Status::Fatal;
-        return out;
-      }
-      ++it;
-      if (!chebyshev) {
-        scatter(m_X, m_x);
-      } else {
-        m_xhat = m_x;
-        scatter(m_X, m_xhat);
-        const double update = (m_xhat - m_x).norm();
-        const int S = m_opt.chebyshev_delay;
-        ++j;
-        if (j == S) {
-          if (m_opt.chebyshev_rho == 0.0) rho = prev_update > 0.0 ? std::min(update / prev_update, 0.9999) : 0.0;
-          omega = rho > 0.0 ? 2.0 / (2.0 - rho * rho) : 1.0;
-        } else if (j > S) {
-          omega = 4.0 / (4.0 - rho * rho * omega);
-        }
-        prev_update = update;
-        if (omega != 1.0) {
-          // x_{k+1} = x_{k-1} + omega (xhat - x_{k-1}); m_xprev holds x_{k-1}.
-          m_xprev = m_xprev + omega * (m_xhat - m_xprev);
-          m_x.swap(m_xprev);  // now m_x = x_{k+1} and m_xprev = x_k
-        } else {
-          m_xprev.swap(m_x);  // m_xprev = x_k
-          m_x = m_xhat;
-        }
-      }
-      if (m_opt.on_iteration) m_opt.on_iteration(it, m_x);
-    }
-  } else if (!m_free.empty()) {
-    // L-BFGS on g (Liu, Bouaziz and Kavan 2017, Algorithm 1): grad g = A x - b(d(x)), initial
-    // inverse Hessian A^{-1} (the prefactored matrix), Armijo backtracking from alpha = 1.
-    gather(m_x, m_X);
-    g = quadratic_terms(m_x) + local_step(m_x);
-    g_start = g;
-    m_G.noalias() = m_A * m_X;
-    m_G -= m_B;
-    const int H = m_opt.lbfgs_history;
-    int stored = 0, newest = -1;
-    for (int k = 0; k < N; ++k) {
-      // Two-loop recursion: D = -H G with H0 = A^{-1}.
-      m_D = m_G;
-      for (int c = 0; c < stored; ++c) {
-        const int i = (newest - c + H) % H;
-        m_alpha[size_t(i)] = m_rho_lbfgs[size_t(i)] * inner(m_s[size_t(i)], m_D);
-        m_D -= m_alpha[size_t(i)] * m_t[size_t(i)];
-      }
-      if (global_solve(m_D, m_Xtrial, out.message) != Status::Converged) {
-        out.status = Status::Fatal;
-        return out;
-      }
-      m_D = m_Xtrial;
-      for (int c = stored - 1; c >= 0; --c) {
-        const int i = (newest - c + H) % H;
-        const double beta = m_rho_lbfgs[size_t(i)] * inner(m_t[size_t(i)], m_D);
-        m_D += (m_alpha[size_t(i)] - beta) * m_s[size_t(i)];
-      }
-      m_D = -m_D;
-      double slope = inner(m_G, m_D);
-      if (!(slope < 0.0)) {  // not a descent direction: drop the history, take the plain step
-        stored = 0;
-        if (global_solve(m_G, m_D, out.message) != Status::Converged) {
-          out.status = Status::Fatal;
-          return out;
-        }
-        m_D = -m_D;
-        slope = inner(m_G, m_D);
-      }
-      ++it;
-      double alpha = 1.0, g_trial = g;
-      bool accepted = false;
-      for (int trial = 0; trial < 30; ++trial) {
-        m_Xtrial = m_X + alpha * m_D;
-        scatter(m_Xtrial, m_x);
-        g_trial = quadratic_terms(m_x) + local_step(m_x);
-        ++m_line_search_trials;
-        m_Gnew.noalias() = m_A * m_Xtrial;
-        m_Gnew -= m_B;
-        if (g_trial <= g + 1e-4 * alpha * slope) {
-          accepted = true;
-          break;
-        }
-        // Near the minimum the predicted decrease sinks below the round-off of g itself (about
-        // 1e-16 |g| per term): there the gradient, which has no such cancellation, decides.
-        if (-alpha * slope <= 1e-12 * (std::abs(g) + std::abs(g_start - g)) &&
-            m_Gnew.squaredNorm() < m_G.squaredNorm()) {
-          accepted = true;
-          break;
-        }
-        alpha *= 0.5;
-      }
-      if (!accepted) {  // no decrease of g or of its gradient is measurable any more
-        scatter(m_X, m_x);
-        converged = true;
-        break;
-      }
-      // History pair s = x_{k+1} - x_k, t = grad_{k+1} - grad_k (skipped unless curvature > 0).
-      const int slot = (newest + 1) % H;
-      m_s[size_t(slot)] = m_Xtrial - m_X;
-      m_t[size_t(slot)] = m_Gnew - m_G;
-      const double st = inner(m_s[size_t(slot)], m_t[size_t(slot)]);
-      if (st > 0.0) {
-        m_rho_lbfgs[size_t(slot)] = 1.0 / st;
-        newest = slot;
-        stored = std::min(stored + 1, H);
-      } else if (stored == H) {
-        stored = H - 1;  // the rejected pair overwrote the oldest one: drop it from the history
-      }
-      m_X.swap(m_Xtrial);
-      m_G.swap(m_Gnew);
-      g_prev = g;
-      g = g_trial;
-      if (m_opt.on_iteration) m_opt.on_iteration(it, m_x);
-      out.residual = (g_start - g) > 0.0 ? (g_prev - g) / (g_start - g) : 0.0;
-      if (m_opt.tolerance > 0.0 && g_prev - g <= m_opt.tolerance * (g_start - g)) {
-        converged = true;
-        break;
-      }
-    }
-  }
-
+  bool converged = true;
+  if (!m_free.empty())
+    converged = m_opt.acceleration == Acceleration::Lbfgs ? iterate_lbfgs(out) : iterate_local_global(out);
+  if (out.status == Status::Fatal) return out;
+  const int it = out.iterations;
   s1.t = s0.t + h;
   s1.x = m_x;
   s1.v.resize(s0.v.size());
@@ -485,7 +326,6 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
     s1.v.segment<3>(3 * p) = m_row[size_t(p)] >= 0
                                  ? Vec3((s1.x.segment<3>(3 * p) - s0.x.segment<3>(3 * p)) / h)
                                  : Vec3(s0.v.segment<3>(3 * p));
-  out.iterations = it;
   m_iterations += it;
   ++m_steps;
   if (!converged) {
@@ -496,6 +336,185 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
     out.message = msg.str();
   }
   return out;
+}
+
+bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
+  const bool chebyshev = m_opt.acceleration == Acceleration::Chebyshev;
+  const bool want_objective = m_opt.tolerance > 0.0 || chebyshev;
+  const int N = m_opt.iterations;
+  double g_start = 0.0, g_prev = 0.0, g = 0.0;
+  bool converged = m_opt.tolerance == 0.0;
+  int it = 0;
+  // Chebyshev state (Wang 2015, eq. 11 with gamma = 1): x_{k+1} = x_{k-1} + omega (xhat - x_{k-1}),
+  // with omega = 1 for the first S - 1 iterations after a (re)start, 2 / (2 - rho^2) at the S-th
+  // and 4 / (4 - rho^2 omega) after it. j counts the iterations since the last (re)start.
+  double omega = 1.0, rho = m_opt.chebyshev_rho, prev_update = 0.0;
+  int j = 0;
+  for (int k = 0;; ++k) {
+    // Local step at the current iterate x_k (its objective comes for free with it).
+    if (k == N && !want_objective) break;
+    const double E = local_step(m_x);
+    if (want_objective) {
+      g = quadratic_terms(m_x) + E;
+      if (k == 0) {
+        g_start = g;
+      } else {
+        if (chebyshev && omega != 1.0 && g > g_prev) {
+          // The semi-iteration overshot (rho too large for this stage of a nonlinear
+          // iteration): restart it from x_k with plain iterations, as on entry.
+          j = 0;
+          omega = 1.0;
+          ++m_chebyshev_restarts;
+        }
+        out.residual = (g_start - g) > 0.0 ? (g_prev - g) / (g_start - g) : 0.0;
+        if (m_opt.tolerance > 0.0 && g_prev - g <= m_opt.tolerance * (g_start - g)) {
+          converged = true;
+          break;
+        }
+      }
+      g_prev = g;
+    }
+    if (k == N) break;
+    // Global step: xhat = A^{-1} b(d(x_k)), or one Jacobi sweep towards it from x_k.
+    if (!m_chol) {
+      jacobi_sweep(m_B, m_x, m_X);
+    } else if (global_solve(m_B, m_X, out.message) != Status::Converged) {
+      out.status = Status::Fatal;
+      return false;
+    }
+    ++it;
+    if (!chebyshev) {
+      scatter(m_X, m_x);
+    } else {
+      m_xhat = m_x;
+      scatter(m_X, m_xhat);
+      const double update = (m_xhat - m_x).norm();
+      const int S = m_opt.chebyshev_delay;
+      ++j;
+      if (j == S) {
+        if (m_opt.chebyshev_rho == 0.0) rho = prev_update > 0.0 ? std::min(update / prev_update, 0.9999) : 0.0;
+        omega = rho > 0.0 ? 2.0 / (2.0 - rho * rho) : 1.0;
+      } else if (j > S) {
+        omega = 4.0 / (4.0 - rho * rho * omega);
+      }
+      prev_update = update;
+      if (omega != 1.0) {
+        // x_{k+1} = x_{k-1} + omega (xhat - x_{k-1}); m_xprev holds x_{k-1}.
+        m_xprev = m_xprev + omega * (m_xhat - m_xprev);
+        m_x.swap(m_xprev);  // now m_x = x_{k+1} and m_xprev = x_k
+      } else {
+        m_xprev.swap(m_x);  // m_xprev = x_k
+        m_x = m_xhat;
+      }
+    }
+    if (m_opt.on_iteration) m_opt.on_iteration(it, m_x);
+  }
+  out.iterations = it;
+  return converged;
+}
+
+Status FastMassSpringStepper::lbfgs_direction(int stored, int newest, std::string& message) {
+  // Two-loop recursion: D = -H G with H0 = A^{-1}.
+  const int H = m_opt.lbfgs_history;
+  m_D = m_G;
+  for (int c = 0; c < stored; ++c) {
+    const int i = (newest - c + H) % H;
+    m_alpha[size_t(i)] = m_rho_lbfgs[size_t(i)] * inner(m_s[size_t(i)], m_D);
+    m_D -= m_alpha[size_t(i)] * m_t[size_t(i)];
+  }
+  if (const Status st = global_solve(m_D, m_Xtrial, message); st != Status::Converged) return st;
+  m_D = m_Xtrial;
+  for (int c = stored - 1; c >= 0; --c) {
+    const int i = (newest - c + H) % H;
+    const double beta = m_rho_lbfgs[size_t(i)] * inner(m_t[size_t(i)], m_D);
+    m_D += (m_alpha[size_t(i)] - beta) * m_s[size_t(i)];
+  }
+  m_D = -m_D;
+  return Status::Converged;
+}
+
+bool FastMassSpringStepper::iterate_lbfgs(StepSummary& out) {
+  const int N = m_opt.iterations;
+  double g_start = 0.0, g_prev = 0.0, g = 0.0;
+  bool converged = m_opt.tolerance == 0.0;
+  int it = 0;
+  // L-BFGS on g (Liu, Bouaziz and Kavan 2017, Algorithm 1): grad g = A x - b(d(x)), initial
+  // inverse Hessian A^{-1} (the prefactored matrix), Armijo backtracking from alpha = 1.
+  gather(m_x, m_X);
+  g = quadratic_terms(m_x) + local_step(m_x);
+  g_start = g;
+  m_G.noalias() = m_A * m_X;
+  m_G -= m_B;
+  const int H = m_opt.lbfgs_history;
+  int stored = 0, newest = -1;
+  for (int k = 0; k < N; ++k) {
+    if (lbfgs_direction(stored, newest, out.message) != Status::Converged) {
+      out.status = Status::Fatal;
+      return false;
+    }
+    double slope = inner(m_G, m_D);
+    if (!(slope < 0.0)) {  // not a descent direction: drop the history, take the plain step
+      stored = 0;
+      if (global_solve(m_G, m_D, out.message) != Status::Converged) {
+        out.status = Status::Fatal;
+        return false;
+      }
+      m_D = -m_D;
+      slope = inner(m_G, m_D);
+    }
+    ++it;
+    double alpha = 1.0, g_trial = g;
+    bool accepted = false;
+    for (int trial = 0; trial < 30; ++trial) {
+      m_Xtrial = m_X + alpha * m_D;
+      scatter(m_Xtrial, m_x);
+      g_trial = quadratic_terms(m_x) + local_step(m_x);
+      ++m_line_search_trials;
+      m_Gnew.noalias() = m_A * m_Xtrial;
+      m_Gnew -= m_B;
+      if (g_trial <= g + 1e-4 * alpha * slope) {
+        accepted = true;
+        break;
+      }
+      // Near the minimum the predicted decrease sinks below the round-off of g itself (about
+      // 1e-16 |g| per term): there the gradient, which has no such cancellation, decides.
+      if (-alpha * slope <= 1e-12 * (std::abs(g) + std::abs(g_start - g)) &&
+          m_Gnew.squaredNorm() < m_G.squaredNorm()) {
+        accepted = true;
+        break;
+      }
+      alpha *= 0.5;
+    }
+    if (!accepted) {  // no decrease of g or of its gradient is measurable any more
+      scatter(m_X, m_x);
+      converged = true;
+      break;
+    }
+    // History pair s = x_{k+1} - x_k, t = grad_{k+1} - grad_k (skipped unless curvature > 0).
+    const int slot = (newest + 1) % H;
+    m_s[size_t(slot)] = m_Xtrial - m_X;
+    m_t[size_t(slot)] = m_Gnew - m_G;
+    const double st = inner(m_s[size_t(slot)], m_t[size_t(slot)]);
+    if (st > 0.0) {
+      m_rho_lbfgs[size_t(slot)] = 1.0 / st;
+      newest = slot;
+      stored = std::min(stored + 1, H);
+    } else if (stored == H) {
+      stored = H - 1;  // the rejected pair overwrote the oldest one: drop it from the history
+    }
+    m_X.swap(m_Xtrial);
+    m_G.swap(m_Gnew);
+    g_prev = g;
+    g = g_trial;
+    if (m_opt.on_iteration) m_opt.on_iteration(it, m_x);
+    out.residual = (g_start - g) > 0.0 ? (g_prev - g) / (g_start - g) : 0.0;
+    if (m_opt.tolerance > 0.0 && g_prev - g <= m_opt.tolerance * (g_start - g)) {
+      converged = true;
+      break;
+    }
+  }
+  out.iterations = it;
+  return converged;
 }
 
 StepperStats FastMassSpringStepper::stats() const {

@@ -143,6 +143,14 @@ class FastMassSpringStepper final : public Stepper {
   Status global_solve(const Rows3& B, Rows3& X, std::string& message);
   /// X = x + D^-1 (B - A x) on the free rows, x the current 3n iterate (global_solver = "jacobi").
   void jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X);
+  /// The iterations of one step from m_x (plain or Chebyshev-accelerated local/global, or
+  /// L-BFGS), leaving the result in m_x: out gets the iteration count and the last relative
+  /// objective decrease (residual), and Status::Fatal if a global solve failed. Returns whether
+  /// the tolerance was met (always true with tolerance = 0).
+  bool iterate_local_global(StepSummary& out);
+  bool iterate_lbfgs(StepSummary& out);
+  /// m_D = -H m_G by the L-BFGS two-loop recursion over the `stored` newest pairs, H0 = A^-1.
+  Status lbfgs_direction(int stored, int newest, std::string& message);
 
   const MassSpringSystem& m_sys;
   FastMassSpringOptions m_opt;
