@@ -3,6 +3,18 @@
 #include <algorithm>
 
 #include "hooke/core.hpp"
+#include "hooke_config.hpp"
+
+// The AVX2 copy of the kernels needs an x86 target (the ISA, __builtin_cpu_supports("avx2")) and
+// GCC's `#pragma GCC target`, which clang ignores (it would compile a second baseline copy and
+// warn about the unknown pragma). The compiler macros keep any other build, e.g. aarch64, on the
+// portable kernels even where CMake's processor check was wrong (a cross build).
+#if HOOKE_X86_SIMD && (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__) && \
+    !defined(__clang__)
+#define HOOKE_SUPERNODAL_AVX2 1
+#else
+#define HOOKE_SUPERNODAL_AVX2 0
+#endif
 
 extern "C" {
 // LAPACK (OpenBLAS): inverse of a triangular matrix in place.
@@ -41,19 +53,24 @@ struct Work {
 };
 }  // namespace
 
-// The kernels twice: for AVX2 (4-wide vectors in one register) and for the baseline x86-64 ISA
+// The kernels twice on x86: for AVX2 (4-wide vectors in one register) and for the baseline ISA
 // (the same vector code in SSE2 halves). Chosen at run time; results differ between the two only
-// in rounding, and a machine always takes the same one.
+// in rounding, and a machine always takes the same one. Elsewhere (and with HOOKE_X86_SIMD off)
+// only the baseline copy exists: the compiler lowers the generic 4-wide vectors to the target's
+// own (two NEON registers on aarch64) or to scalars.
+#if HOOKE_SUPERNODAL_AVX2
 namespace sn_avx2 {
 #pragma GCC push_options
 #pragma GCC target("avx2")
 #include "supernodal_kernels.inc"
 #pragma GCC pop_options
 }  // namespace sn_avx2
+#endif
 
 namespace sn_base {
-// 32-byte vectors passed between the (inlined, file-local) helpers without AVX: GCC warns that the
-// ABI differs from AVX code, which matters only across separately compiled files.
+// 32-byte vectors passed between the (inlined, file-local) helpers without AVX: on x86 the
+// compilers warn that the ABI differs from AVX code, which matters only across separately
+// compiled files.
 #pragma GCC diagnostic push
 #pragma GCC diagnostic ignored "-Wpsabi"
 #include "supernodal_kernels.inc"
@@ -156,8 +173,12 @@ void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<
 
 SupernodalSolver::SupernodalSolver(int K) : m_K(K) {
   HOOKE_ASSERT(K >= 1 && K <= 4, "SupernodalSolver: K = " << K << " right-hand sides (1..4)");
+#if HOOKE_SUPERNODAL_AVX2
   __builtin_cpu_init();
   m_avx2 = __builtin_cpu_supports("avx2");
+#else
+  m_avx2 = false;  // only the portable kernels in this build
+#endif
 }
 
 void SupernodalSolver::bind(const SupernodalFactorView& f) {
@@ -263,10 +284,13 @@ void SupernodalSolver::solve(const double* b, double* x) {
   // Two threads pay off from about 1e5 factor entries (a 10k-spring cloth's factor has 7e4).
   const bool parallel = run_parallel(static_cast<long long>(m_work_total), 100000);
   const Packed pk{m_inv_start.data(), m_off_start.data(), m_packed.data()};
-  if (m_avx2)
+#if HOOKE_SUPERNODAL_AVX2
+  if (m_avx2) {
     sn_avx2::solve_any(m_K, m_f, pk, split, parallel, b, x, m_y.data(), work);
-  else
-    sn_base::solve_any(m_K, m_f, pk, split, parallel, b, x, m_y.data(), work);
+    return;
+  }
+#endif
+  sn_base::solve_any(m_K, m_f, pk, split, parallel, b, x, m_y.data(), work);
 }
 
 }  // namespace hooke
