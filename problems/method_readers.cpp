@@ -14,8 +14,11 @@ MethodOptions read_implicit(TableReader& r, const std::string& method) {
   ImplicitOptions o;
   if (method == "implicit") o.beta = r.number("beta", o.beta);
   o.linear_solver = r.string("linear_solver", default_linear_solver());
+  o.preconditioner = r.string("preconditioner", o.preconditioner);
   if (const std::string why = linear_solver_unknown(o.linear_solver); !why.empty())
     r.fail("linear_solver", why);
+  if (const std::string why = linear_solver_unknown(o.linear_solver, o.preconditioner); !why.empty())
+    r.fail("preconditioner", why);
   o.newton_iterations = r.int_field("newton_iterations", o.newton_iterations);
   o.newton_tolerance = r.number("tolerance", o.newton_tolerance);
   o.linear_tolerance = r.number("linear_tolerance", o.linear_tolerance);

@@ -1,5 +1,7 @@
 #include "hooke/integrators/implicit_stepper.hpp"
 
+#include "hooke/linear/linear_registry.hpp"
+
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -46,10 +48,12 @@ ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme 
       m_J(system.make_jacobians()), m_A(system) {
   const OptionError err = m_options.validate();
   HOOKE_ASSERT(err.ok(), "ImplicitOptions: " << err.message);
-  HOOKE_ASSERT(m_options.linear_solver.empty() || m_options.linear_solver == m_solver->name(),
-               "ImplicitOptions::linear_solver is '" << m_options.linear_solver
-                                                     << "' but the backend given is '"
-                                                     << m_solver->name() << "'");
+  HOOKE_ASSERT(m_options.linear_solver.empty() ||
+                   canonical_linear_solver(m_options.linear_solver, m_options.preconditioner) ==
+                       m_solver->name(),
+               "ImplicitOptions::linear_solver / preconditioner are '"
+                   << m_options.linear_solver << "' / '" << m_options.preconditioner
+                   << "' but the backend given is '" << m_solver->name() << "'");
   m_jac_options.clamp_compressed = m_options.clamp_compressed;
   // Leave the damper's non-symmetric df/dx out of A for every backend: A then stays symmetric
   // (and SPD with the clamp), which CG and Cholesky need and under which Jacobi and Gauss-Seidel

@@ -31,6 +31,10 @@ struct ImplicitOptions {
   /// Linear backend by name (linear_solvers()); "" = default_linear_solver(). The registry makes
   /// the backend from it; ImplicitStepper checks that the backend it is given has this name.
   std::string linear_solver;
+  /// With linear_solver = "pcg": its preconditioner by name (preconditioners()), so that a Krylov
+  /// method and a preconditioner are a pair of names ("pcg" + "nodal" = "pcg-nodal"); "" = the
+  /// backend's own (Jacobi for "pcg"). Must stay "" for every other backend.
+  std::string preconditioner;
   /// beta in [0, 1] (Beta scheme only).
   double beta = 1.0;
   /// Maximum Newton iterations per step; 1 gives the linearised step (no convergence test).

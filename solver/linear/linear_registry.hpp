@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "hooke/linear/linear_solver.hpp"
+#include "hooke/linear/preconditioner.hpp"
 
 namespace hooke {
 
@@ -13,15 +14,33 @@ struct LinearSolverInfo {
   const char* description;  ///< one line for --help and messages
 };
 
-/// Every linear backend this build has, in table order (the reference backend first when built).
+/// One entry of the preconditioner table.
+struct PreconditionerInfo {
+  const char* name;         ///< as in scene files: [integrator] preconditioner, or "pcg-<name>"
+  const char* description;  ///< one line for --help and messages
+};
+
+/// Every linear backend this build has, in table order: the reference direct solver first when
+/// built, then conjugate gradients with each preconditioner ("pcg-<preconditioner>", with the short
+/// forms "pcg" for Jacobi and "cg" for none), then the stationary iterations.
 const std::vector<LinearSolverInfo>& linear_solvers();
 /// Comma-separated names, for messages.
 std::string linear_solver_names();
-/// "" if name is a backend of this build, else why not: the available names, or the CMake option
-/// and Debian package of a known backend this build lacks (the message make_linear_solver throws).
-std::string linear_solver_unknown(const std::string& name);
-/// Creates a backend by name; throws UnknownName listing the available names, or naming the CMake
-/// option and Debian package of a known backend this build lacks.
-std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name);
+/// Every preconditioner of the Krylov backend this build has, in table order.
+const std::vector<PreconditionerInfo>& preconditioners();
+std::string preconditioner_names();
+/// "" if (name, preconditioner) names a backend of this build, else why not: the available names,
+/// or the CMake option and Debian package of a known backend this build lacks (the message
+/// make_linear_solver throws). A preconditioner goes with name = "pcg" only ("" = none given).
+std::string linear_solver_unknown(const std::string& name, const std::string& preconditioner = "");
+/// The registry name of the backend (name, preconditioner) makes: ("pcg", "nodal") -> "pcg-nodal".
+std::string canonical_linear_solver(const std::string& name, const std::string& preconditioner);
+/// Creates a backend by name, or the Krylov method "pcg" with the named preconditioner (a pair of
+/// registry names: ("pcg", "nodal") is "pcg-nodal"); throws UnknownName (see
+/// linear_solver_unknown).
+std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name,
+                                                 const std::string& preconditioner = "");
+/// Creates a preconditioner by name; throws UnknownName.
+std::unique_ptr<Preconditioner> make_preconditioner(const std::string& name);
 
 }  // namespace hooke

@@ -49,6 +49,31 @@ TEST(MethodReaders, ImplicitKeysFillImplicitOptions) {
   EXPECT_EQ(d.resolved["integrator"]["linear_solver"].value<std::string>(), default_linear_solver());
 }
 
+TEST(MethodReaders, KrylovMethodAndPreconditionerAreAPairOfNames) {
+  const Scene s = load("method = \"implicit\"\nlinear_solver = \"pcg\"\npreconditioner = \"block\"\n");
+  const auto* o = s.integrator.options.get<ImplicitOptions>();
+  ASSERT_NE(o, nullptr);
+  EXPECT_EQ(o->preconditioner, "block");
+  // The pair makes the same backend as the combined name, step for step.
+  auto pair = make_stepper("implicit", *s.system, s.integrator.options);
+  ImplicitOptions combined = *o;
+  combined.linear_solver = "pcg-block";
+  combined.preconditioner.clear();
+  auto named = make_stepper("implicit", *s.system, combined);
+  State a, b;
+  ASSERT_EQ(pair->step(s.initial, 1e-3, a).status, Status::Converged);
+  ASSERT_EQ(named->step(s.initial, 1e-3, b).status, Status::Converged);
+  EXPECT_EQ(a.x, b.x);
+  EXPECT_EQ(a.v, b.v);
+  EXPECT_EQ(load_error("method = \"implicit\"\nlinear_solver = \"gauss-seidel\"\n"
+                       "preconditioner = \"jacobi\"\n").key(),
+            "integrator.preconditioner");
+  const InputError unknown =
+      load_error("method = \"implicit\"\nlinear_solver = \"pcg\"\npreconditioner = \"ilu\"\n");
+  EXPECT_EQ(unknown.key(), "integrator.preconditioner");
+  EXPECT_NE(unknown.reason().find("jacobi"), std::string::npos) << unknown.reason();
+}
+
 TEST(MethodReaders, ValidateRulesAreReportedThroughTheSceneKey) {
   // newton_tolerance is the scene key "tolerance".
   const InputError tol = load_error("method = \"implicit\"\ntolerance = -1.0\n");
