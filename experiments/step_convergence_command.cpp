@@ -7,10 +7,12 @@
 // and where does XPBD (Macklin et al. 2019) land at equal wall time?
 // Scene: a shipped cloth scene (default hanging_cloth_16: 16 x 16, 1 kg, two pinned corners, drag
 // 0.01), with the structural stiffness set to k and shear / flexion scaled by 0.2 / 0.02 as in the
-// scene, for k = 1e2, 1e4, 1e6 (--full: 1e2 .. 1e6 and three step sizes). The step starts from the
-// state after 3 converged backward-Euler steps from rest, so the cloth is moving and folding.
+// scene, for k = 1e2, 1e4, 1e6 at h = 1e-2 (--full: 1e2 .. 1e6 at h = 1e-3, 1e-2, 1/30). The step
+// starts from the state after 3 converged backward-Euler steps from rest, so the cloth is moving
+// and folding.
 // Reference: the exact step x* from Ceres (ceres-implicit, Newton on the residual to round-off);
-// hooke's own Newton-converged step gives an independent bound on the reference's error.
+// hooke's own Newton-converged step gives an independent bound on the reference's error (and is
+// the reference in a build without Ceres).
 // Objective error of an iterate x: (g(x) - g(x*)) / (g(y) - g(x*)), the fraction of the initial
 // gap left, with g the objective of FastMassSpringStepper and y = x0 + h v0 the inertial start.
 // Run:    hooke step-convergence [SCENE] [--full] [--out DIR]
@@ -22,10 +24,10 @@
 #include "experiments/cli.hpp"
 
 #include "experiments/plot_script.hpp"
+#include "experiments/trajectory.hpp"
 
 #include <chrono>
 #include <cmath>
-#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -40,6 +42,7 @@
 
 namespace hooke {
 
+#if HOOKE_WITH_CHOLMOD
 namespace {
 using Clock = std::chrono::steady_clock;
 double seconds_since(Clock::time_point t0) {
@@ -51,13 +54,195 @@ struct Sample {
   int iterations;
   double wall, objective_error, position_error;
 };
+/// Convergence curves by method name (the CSV and the table list them in this order).
+using Curves = std::map<std::string, std::vector<Sample>>;
 
-std::string fmt(double v) {
-  char b[32];
-  std::snprintf(b, sizeof b, "%.3g", v);
-  return b;
+/// The cloth scene with structural stiffness k (shear 0.2 k, flexion 0.02 k), backward Euler.
+Scene load_cloth(const std::string& scene_path, double k) {
+  const std::vector<std::string> sets = {
+      "springs.structural_stiffness=" + fmt(k), "springs.shear_stiffness=" + fmt(0.2 * k),
+      "springs.flexion_stiffness=" + fmt(0.02 * k), "integrator.method=implicit"};
+  return load_scene(scene_path, sets);
+}
+
+/// Newton on backward Euler run to round-off (the start of the step and hooke's own exact step).
+ImplicitOptions converged_newton() {
+  ImplicitOptions newton;
+  newton.newton_iterations = 100;
+  newton.newton_tolerance = 1e-13;
+  newton.linear_tolerance = 1e-14;
+  return newton;
+}
+
+/// The state after 3 converged backward-Euler steps of size h from `initial` (rest).
+State start_of_step(const MassSpringSystem& sys, const State& initial, double h) {
+  State s0 = initial, s1;
+  auto be = make_stepper("implicit", sys, converged_newton());
+  for (int n = 0; n < 3; ++n) {
+    be->step(s0, h, s1);
+    s0 = s1;
+  }
+  return s0;
+}
+
+/// The exact step from s0: Ceres if built, else hooke's Newton-converged step (`newton_step`,
+/// which with Ceres bounds the reference's error).
+State exact_step(const MassSpringSystem& sys, const State& s0, double h, const State& newton_step) {
+#if HOOKE_WITH_CERES
+  (void)newton_step;
+  CeresImplicitOptions ceres;
+  ceres.max_iterations = 200;
+  State exact;
+  make_stepper("ceres-implicit", sys, ceres)->step(s0, h, exact);
+  return exact;
+#else
+  (void)sys;
+  (void)s0;
+  (void)h;
+  return newton_step;
+#endif
+}
+
+/// Errors of an iterate x of the step from s0 against the exact step: the objective error
+/// (g(x) - g(x*)) / (g(y) - g(x*)) with y = x0 + h v0, and |x - x*|_inf / |x* - x0|_inf.
+class StepErrors {
+ public:
+  StepErrors(const MassSpringSystem& sys, const State& s0, double h, const State& exact)
+      : m_judge(sys), m_s0(s0), m_h(h), m_exact(exact) {
+    const Vec y = s0.x + h * s0.v;
+    m_g_star = m_judge.objective(s0, h, exact.x);
+    m_gap = m_judge.objective(s0, h, y) - m_g_star;
+    m_dx = (exact.x - s0.x).lpNorm<Eigen::Infinity>();
+  }
+  double objective(ConstRef x) const { return (m_judge.objective(m_s0, m_h, x) - m_g_star) / m_gap; }
+  double position(ConstRef x) const { return (x - m_exact.x).lpNorm<Eigen::Infinity>() / m_dx; }
+
+ private:
+  FastMassSpringStepper m_judge;
+  const State& m_s0;
+  double m_h;
+  const State& m_exact;
+  double m_g_star = 0.0, m_gap = 0.0, m_dx = 0.0;
+};
+
+/// Local/global and its accelerations (up to max_iterations): one traced step after a warm-up
+/// step that factors, the time spent measuring errors excluded from the wall time.
+void trace_local_global(const MassSpringSystem& sys, const State& s0, double h, int max_iterations,
+                        const StepErrors& errors, Curves& curves) {
+  State s1 = s0;
+  for (const Acceleration a : {Acceleration::None, Acceleration::Chebyshev, Acceleration::Lbfgs}) {
+    FastMassSpringOptions o;
+    o.acceleration = a;
+    o.iterations = max_iterations;
+    std::vector<Sample>& curve = curves[std::string("fast-mass-spring/") + to_string(a)];
+    Clock::time_point t0;
+    double excluded = 0.0;
+    bool done = false;
+    o.on_iteration = [&](int it, ConstRef x) {
+      if (done) return;
+      const auto c0 = Clock::now();
+      const double wall = std::chrono::duration<double>(c0 - t0).count() - excluded;
+      const double e = errors.objective(x);
+      curve.push_back({it, wall, e, errors.position(x)});
+      done = std::abs(e) < 1e-12;  // far below any target: stop tracing, the step finishes
+      excluded += seconds_since(c0);
+    };
+    FastMassSpringStepper fms(sys, o);
+    t0 = Clock::now();
+    fms.step(s0, h, s1);  // warm-up: factors once (the same h below reuses the factor)
+    curve.clear();
+    done = false;
+    excluded = 0.0;
+    t0 = Clock::now();
+    fms.step(s0, h, s1);
+  }
+}
+
+/// Newton on beta = 1 with n = 1 .. 12 iterations, n = 1 the linearised step; each run timed
+/// whole (assembly, factorization and solve in every iteration) after a warm-up step.
+void time_newton(const MassSpringSystem& sys, const State& s0, double h, const StepErrors& errors,
+                 Curves& curves) {
+  State s1 = s0;
+  for (int n = 1; n <= 12; ++n) {
+    ImplicitOptions o = converged_newton();
+    o.newton_iterations = n;
+    o.newton_tolerance = 1e-300;  // exactly n iterations
+    auto st = make_stepper("implicit", sys, o);
+    st->step(s0, h, s1);  // warm-up: symbolic analysis
+    const auto t0 = Clock::now();
+    st->step(s0, h, s1);
+    const double wall = seconds_since(t0);
+    curves["newton-beta1-cholmod"].push_back(
+        {n, wall, errors.objective(s1.x), errors.position(s1.x)});
+  }
+}
+
+/// XPBD: substeps 1 .. 256, one step each, for the same wall-time axis.
+void time_xpbd(const MassSpringSystem& sys, const State& s0, double h, const StepErrors& errors,
+               Curves& curves) {
+  State s1 = s0;
+  for (int sub = 1; sub <= 256; sub *= 2) {
+    XpbdOptions o;
+    o.substeps = sub;
+    auto st = make_stepper("xpbd", sys, o);
+    const auto t0 = Clock::now();
+    st->step(s0, h, s1);
+    const double wall = seconds_since(t0);
+    curves["xpbd"].push_back({sub, wall, errors.objective(s1.x), errors.position(s1.x)});
+  }
+}
+
+/// The opening of step_convergence.md, down to the table's header.
+std::string table_header(const std::string& scene_path, double target) {
+  std::ostringstream md;
+  md << "Iterations and wall time (ms) to bring the objective error below " << target
+     << " on one backward-Euler step (" << scene_path << "); `-` = not reached within the budget "
+     << "(its best error in brackets).\n\n"
+     << "| k (N/m) | h (s) | reference error | method | iterations | wall (ms) |\n|---|---|---|---|---|---|\n";
+  return md.str();
+}
+
+/// Every sample of the curves as CSV rows, and per method one table row: the first sample below
+/// target (or the best error reached).
+void write_curves(const Curves& curves, double k, double h, double reference_error, double target,
+                  std::ostream& csv, std::ostream& md) {
+  for (const auto& [method, curve] : curves) {
+    for (const Sample& s : curve)
+      csv << k << "," << h << "," << method << "," << s.iterations << "," << s.wall << ","
+          << s.objective_error << "," << s.position_error << "\n";
+    const Sample* hit = nullptr;
+    double best = std::numeric_limits<double>::infinity();
+    for (const Sample& s : curve) {
+      best = std::min(best, std::abs(s.objective_error));
+      if (!hit && std::abs(s.objective_error) < target) hit = &s;
+    }
+    md << "| " << fmt(k) << " | " << fmt(h) << " | " << fmt(reference_error) << " | " << method
+       << " | " << (hit ? std::to_string(hit->iterations) : "- (" + fmt(best) + ")") << " | "
+       << (hit ? fmt(1e3 * hit->wall) : "-") << " |\n";
+  }
+}
+
+/// The study at one (k, h): every method's curve on the step, written to csv and md.
+void study_step(const std::string& scene_path, double k, double h, int max_iterations,
+                double target, std::ostream& csv, std::ostream& md) {
+  const Scene scene = load_cloth(scene_path, k);
+  const MassSpringSystem& sys = *scene.system;
+  const State s0 = start_of_step(sys, scene.initial, h);
+  State newton_step;
+  make_stepper("implicit", sys, converged_newton())->step(s0, h, newton_step);
+  const State exact = exact_step(sys, s0, h, newton_step);
+  const StepErrors errors(sys, s0, h, exact);
+  const double reference_error = std::abs(errors.objective(newton_step.x));
+
+  Curves curves;
+  trace_local_global(sys, s0, h, max_iterations, errors, curves);
+  time_newton(sys, s0, h, errors, curves);
+  time_xpbd(sys, s0, h, errors, curves);
+  write_curves(curves, k, h, reference_error, target, csv, md);
+  std::cerr << "k = " << fmt(k) << ", h = " << fmt(h) << ": done\n";
 }
 }  // namespace
+#endif
 
 int run_step_convergence(const std::string& scene_path, const StepConvergenceOptions& opt) {
 #if !HOOKE_WITH_CHOLMOD
@@ -75,118 +260,9 @@ int run_step_convergence(const std::string& scene_path, const StepConvergenceOpt
   std::ofstream csv(opt.out_dir + "/step_convergence.csv");
   csv << "k,h,method,iterations,wall_seconds,objective_error,position_error\n";
   std::ostringstream md;
-  md << "Iterations and wall time (ms) to bring the objective error below " << opt.target
-     << " on one backward-Euler step (" << scene_path << "); `-` = not reached within the budget "
-     << "(its best error in brackets).\n\n"
-     << "| k (N/m) | h (s) | reference error | method | iterations | wall (ms) |\n|---|---|---|---|---|---|\n";
-
+  md << table_header(scene_path, opt.target);
   for (const double k : ks)
-    for (const double h : hs) {
-      const std::vector<std::string> sets = {
-          "springs.structural_stiffness=" + fmt(k), "springs.shear_stiffness=" + fmt(0.2 * k),
-          "springs.flexion_stiffness=" + fmt(0.02 * k), "integrator.method=implicit"};
-      Scene scene = load_scene(scene_path, sets);
-      const MassSpringSystem& sys = *scene.system;
-      // The start of the step: 3 converged backward-Euler steps from rest.
-      ImplicitOptions newton;
-      newton.newton_iterations = 100;
-      newton.newton_tolerance = 1e-13;
-      newton.linear_tolerance = 1e-14;
-      State s0 = scene.initial, s1;
-      {
-        auto be = make_stepper("implicit", sys, newton);
-        for (int n = 0; n < 3; ++n) {
-          be->step(s0, h, s1);
-          s0 = s1;
-        }
-      }
-      // The exact step: Ceres if built, else Newton; the other one bounds the reference's error.
-      State exact, newton_step;
-      make_stepper("implicit", sys, newton)->step(s0, h, newton_step);
-#if HOOKE_WITH_CERES
-      CeresImplicitOptions ceres;
-      ceres.max_iterations = 200;
-      make_stepper("ceres-implicit", sys, ceres)->step(s0, h, exact);
-#else
-      exact = newton_step;
-#endif
-      FastMassSpringStepper judge(sys);
-      const Vec y = s0.x + h * s0.v;
-      const double g_star = judge.objective(s0, h, exact.x), gap = judge.objective(s0, h, y) - g_star;
-      const double dx = (exact.x - s0.x).lpNorm<Eigen::Infinity>();
-      auto objective_error = [&](ConstRef x) { return (judge.objective(s0, h, x) - g_star) / gap; };
-      auto position_error = [&](ConstRef x) { return (x - exact.x).lpNorm<Eigen::Infinity>() / dx; };
-      const double reference_error = std::abs(objective_error(newton_step.x));
-
-      std::map<std::string, std::vector<Sample>> curves;
-      // Local/global and its accelerations: one traced step after a warm-up step that factors.
-      for (const Acceleration a : {Acceleration::None, Acceleration::Chebyshev, Acceleration::Lbfgs}) {
-        FastMassSpringOptions o;
-        o.acceleration = a;
-        o.iterations = max_iterations;
-        std::vector<Sample>& curve = curves[std::string("fast-mass-spring/") + to_string(a)];
-        Clock::time_point t0;
-        double excluded = 0.0;
-        bool done = false;
-        o.on_iteration = [&](int it, ConstRef x) {
-          if (done) return;
-          const auto c0 = Clock::now();
-          const double wall = std::chrono::duration<double>(c0 - t0).count() - excluded;
-          const double e = objective_error(x);
-          curve.push_back({it, wall, e, position_error(x)});
-          done = std::abs(e) < 1e-12;  // far below any target: stop tracing, the step finishes
-          excluded += seconds_since(c0);
-        };
-        FastMassSpringStepper fms(sys, o);
-        t0 = Clock::now();
-        fms.step(s0, h, s1);  // warm-up: factors once (the same h below reuses the factor)
-        curve.clear();
-        done = false;
-        excluded = 0.0;
-        t0 = Clock::now();
-        fms.step(s0, h, s1);
-      }
-      // Newton on beta = 1 with n iterations, n = 1 the linearised step; each run timed whole
-      // (assembly, factorization and solve in every iteration).
-      for (int n = 1; n <= 12; ++n) {
-        ImplicitOptions o = newton;
-        o.newton_iterations = n;
-        o.newton_tolerance = 1e-300;  // exactly n iterations
-        auto st = make_stepper("implicit", sys, o);
-        st->step(s0, h, s1);  // warm-up: symbolic analysis
-        const auto t0 = Clock::now();
-        st->step(s0, h, s1);
-        const double wall = seconds_since(t0);
-        curves["newton-beta1-cholmod"].push_back(
-            {n, wall, objective_error(s1.x), position_error(s1.x)});
-      }
-      // XPBD: substeps 1 .. 256, one step each, for the same wall-time axis.
-      for (int sub = 1; sub <= 256; sub *= 2) {
-        XpbdOptions o;
-        o.substeps = sub;
-        auto st = make_stepper("xpbd", sys, o);
-        const auto t0 = Clock::now();
-        st->step(s0, h, s1);
-        const double wall = seconds_since(t0);
-        curves["xpbd"].push_back({sub, wall, objective_error(s1.x), position_error(s1.x)});
-      }
-
-      for (const auto& [method, curve] : curves) {
-        for (const Sample& s : curve)
-          csv << k << "," << h << "," << method << "," << s.iterations << "," << s.wall << ","
-              << s.objective_error << "," << s.position_error << "\n";
-        const Sample* hit = nullptr;
-        double best = std::numeric_limits<double>::infinity();
-        for (const Sample& s : curve) {
-          best = std::min(best, std::abs(s.objective_error));
-          if (!hit && std::abs(s.objective_error) < opt.target) hit = &s;
-        }
-        md << "| " << fmt(k) << " | " << fmt(h) << " | " << fmt(reference_error) << " | " << method
-           << " | " << (hit ? std::to_string(hit->iterations) : "- (" + fmt(best) + ")") << " | "
-           << (hit ? fmt(1e3 * hit->wall) : "-") << " |\n";
-      }
-      std::cerr << "k = " << fmt(k) << ", h = " << fmt(h) << ": done\n";
-    }
+    for (const double h : hs) study_step(scene_path, k, h, max_iterations, opt.target, csv, md);
   csv.close();
   std::ofstream(opt.out_dir + "/step_convergence.md") << md.str();
   std::cout << md.str();

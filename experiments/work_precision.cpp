@@ -13,8 +13,10 @@
 // Errors: at each of `samples` equally spaced times, the RMS over particles of |x_i - x_ref_i|
 // (and the max); "final" is the last sample, "traj" the maximum over samples. Step sizes are
 // rounded so that every sample time falls on a step. A run that diverges (the `hooke run` energy
-// rule) or fails is kept in the CSV with its status and no error.
-// Run:    hooke workprecision [--full] [--cases chain,...] [--methods rk4,...] [--out DIR]
+// rule) or fails is kept in the CSV with its status and no error. A method that cannot load or does
+// not support a case is skipped on it; one whose run takes over 60 s skips the rest of its sweep.
+// Run:    hooke workprecision [--full] [--cases chain,...] [--methods rk4,...] [--rtols 1e-3,...]
+//                             [--reference-rtol R] [--samples S] [--out DIR] [--no-plot]
 // Writes: DIR/workprecision.csv (case,label,method,h,rtol,wall_s,steps,rms_err_final,
 //         max_err_final,rms_err_traj,max_err_traj,status), DIR/reference.csv (case,rtol,wall_s,
 //         err_rms_final,err_rms_traj,err_max_traj,how) and, through
@@ -29,6 +31,8 @@
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
+#include <optional>
+#include <utility>
 
 #include "experiments/divergence.hpp"
 #include "experiments/plot_script.hpp"
@@ -69,6 +73,115 @@ std::vector<WorkPrecisionCase> work_precision_cases(bool full, const std::string
   return cases;
 }
 
+namespace {
+/// The tolerances of adaptive methods: --rtols, else 1e-3, 1e-5, 1e-7 (full: 1e-3 .. 1e-8).
+std::vector<double> sweep_rtols(const WorkPrecisionOptions& options) {
+  if (!options.rtols.empty()) return options.rtols;
+  return options.full ? std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8}
+                      : std::vector<double>{1e-3, 1e-5, 1e-7};
+}
+
+/// The case's scene run by study method m at step h over the case's duration, without VTK output.
+Scene load_case(const WorkPrecisionCase& c, const StudyMethod& m, double h) {
+  std::vector<std::string> sets = c.sets;
+  sets.push_back("integrator.method=" + m.method);
+  sets.insert(sets.end(), m.sets.begin(), m.sets.end());
+  sets.push_back("time.dt=" + exact_number(h));
+  sets.push_back("time.duration=" + exact_number(c.duration));
+  sets.push_back("output.vtk=false");
+  return load_scene(c.scene, sets);
+}
+
+/// The case's CVODE reference at S samples, its line written to refcsv; none (after saying why)
+/// if CVODE did not complete.
+std::optional<Reference> case_reference(const WorkPrecisionCase& c, double reference_rtol, int S,
+                                        FILE* refcsv) {
+  // The reference steps straight from sample to sample (dt = T / S).
+  const StudyMethod cvode{"cvode", "cvode", {}, Sweep::Tolerance};
+  const Scene ref_scene = load_case(c, cvode, c.duration / S);
+  if (!ref_scene.system->constraints().empty())
+    throw InputError(c.scene, "constraints", "work-precision compares unconstrained trajectories");
+  std::fprintf(stderr, "workprecision: %s: reference ...\n", c.name.c_str());
+  Reference ref = compute_reference(ref_scene, reference_rtol, 0.0, sample_steps(S, S), true);
+  if (!ref.trajectory.complete) {
+    std::fprintf(stderr, "error: %s: the CVODE reference did not complete: %s\n", c.name.c_str(),
+                 ref.trajectory.status.c_str());
+    return std::nullopt;
+  }
+  std::fprintf(refcsv, "%s,%.3g,%.4g,%.6g,%.6g,%.6g,%s\n", c.name.c_str(), reference_rtol,
+               ref.trajectory.wall, ref.own_error.rms_final, ref.own_error.rms_traj,
+               ref.own_error.max_traj, csv_quoted(ref.how).c_str());
+  std::fflush(refcsv);
+  std::fprintf(stderr, "workprecision: %s: %s\n", c.name.c_str(), ref.how.c_str());
+  return ref;
+}
+
+/// The (h, rtol) runs of method m on the case: each rtol at h = T / S for a tolerance sweep, else
+/// each of the case's step sizes rounded so that every sample time falls on a step (rtol 0).
+std::vector<std::pair<double, double>> method_runs(const WorkPrecisionCase& c, const StudyMethod& m,
+                                                   const std::vector<double>& rtols, int S) {
+  std::vector<std::pair<double, double>> runs;
+  if (m.sweep == Sweep::Tolerance)
+    for (double r : rtols) runs.emplace_back(c.duration / S, r);
+  else
+    for (double h : c.h) {
+      const long long per_sample = std::max(1LL, std::llround(c.duration / (S * h)));
+      runs.emplace_back(c.duration / double(S * per_sample), 0.0);
+    }
+  return runs;
+}
+
+/// One run of method m on the scene at S samples (at tolerance rtol if rtol > 0), stopped if it
+/// diverges by the `hooke run` energy rule.
+Trajectory run_method(const Scene& scene, const StudyMethod& m, double rtol, int S) {
+  // The scene's step count is a multiple of S (method_runs), so these are the reference's times.
+  const std::vector<long long> samples = sample_steps(scene.time.steps(), S);
+  RunLimits limits;
+  limits.energy_limit =
+      divergence_energy_limit(*scene.system, scene.initial, scene.run.energy_growth_limit);
+  limits.check_every = 10;
+  // Adaptive methods: atol follows rtol (1e-3 rtol x the scene's size), as for the reference;
+  // a fixed tight atol would hide the rtol sweep.
+  const MethodOptions opts =
+      rtol > 0 ? reference_options(scene, m.method, rtol, 0.0) : scene.integrator.options;
+  return run_trajectory(scene, m.method, opts, samples, m.sweep == Sweep::Tolerance, limits);
+}
+
+/// Every run of method m on the case (method_runs), one CSV row each; stops at the first run that
+/// cannot load or is unsupported, and after one that takes over 60 s.
+void sweep_method(const WorkPrecisionCase& c, const StudyMethod& m, const std::vector<double>& rtols,
+                  int S, const Reference& ref, FILE* csv) {
+  for (const auto& [h, rtol] : method_runs(c, m, rtols, S)) {
+    Scene scene;
+    try {
+      scene = load_case(c, m, h);
+    } catch (const InputError& e) {
+      std::cerr << "skipped " << m.label << " on " << c.name << ": " << e.what() << "\n";
+      return;
+    }
+    if (const std::string why = method_unsupported(m.method, *scene.system); !why.empty()) {
+      std::cerr << "skipped " << m.label << " on " << c.name << ": " << why << "\n";
+      return;
+    }
+    const Trajectory tr = run_method(scene, m, rtol, S);
+    const Errors e = compare(tr, ref.trajectory);
+    std::fprintf(csv, "%s,%s,%s,%.6g,%.3g,%.6g,%lld,%.6g,%.6g,%.6g,%.6g,%s\n", c.name.c_str(),
+                 m.label.c_str(), m.method.c_str(), h, rtol, tr.wall, tr.steps, e.rms_final,
+                 e.max_final, e.rms_traj, e.max_traj, csv_quoted(tr.status).c_str());
+    std::fflush(csv);
+    std::fprintf(stderr,
+                 "workprecision: %-14s %-20s h = %-9.3g rtol = %-7.2g wall %8.3f s  err %-9.3g %s\n",
+                 c.name.c_str(), m.label.c_str(), h, rtol, tr.wall, e.rms_final, tr.status.c_str());
+    // A method that takes 60 s for one run would take longer still at smaller h: stop it here.
+    if (tr.wall > 60.0) {
+      std::fprintf(stderr, "workprecision: %s: %s took %.0f s; smaller steps skipped\n",
+                   c.name.c_str(), m.label.c_str(), tr.wall);
+      return;
+    }
+  }
+}
+}  // namespace
+
 int run_work_precision(const WorkPrecisionOptions& options, const std::string& scenes_dir) {
   namespace fs = std::filesystem;
   using Clock = std::chrono::steady_clock;
@@ -77,10 +190,7 @@ int run_work_precision(const WorkPrecisionOptions& options, const std::string& s
       select_cases(work_precision_cases(options.full, scenes_dir), options.cases);
   const std::vector<StudyMethod> study =
       available_study_methods(study_methods(), options.methods, std::cerr);
-  std::vector<double> rtols = options.rtols;
-  if (rtols.empty())
-    rtols = options.full ? std::vector<double>{1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8}
-                         : std::vector<double>{1e-3, 1e-5, 1e-7};
+  const std::vector<double> rtols = sweep_rtols(options);
   const int S = std::max(1, options.samples);
 
   fs::create_directories(options.out_dir);
@@ -92,92 +202,9 @@ int run_work_precision(const WorkPrecisionOptions& options, const std::string& s
                "err_traj,status\n");
   std::fprintf(refcsv, "case,rtol,wall_s,err_rms_final,err_rms_traj,err_max_traj,how\n");
   for (const auto& c : cases) {
-    auto load = [&](const StudyMethod& m, double h) {
-      std::vector<std::string> sets = c.sets;
-      sets.push_back("integrator.method=" + m.method);
-      sets.insert(sets.end(), m.sets.begin(), m.sets.end());
-      sets.push_back("time.dt=" + exact_number(h));
-      sets.push_back("time.duration=" + exact_number(c.duration));
-      sets.push_back("output.vtk=false");
-      return load_scene(c.scene, sets);
-    };
-    // The reference steps straight from sample to sample (dt = T / S).
-    const StudyMethod cvode{"cvode", "cvode", {}, Sweep::Tolerance};
-    const Scene ref_scene = load(cvode, c.duration / S);
-    if (!ref_scene.system->constraints().empty())
-      throw InputError(c.scene, "constraints",
-                       "work-precision compares unconstrained trajectories");
-    std::vector<long long> ref_samples;
-    for (int i = 1; i <= S; ++i) ref_samples.push_back(i);
-    std::fprintf(stderr, "workprecision: %s: reference ...\n", c.name.c_str());
-    const Reference ref =
-        compute_reference(ref_scene, options.reference_rtol, 0.0, ref_samples, true);
-    if (!ref.trajectory.complete) {
-      std::fprintf(stderr, "error: %s: the CVODE reference did not complete: %s\n", c.name.c_str(),
-                   ref.trajectory.status.c_str());
-      return 3;
-    }
-    std::fprintf(refcsv, "%s,%.3g,%.4g,%.6g,%.6g,%.6g,%s\n", c.name.c_str(), options.reference_rtol,
-                 ref.trajectory.wall, ref.own_error.rms_final, ref.own_error.rms_traj,
-                 ref.own_error.max_traj, csv_quoted(ref.how).c_str());
-    std::fflush(refcsv);
-    std::fprintf(stderr, "workprecision: %s: %s\n", c.name.c_str(), ref.how.c_str());
-
-    for (const auto& m : study) {
-      std::vector<std::pair<double, double>> runs;  // (h, rtol)
-      if (m.sweep == Sweep::Tolerance)
-        for (double r : rtols) runs.emplace_back(c.duration / S, r);
-      else
-        for (double h : c.h) {
-          const long long per_sample = std::max(1LL, std::llround(c.duration / (S * h)));
-          runs.emplace_back(c.duration / double(S * per_sample), 0.0);
-        }
-      bool skip = false;
-      for (const auto& [h, rtol] : runs) {
-        if (skip) break;
-        Scene scene;
-        try {
-          scene = load(m, h);
-        } catch (const InputError& e) {
-          std::cerr << "skipped " << m.label << " on " << c.name << ": " << e.what() << "\n";
-          break;
-        }
-        if (const std::string why = method_unsupported(m.method, *scene.system); !why.empty()) {
-          std::cerr << "skipped " << m.label << " on " << c.name << ": " << why << "\n";
-          break;
-        }
-        const long long N = scene.time.steps();
-        const long long per = m.sweep == Sweep::Tolerance ? 1 : N / S;
-        std::vector<long long> samples;
-        for (int i = 1; i < S; ++i) samples.push_back(per * i);
-        samples.push_back(N);
-        RunLimits limits;
-        limits.energy_limit =
-            divergence_energy_limit(*scene.system, scene.initial, scene.run.energy_growth_limit);
-        limits.check_every = 10;
-        // Adaptive methods: atol follows rtol (1e-3 rtol x the scene's size), as for the reference;
-        // a fixed tight atol would hide the rtol sweep.
-        const MethodOptions opts =
-            rtol > 0 ? reference_options(scene, m.method, rtol, 0.0) : scene.integrator.options;
-        const Trajectory tr =
-            run_trajectory(scene, m.method, opts, samples, m.sweep == Sweep::Tolerance, limits);
-        const Errors e = compare(tr, ref.trajectory);
-        std::fprintf(csv, "%s,%s,%s,%.6g,%.3g,%.6g,%lld,%.6g,%.6g,%.6g,%.6g,%s\n", c.name.c_str(),
-                     m.label.c_str(), m.method.c_str(), h, rtol, tr.wall, tr.steps, e.rms_final,
-                     e.max_final, e.rms_traj, e.max_traj, csv_quoted(tr.status).c_str());
-        std::fflush(csv);
-        std::fprintf(
-            stderr,
-            "workprecision: %-14s %-20s h = %-9.3g rtol = %-7.2g wall %8.3f s  err %-9.3g %s\n",
-            c.name.c_str(), m.label.c_str(), h, rtol, tr.wall, e.rms_final, tr.status.c_str());
-        // A method that takes 60 s for one run would take longer still at smaller h: stop it here.
-        if (tr.wall > 60.0) {
-          std::fprintf(stderr, "workprecision: %s: %s took %.0f s; smaller steps skipped\n",
-                       c.name.c_str(), m.label.c_str(), tr.wall);
-          skip = true;
-        }
-      }
-    }
+    const std::optional<Reference> ref = case_reference(c, options.reference_rtol, S, refcsv);
+    if (!ref) return 3;
+    for (const auto& m : study) sweep_method(c, m, rtols, S, *ref, csv);
   }
   std::fclose(csv);
   std::fclose(refcsv);
