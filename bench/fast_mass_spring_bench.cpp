@@ -21,7 +21,7 @@
 #include <memory>
 
 #include "bench/cloth_fixture.hpp"
-#include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "hooke/linear/cholmod_solver.hpp"
 
 namespace {

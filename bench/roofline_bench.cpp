@@ -16,7 +16,7 @@
 #include <vector>
 
 #include "bench/cloth_fixture.hpp"
-#include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "hooke/integrators/implicit_operator.hpp"
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/linear/cholmod_solver.hpp"

@@ -36,7 +36,7 @@
 #include <sstream>
 
 #include "experiments/plot_script.hpp"
-#include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/linear/conjugate_gradient.hpp"
 #include "hooke/registry.hpp"

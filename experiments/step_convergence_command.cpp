@@ -35,7 +35,7 @@
 #include <map>
 #include <sstream>
 
-#include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "hooke/registry.hpp"
 #include "hooke_config.hpp"
 #include "problems/scene.hpp"

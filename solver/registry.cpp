@@ -6,11 +6,11 @@
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke_config.hpp"
 #if HOOKE_WITH_SUNDIALS
-#include "hooke/backends/cvode_stepper.hpp"
-#include "hooke/backends/ida_stepper.hpp"
+#include "hooke/whole_step/cvode_stepper.hpp"
+#include "hooke/whole_step/ida_stepper.hpp"
 #endif
 #if HOOKE_WITH_CERES
-#include "hooke/backends/ceres_implicit_stepper.hpp"
+#include "hooke/whole_step/ceres_implicit_stepper.hpp"
 #endif
 
 namespace hooke {

@@ -7,11 +7,11 @@
 #include <typeinfo>
 #include <vector>
 
-#include "hooke/backends/ceres_implicit_stepper.hpp"
-#include "hooke/backends/cvode_stepper.hpp"
-#include "hooke/backends/fast_mass_spring.hpp"
-#include "hooke/backends/ida_stepper.hpp"
-#include "hooke/backends/xpbd.hpp"
+#include "hooke/whole_step/ceres_implicit_stepper.hpp"
+#include "hooke/whole_step/cvode_stepper.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
+#include "hooke/whole_step/ida_stepper.hpp"
+#include "hooke/whole_step/xpbd.hpp"
 #include "hooke/integrators/explicit_stepper.hpp"
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/integrators/stepper.hpp"

@@ -2,7 +2,7 @@
 #include <limits>
 
 #include "hooke/core.hpp"
-#include "hooke/model/block_pattern.hpp"
+#include "hooke/sparse/block_pattern.hpp"
 
 namespace hooke {
 

@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "hooke/core.hpp"
-#include "hooke/model/block_pattern.hpp"
+#include "hooke/sparse/block_pattern.hpp"
 
 namespace hooke {
 

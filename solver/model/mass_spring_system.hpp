@@ -4,7 +4,7 @@
 
 #include "hooke/constraints/constraint.hpp"
 #include "hooke/forces/force.hpp"
-#include "hooke/model/block_pattern.hpp"
+#include "hooke/sparse/block_pattern.hpp"
 #include "hooke/model/state.hpp"
 
 namespace hooke {

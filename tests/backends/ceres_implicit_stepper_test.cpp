@@ -23,7 +23,7 @@
 #include <utility>
 #include <vector>
 
-#include "hooke/backends/ceres_implicit_stepper.hpp"
+#include "hooke/whole_step/ceres_implicit_stepper.hpp"
 #include "hooke/forces/air_drag.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"

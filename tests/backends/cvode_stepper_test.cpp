@@ -15,7 +15,7 @@
 
 #if HOOKE_WITH_SUNDIALS  // the whole file tests a backend this build may lack
 
-#include "hooke/backends/cvode_stepper.hpp"
+#include "hooke/whole_step/cvode_stepper.hpp"
 
 #include <gtest/gtest.h>
 

@@ -17,7 +17,7 @@
 #include <string>
 #include <vector>
 
-#include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/forces/spring_damper.hpp"
 #include "hooke/registry.hpp"
@@ -26,7 +26,7 @@
 #include "support/random.hpp"
 #include "support/systems.hpp"
 #if HOOKE_WITH_CERES
-#include "hooke/backends/ceres_implicit_stepper.hpp"
+#include "hooke/whole_step/ceres_implicit_stepper.hpp"
 #endif
 
 namespace hooke {

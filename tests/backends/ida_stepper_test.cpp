@@ -14,7 +14,7 @@
 
 #if HOOKE_WITH_SUNDIALS  // the whole file tests a backend this build may lack
 
-#include "hooke/backends/ida_stepper.hpp"
+#include "hooke/whole_step/ida_stepper.hpp"
 
 #include <gtest/gtest.h>
 
@@ -24,7 +24,7 @@
 #include <random>
 #include <string>
 
-#include "hooke/backends/cvode_stepper.hpp"
+#include "hooke/whole_step/cvode_stepper.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"
 #include "support/systems.hpp"

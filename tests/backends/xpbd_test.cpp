@@ -7,7 +7,7 @@
 #include <cmath>
 #include <vector>
 
-#include "hooke/backends/xpbd.hpp"
+#include "hooke/whole_step/xpbd.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/registry.hpp"
 #include "support/backend_scenes.hpp"

@@ -9,7 +9,7 @@
 #include <utility>
 #include <vector>
 
-#include "hooke/model/block_pattern.hpp"
+#include "hooke/sparse/block_pattern.hpp"
 
 namespace {
 

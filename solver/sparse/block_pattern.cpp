@@ -1,4 +1,4 @@
-#include "hooke/model/block_pattern.hpp"
+#include "hooke/sparse/block_pattern.hpp"
 
 #include <algorithm>
 

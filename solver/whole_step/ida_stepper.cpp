@@ -1,4 +1,4 @@
-#include "hooke/backends/ida_stepper.hpp"
+#include "hooke/whole_step/ida_stepper.hpp"
 
 #include <ida/ida.h>
 #include <ida/ida_ls.h>
@@ -10,7 +10,7 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "hooke/backends/sundials_detail.hpp"
+#include "hooke/whole_step/sundials_detail.hpp"
 #include "hooke/model/mass_spring_ode.hpp"
 
 namespace hooke {

@@ -1,4 +1,4 @@
-#include "hooke/backends/fast_mass_spring.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -6,7 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "hooke/backends/spring_potential_forces.hpp"
+#include "hooke/whole_step/spring_potential_forces.hpp"
 #include "hooke/linear/cholmod_solver.hpp"
 
 namespace hooke {

@@ -1,4 +1,4 @@
-#include "hooke/backends/xpbd.hpp"
+#include "hooke/whole_step/xpbd.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -6,7 +6,7 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "hooke/backends/spring_potential_forces.hpp"
+#include "hooke/whole_step/spring_potential_forces.hpp"
 
 namespace hooke {
 

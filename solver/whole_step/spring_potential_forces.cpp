@@ -1,4 +1,4 @@
-#include "hooke/backends/spring_potential_forces.hpp"
+#include "hooke/whole_step/spring_potential_forces.hpp"
 
 #include "hooke/forces/air_drag.hpp"
 #include "hooke/forces/gravity.hpp"

@@ -4,7 +4,7 @@
 #include <memory>
 #include <string>
 
-#include "hooke/backends/sundials_common.hpp"
+#include "hooke/whole_step/sundials_common.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 

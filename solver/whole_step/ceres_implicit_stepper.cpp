@@ -1,4 +1,4 @@
-#include "hooke/backends/ceres_implicit_stepper.hpp"
+#include "hooke/whole_step/ceres_implicit_stepper.hpp"
 
 #include <ceres/ceres.h>
 

@@ -5,7 +5,7 @@
 #include <string>
 #include <vector>
 
-#include "hooke/backends/spring_potential_forces.hpp"
+#include "hooke/whole_step/spring_potential_forces.hpp"
 #include "hooke/forces/spring_set.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"

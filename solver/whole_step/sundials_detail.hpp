@@ -13,7 +13,7 @@
 #include <string>
 #include <type_traits>
 
-#include "hooke/backends/sundials_common.hpp"
+#include "hooke/whole_step/sundials_common.hpp"
 
 namespace hooke::sundials_detail {
 

@@ -1,4 +1,4 @@
-#include "hooke/backends/cvode_stepper.hpp"
+#include "hooke/whole_step/cvode_stepper.hpp"
 
 #include <cvode/cvode.h>
 #include <cvode/cvode_ls.h>
@@ -12,7 +12,7 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "hooke/backends/sundials_detail.hpp"
+#include "hooke/whole_step/sundials_detail.hpp"
 #include "hooke/model/mass_spring_ode.hpp"
 
 namespace hooke {
