@@ -57,7 +57,7 @@ struct Fixture {
     hooke::State s1;
     fms->step(undamped.initial, kH, s1);
     hooke::CholmodOptions metis;
-    metis.ordering = "metis";
+    metis.ordering = hooke::CholmodOrdering::Metis;
     chol = std::make_unique<hooke::CholmodSolver>(metis);
     chol->analyze(fms->global_matrix());
     chol->factor(fms->global_matrix());

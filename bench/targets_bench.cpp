@@ -27,8 +27,9 @@
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+using hooke::Clock;
+using hooke::seconds_since;
+
 
 std::string scene_path(const char* name) { return std::string(HOOKE_BENCH_SCENES_DIR) + "/" + name; }
 
@@ -38,7 +39,7 @@ void BM_LocalGlobal411(benchmark::State& state) {
   const double h = scene.time.dt;
   auto t0 = Clock::now();
   hooke::FastMassSpringStepper fms(*scene.system, o);
-  const double analyze = since(t0);
+  const double analyze = seconds_since(t0);
   hooke::State s0 = scene.initial, s1;
   fms.step(s0, h, s1);  // warm-up: factors
   const double factor = fms.last_factor_seconds();
@@ -48,7 +49,7 @@ void BM_LocalGlobal411(benchmark::State& state) {
   for (auto _ : state) {
     t0 = Clock::now();
     fms.step(s0, h, s1);
-    state.SetIterationTime(since(t0) / o.iterations);
+    state.SetIterationTime(seconds_since(t0) / o.iterations);
     iterations += o.iterations;
     std::swap(s0, s1);
   }
@@ -74,7 +75,7 @@ void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int
                           scene.initial);
     const auto t0 = Clock::now();
     for (int k = 0; k < steps; ++k) {
-      if (k == 1) first += since(t0);
+      if (k == 1) first += seconds_since(t0);
       const hooke::StepSummary s = sim.advance(h);
       if (s.status != hooke::Status::Converged) {
         state.SkipWithError(s.message.c_str());
@@ -83,7 +84,7 @@ void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int
       iterations += s.iterations;
       ++taken;
     }
-    const double all = since(t0);
+    const double all = seconds_since(t0);
     later += steps > 1 ? (all - first) / (steps - 1) : 0.0;
     state.SetIterationTime(all / steps);
     const hooke::StepperStats st = sim.stepper().stats();

@@ -84,7 +84,6 @@ double first_period(const std::vector<double>& y, double dt, double window, doub
 
 int run_resolution(const ResolutionOptions& options, const std::string& scenes_dir) {
   namespace fs = std::filesystem;
-  using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   std::vector<int> ns = options.n;
   if (ns.empty())
@@ -162,7 +161,7 @@ int run_resolution(const ResolutionOptions& options, const std::string& scenes_d
       }
       const double sag_com = failure.empty() ? pin_y - com_height(sys, st.state().x) : NAN;
       const double sag_low = failure.empty() ? pin_y - lowest : NAN;
-      const double wall = std::chrono::duration<double>(Clock::now() - t0).count();
+      const double wall = seconds_since(t0);
       std::fprintf(csv, "%s,%d,%lld,%zu,%.6g,%.6g,%.6g,%.6g,%.6g,%.3g,%.3g\n", var.name.c_str(), n,
                    (long long)sys.num_particles(), scene.edges.size(), k_structural * kf, c, period,
                    sag_com, sag_low, speed, wall);
@@ -176,7 +175,7 @@ int run_resolution(const ResolutionOptions& options, const std::string& scenes_d
   }
   std::fclose(csv);
   std::printf("resolution: wrote %s (%.1f s)\n", path.c_str(),
-              std::chrono::duration<double>(Clock::now() - start).count());
+              seconds_since(start));
   if (options.plot) run_plot_script("resolution.py", options.out_dir);
   return 0;
 }

@@ -23,7 +23,6 @@ namespace hooke {
 namespace {
 
 namespace fs = std::filesystem;
-using Clock = std::chrono::steady_clock;
 
 /// A one-line progress display on a terminal, refreshed at most 4 times a second.
 class Progress {
@@ -217,7 +216,7 @@ int MassSpringRun::run() {
     const double t_start = m_sim.state().t;
     const auto t0 = Clock::now();
     const StepSummary sum = m_sim.advance(m_scene.time.step_size(step, t_start));
-    m_wall += std::chrono::duration<double>(Clock::now() - t0).count();
+    m_wall += seconds_since(t0);
     const bool accepted = sum.status == Status::Converged ||
                           (sum.status == Status::NotConverged && m_scene.run.allow_not_converged);
     if (!accepted) return report_failure(step, sum);

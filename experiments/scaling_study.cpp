@@ -76,8 +76,6 @@ const std::vector<MethodSpec>& specs() {
   return s;
 }
 
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// Resets the peak resident set size (Linux >= 4.0); false where unsupported.
 bool reset_peak_memory() {
@@ -134,7 +132,7 @@ Row run_one(const MethodSpec& m, long long side, int threads, int steps) {
                  scene.initial);
   const double h = scene.time.dt;
   StepSummary s = sim.advance(h);  // warm-up: analysis, first factorization
-  r.setup_s = since(t_setup);
+  r.setup_s = seconds_since(t_setup);
   if (s.status == Status::BrokeDown || s.status == Status::Fatal) {
     r.status = "failed: " + s.message;
     return r;
@@ -150,7 +148,7 @@ Row run_one(const MethodSpec& m, long long side, int threads, int steps) {
     }
     iterations += std::max(1, s.iterations);
   }
-  const double total = since(t0);
+  const double total = seconds_since(t0);
   r.steps = steps;
   r.step_s = total / steps;
   r.iterations_per_step = double(iterations) / steps;

@@ -142,7 +142,6 @@ Boundary find_stability_boundary(const std::function<Verdict(double h)>& classif
 
 int run_stability(const StabilityOptions& options, const std::string& scenes_dir) {
   namespace fs = std::filesystem;
-  using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   const std::vector<StabilityCase> cases =
       select_cases(stability_cases(options.full, scenes_dir), options.cases);
@@ -196,7 +195,7 @@ int run_stability(const StabilityOptions& options, const std::string& scenes_dir
   }
   std::fclose(csv);
   std::printf("stability: wrote %s (%.1f s)\n", csv_path.c_str(),
-              std::chrono::duration<double>(Clock::now() - start).count());
+              seconds_since(start));
   if (options.plot) run_plot_script("stability.py", options.out_dir);
   return 0;
 }

@@ -44,10 +44,6 @@ namespace hooke {
 
 #if HOOKE_WITH_CHOLMOD
 namespace {
-using Clock = std::chrono::steady_clock;
-double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
 
 /// One point of a convergence curve.
 struct Sample {

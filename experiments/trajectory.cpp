@@ -15,7 +15,6 @@
 namespace hooke {
 
 namespace {
-using Clock = std::chrono::steady_clock;
 }
 
 Trajectory run_trajectory(const Scene& scene, const std::string& method,
@@ -39,7 +38,7 @@ Trajectory run_trajectory(const Scene& scene, const std::string& method,
   auto stop = [&](const std::string& why) {
     tr.status = why;
     tr.diverged = true;
-    tr.wall = std::chrono::duration<double>(Clock::now() - t0).count();
+    tr.wall = seconds_since(t0);
     return tr;
   };
   // Energy and strain limits; "" if the state is within them.
@@ -82,7 +81,7 @@ Trajectory run_trajectory(const Scene& scene, const std::string& method,
     if (std::string why = check(sim.state()); !why.empty()) return stop(why);
     tr.samples.push_back(sim.state());
   }
-  tr.wall = std::chrono::duration<double>(Clock::now() - t0).count();
+  tr.wall = seconds_since(t0);
   tr.complete = true;
   if (not_converged) tr.status = "not-converged in " + std::to_string(not_converged) + " steps";
   return tr;

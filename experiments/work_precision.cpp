@@ -184,7 +184,6 @@ void sweep_method(const WorkPrecisionCase& c, const StudyMethod& m, const std::v
 
 int run_work_precision(const WorkPrecisionOptions& options, const std::string& scenes_dir) {
   namespace fs = std::filesystem;
-  using Clock = std::chrono::steady_clock;
   const auto start = Clock::now();
   const std::vector<WorkPrecisionCase> cases =
       select_cases(work_precision_cases(options.full, scenes_dir), options.cases);
@@ -209,7 +208,7 @@ int run_work_precision(const WorkPrecisionOptions& options, const std::string& s
   std::fclose(csv);
   std::fclose(refcsv);
   std::printf("workprecision: wrote %s/workprecision.csv and reference.csv (%.1f s)\n",
-              options.out_dir.c_str(), std::chrono::duration<double>(Clock::now() - start).count());
+              options.out_dir.c_str(), seconds_since(start));
   if (options.plot) run_plot_script("work_precision.py", options.out_dir);
   return 0;
 }

@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <Eigen/SparseCore>
+#include <chrono>
 #include <sstream>
 #include <stdexcept>
 #include <string>
@@ -22,6 +23,13 @@ using ConstRef = Eigen::Ref<const Eigen::VectorXd>;
 using VecRef = Eigen::Ref<Eigen::VectorXd>;
 /// Compressed-column sparse matrix used for K = df/dx and D = df/dv (3n x 3n).
 using SparseMatrix = Eigen::SparseMatrix<double, Eigen::ColMajor, int>;
+
+/// The clock of every timing in hooke (wall time, monotonic).
+using Clock = std::chrono::steady_clock;
+/// Seconds of wall time since t0.
+inline double seconds_since(Clock::time_point t0) {
+  return std::chrono::duration<double>(Clock::now() - t0).count();
+}
 
 /// Thrown by HOOKE_ASSERT: a broken invariant or a size mismatch, i.e. a programmer error.
 class InternalError : public std::logic_error {

@@ -9,8 +9,6 @@
 namespace hooke {
 
 namespace {
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 void accumulate(LinearSummary& total, const LinearSummary& s) {
   total.iterations += s.iterations;
@@ -165,7 +163,7 @@ void ImplicitStepper::assemble(const OneLeg& c) {
   m_rhs -= m_system.mass_diagonal().cwiseProduct(m_v1 - m_vb);
   m_A.assemble(m_J, c.hf * c.cv, c.hf * c.bx);
   m_A.gather(m_rhs, m_rhs_free);
-  m_assembly_seconds += since(ta);
+  m_assembly_seconds += seconds_since(ta);
 }
 
 StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
@@ -174,7 +172,7 @@ StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
   ++m_steps;
   m_newton_iterations += out.newton_iterations;
   m_last_residual = out.residual;
-  m_total_seconds += since(t0);
+  m_total_seconds += seconds_since(t0);
   return out;
 }
 

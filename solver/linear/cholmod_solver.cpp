@@ -10,14 +10,13 @@
 namespace hooke {
 
 namespace {
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 }  // namespace
 
-std::string CholmodOptions::validate() const {
-  if (ordering != "default" && ordering != "amd" && ordering != "metis" && ordering != "natural")
-    return "ordering = '" + ordering + "': must be one of default, amd, metis, natural";
-  return "";
+OptionError CholmodOptions::validate() const {
+  if (!(flop_rate_ratio > 0.0) || !std::isfinite(flop_rate_ratio))
+    return {"flop_rate_ratio",
+            "flop_rate_ratio = " + std::to_string(flop_rate_ratio) + ": must be finite and > 0"};
+  return {};
 }
 
 struct CholmodSolver::Impl {
@@ -52,17 +51,17 @@ struct CholmodSolver::Impl {
 };
 
 CholmodSolver::CholmodSolver(CholmodOptions options) : m(std::make_unique<Impl>()) {
-  const std::string err = options.validate();
-  HOOKE_ASSERT(err.empty(), "CholmodOptions: " << err);
+  const OptionError err = options.validate();
+  HOOKE_ASSERT(err.ok(), "CholmodOptions: " << err.message);
   m->options = std::move(options);
   cholmod_l_start(&m->c);
   m->c.print = 0;  // failures are reported through LinearSummary, not printed
   m->c.supernodal = m->options.supernodal ? CHOLMOD_SUPERNODAL : CHOLMOD_SIMPLICIAL;
-  if (m->options.ordering != "default") {
+  if (m->options.ordering != CholmodOrdering::Default) {
     m->c.nmethods = 1;
-    m->c.method[0].ordering = m->options.ordering == "amd"     ? CHOLMOD_AMD
-                              : m->options.ordering == "metis" ? CHOLMOD_METIS
-                                                               : CHOLMOD_NATURAL;
+    m->c.method[0].ordering = m->options.ordering == CholmodOrdering::Amd     ? CHOLMOD_AMD
+                              : m->options.ordering == CholmodOrdering::Metis ? CHOLMOD_METIS
+                                                                              : CHOLMOD_NATURAL;
     m->c.postorder = true;
   }
 }
@@ -101,7 +100,7 @@ LinearSummary CholmodSolver::analyze(const SparseMatrix& A) {
   if (m->L) cholmod_l_free_factor(&m->L, &m->c);
   m->L = cholmod_l_analyze(&S, &m->c);
   m->factored = false;
-  s.analyze_seconds = since(t0);
+  s.analyze_seconds = seconds_since(t0);
   if (!m->L || m->c.status < CHOLMOD_OK) {
     s.status = Status::Fatal;
     s.message = "cholmod: analyze failed with CHOLMOD status " + std::to_string(m->c.status) +
@@ -141,7 +140,7 @@ LinearSummary CholmodSolver::factor(const SparseMatrix& A) {
   m->A.x = const_cast<double*>(A.valuePtr());
   cholmod_l_factorize(&m->A, m->L, &m->c);
   ++m->factorizations;
-  s.factor_seconds = since(t0);
+  s.factor_seconds = seconds_since(t0);
   m->factored = false;
   if (m->c.status == CHOLMOD_NOT_POSDEF) {
     s.status = Status::BrokeDown;
@@ -174,7 +173,7 @@ LinearSummary CholmodSolver::solve(ConstRef b, VecRef x, const LinearSolveOption
     return s;
   }
   x = Eigen::Map<const Vec>(static_cast<const double*>(m->X->x), m->n);
-  s.solve_seconds = since(t0);
+  s.solve_seconds = seconds_since(t0);
   return s;
 }
 
@@ -201,7 +200,7 @@ LinearSummary CholmodSolver::solve_columns(const Eigen::Ref<const Eigen::MatrixX
   }
   X = Eigen::Map<const Eigen::MatrixXd, 0, Eigen::OuterStride<>>(
       static_cast<const double*>(m->Xk->x), m->n, B.cols(), Eigen::OuterStride<>(Index(m->Xk->d)));
-  s.solve_seconds = since(t0);
+  s.solve_seconds = seconds_since(t0);
   return s;
 }
 
@@ -226,7 +225,7 @@ LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K
       for (Index r = 0; r < m->n; ++r) x[K * r + c] = m->column[r];
     }
   }
-  s.solve_seconds = since(t0);
+  s.solve_seconds = seconds_since(t0);
   return s;
 }
 
@@ -235,13 +234,8 @@ SupernodalFactorView CholmodSolver::supernodal_view() const {
 }
 
 double CholmodSolver::factor_cost_in_solves() const {
-  // The factorization's flop rate over the solve's, measured on the 3n x 3n backward-Euler matrix
-  // of the 256 x 256 cloth (problems/scenes/target_backward_euler_256.toml) on this 2-core
-  // machine: fl / (4 lnz) = 194 solves' worth of flops, but one factorization took 3.8 s against
-  // 0.11 s for a solve (one OpenBLAS thread), i.e. 35 solves: the rates differ by about 6.
-  constexpr double kRateRatio = 6.0;
   if (!m->L || !(m->c.lnz > 0.0)) return 0.0;
-  return m->c.fl / (4.0 * m->c.lnz) / kRateRatio;
+  return m->c.fl / (4.0 * m->c.lnz) / m->options.flop_rate_ratio;
 }
 
 long long CholmodSolver::factorizations() const { return m->factorizations; }

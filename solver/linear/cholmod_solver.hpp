@@ -3,18 +3,36 @@
 #include <string>
 
 #include "hooke/linear/linear_solver.hpp"
+#include "hooke/options.hpp"
 #include "hooke/linear/supernodal_solve.hpp"
 
 namespace hooke {
 
 /// Options of CholmodSolver fixed for its lifetime.
+/// Fill-reducing ordering of CholmodSolver (CholmodOptions::ordering).
+enum class CholmodOrdering { Default, Amd, Metis, Natural };
+template <>
+struct EnumNames<CholmodOrdering> {
+  static constexpr std::array<const char*, 4> names = {"default", "amd", "metis", "natural"};
+};
+
 struct CholmodOptions {
-  /// Fill-reducing ordering: "default" (CHOLMOD's choice: AMD, METIS if AMD fills badly),
-  /// "amd", "metis" (nested dissection; usually best for cloth grids), "natural".
-  std::string ordering = "default";
+  /// Fill-reducing ordering: Default (CHOLMOD's choice: AMD, METIS if AMD fills badly), Amd,
+  /// Metis (nested dissection; usually best for cloth grids), Natural.
+  CholmodOrdering ordering = CholmodOrdering::Default;
   /// Supernodal (true, BLAS-3, fastest for cloth) or simplicial (false) factorization.
   bool supernodal = true;
-  std::string validate() const;
+  /// How much faster a factorization runs than a triangular solve, per flop (> 0): one
+  /// factorization counts as fl / (4 nnz(L)) / flop_rate_ratio solves in factor_cost_in_solves(),
+  /// which the reuse rule of ReusedFactorization weighs against Krylov iterations (counts, not wall
+  /// time, so runs stay deterministic). The default 6 was measured on the 3n x 3n backward-Euler
+  /// matrix of the 256 x 256 cloth (problems/scenes/target_backward_euler_256.toml) on a 2-core
+  /// AVX-512 machine with one OpenBLAS thread: fl / (4 lnz) = 194 solves' worth of flops, but one
+  /// factorization took 3.8 s against 0.11 s for a solve, i.e. 35 solves. A machine whose BLAS-3
+  /// runs relatively faster than its memory streams wants a larger value.
+  double flop_rate_ratio = 6.0;
+  /// The first field that breaks a rule, if any (OptionError::ok() when valid).
+  OptionError validate() const;
 };
 
 /// Sparse Cholesky LL^T of symmetric positive definite A through SuiteSparse CHOLMOD, with the

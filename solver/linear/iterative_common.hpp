@@ -11,10 +11,8 @@ namespace hooke {
 /// blocks, wall-clock timing).
 namespace linear_detail {
 
-using Clock = std::chrono::steady_clock;
-inline double seconds_since(Clock::time_point t0) {
-  return std::chrono::duration<double>(Clock::now() - t0).count();
-}
+using hooke::Clock;
+using hooke::seconds_since;
 
 /// Positions in A's value array of the diagonal entries; throws InternalError if one is missing.
 std::vector<int> diagonal_positions(const SparseMatrix& A);

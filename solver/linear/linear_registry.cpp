@@ -33,7 +33,7 @@ const std::vector<PreconditionerEntry>& preconditioner_table() {
       {{"cholmod", "a CHOLMOD factorization of an earlier step's A, refactored when that pays"},
        [] {
          CholmodOptions o;
-         o.ordering = "metis";  // nested dissection: the least fill on cloth grids
+         o.ordering = hooke::CholmodOrdering::Metis;  // nested dissection: the least fill on cloth grids
          return std::make_unique<ReusedFactorization>(std::make_unique<CholmodSolver>(o));
        }},
       {{"nodal",

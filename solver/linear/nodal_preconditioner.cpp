@@ -8,7 +8,7 @@ namespace hooke {
 namespace {
 CholmodOptions metis() {
   CholmodOptions o;
-  o.ordering = "metis";  // nested dissection: the least fill on cloth grids
+  o.ordering = hooke::CholmodOrdering::Metis;  // nested dissection: the least fill on cloth grids
   return o;
 }
 }  // namespace

@@ -20,7 +20,6 @@ namespace hooke {
 
 namespace {
 
-using Clock = std::chrono::steady_clock;
 
 /// Ceres' type for each CeresLinearSolver, in the enum's order.
 constexpr ceres::LinearSolverType kLinearSolverTypes[] = {ceres::SPARSE_NORMAL_CHOLESKY,
@@ -464,7 +463,7 @@ StepSummary CeresImplicitStepper::step(const State& s0, double h, State& s1) {
   if (!d.free_particles.empty()) {
     const auto t0 = Clock::now();
     ceres::Solve(d.solver_options, &d.problem, &d.summary);
-    rep.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+    rep.seconds = seconds_since(t0);
     // Ceres counts the initial evaluation as iteration 0 (and as a successful step).
     rep.iterations = std::max(int(d.summary.iterations.size()) - 1, 0);
     rep.successful_steps = std::max(d.summary.num_successful_steps - 1, 0);

@@ -12,8 +12,6 @@
 namespace hooke {
 
 namespace {
-using Clock = std::chrono::steady_clock;
-double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
 /// <A, B> of two equally sized matrices.
 using Rows3 = FastMassSpringStepper::Rows3;
@@ -111,7 +109,7 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
     m_inv_diag.setZero(nf);
   } else {
     CholmodOptions chol_options;
-    chol_options.ordering = "metis";  // nested dissection: the least fill on cloth grids (measured)
+    chol_options.ordering = hooke::CholmodOrdering::Metis;  // nested dissection: the least fill on cloth grids (measured)
     m_chol = std::make_unique<CholmodSolver>(chol_options);
   }
   if (m_chol && nf > 0) {
@@ -169,7 +167,7 @@ void FastMassSpringStepper::prepare(double h) {
   m_factored_h = h;
   m_factored_revision = m_sys.revision();
   ++m_factorizations;
-  m_last_factor_seconds = since(t0);
+  m_last_factor_seconds = seconds_since(t0);
   m_factor_seconds += m_last_factor_seconds;
 }
 
@@ -220,7 +218,7 @@ double FastMassSpringStepper::local_step(ConstRef x) {
   }
   for (size_t r = 0; r < m_free.size(); ++r)
     m_B.row(Index(r)) = m_const.row(Index(r)) + m_acc.segment<3>(3 * m_free[r]).transpose();
-  m_local_seconds += since(t0);
+  m_local_seconds += seconds_since(t0);
   return energy;
 }
 
@@ -292,7 +290,7 @@ void FastMassSpringStepper::jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X) {
     X(Index(r), 1) = xr[1] + d * (B(Index(r), 1) - s1);
     X(Index(r), 2) = xr[2] + d * (B(Index(r), 2) - s2);
   });
-  m_global_seconds += since(t0);
+  m_global_seconds += seconds_since(t0);
 }
 
 Status FastMassSpringStepper::global_solve(const Rows3& B, Rows3& X,
@@ -300,7 +298,7 @@ Status FastMassSpringStepper::global_solve(const Rows3& B, Rows3& X,
   const auto t0 = Clock::now();
   X.resize(B.rows(), 3);  // a no-op: every block is sized once
   const LinearSummary s = m_chol->solve_interleaved(B.data(), X.data(), 3);
-  m_global_seconds += since(t0);
+  m_global_seconds += seconds_since(t0);
   if (s.status != Status::Converged) message = "fast-mass-spring: " + s.message;
   return s.status;
 }

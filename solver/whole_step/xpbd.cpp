@@ -36,7 +36,7 @@ XpbdStepper::XpbdStepper(const MassSpringSystem& system, XpbdOptions options)
 }
 
 StepSummary XpbdStepper::step(const State& s0, double h, State& s1) {
-  const auto t0 = std::chrono::steady_clock::now();
+  const auto t0 = Clock::now();
   StepSummary out;
   const Index n = m_sys.num_particles();
   const double hs = h / m_opt.substeps;
@@ -89,7 +89,7 @@ StepSummary XpbdStepper::step(const State& s0, double h, State& s1) {
   }
   out.iterations = m_opt.substeps * m_opt.iterations;
   ++m_steps;
-  m_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  m_seconds += seconds_since(t0);
   return out;
 }
 
