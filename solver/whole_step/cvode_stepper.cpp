@@ -60,19 +60,12 @@ P check_created(P p, const char* call) {
 
 }  // namespace
 
-struct CvodeStepper::Impl {
+struct CvodeStepper::Impl : sundials_detail::StepperState {
   const MassSpringSystem& system;
   CvodeOptions options;
-  Index n3;
   MassSpringOde ode;     // f(y) = [P v; P M^-1 f(x, v)], shared with the explicit steppers
   FirstOrderMatrix jac;  // J = df/dy (Kind::Ode)
   std::unique_ptr<SchurPreconditioner> prec;  // spgmr only
-  SundialsErrorLog log;
-  State last;           // the state step() returned last
-  bool restart = true;  // re-initialise at the next step whatever s0 is
-  long restarts = 0;
-  SundialsCounters before;  // totals of the runs before the current (re)initialisation
-  SundialsCounters counters;
   // SUNDIALS objects, freed in reverse order: the CVODE memory first, the context last.
   SunPtr<SUNContext> ctx{nullptr, free_context};
   SunPtr<N_Vector> y{nullptr, free_vector};
@@ -83,7 +76,13 @@ struct CvodeStepper::Impl {
 
   Impl(const MassSpringSystem& sys, CvodeOptions opt);
   Eigen::Map<Vec> y_map() { return Eigen::Map<Vec>(N_VGetArrayPointer(y.get()), 2 * n3); }
+  // The integrator's part of sundials_detail::whole_step.
   void read_counters();
+  int reinit(const State& s0);
+  int set_stop_time(double t1) { return CVodeSetStopTime(mem.get(), t1); }
+  int solve(double t1, realtype* t_reached);
+  static Status classify(int flag);
+  static char* flag_name(int flag) { return CVodeGetReturnFlagName(flag); }
   long linearizations() const { return jac.linearizations() + (prec ? prec->linearizations() : 0); }
 
   // ---- callbacks (user_data = this); no allocation; exceptions become an unrecoverable flag ----
@@ -159,12 +158,11 @@ struct CvodeStepper::Impl {
 };
 
 CvodeStepper::Impl::Impl(const MassSpringSystem& sys, CvodeOptions opt)
-    : system(sys),
+    : StepperState(sys),
+      system(sys),
       options(std::move(opt)),
-      n3(sys.dofs()),
       ode(sys),
-      jac(sys, FirstOrderMatrix::Kind::Ode),
-      last(sys.num_particles()) {
+      jac(sys, FirstOrderMatrix::Kind::Ode) {
   sundials_detail::ContextAndVector base("cvode", 2 * n3);
   ctx = std::move(base.ctx);
   y = std::move(base.y);
@@ -241,98 +239,31 @@ SparseMatrix CvodeStepper::jacobian(ConstRef y) {
   return m_impl->jac.to_sparse(0.0);
 }
 
-StepSummary CvodeStepper::step(const State& s0, double h, State& s1) {
-  Impl& m = *m_impl;
-  const Index n3 = m.n3;
-  HOOKE_ASSERT(s0.x.size() == n3 && s0.v.size() == n3,
-               "cvode: s0 has " << s0.x.size() << " positions for " << n3 << " dofs");
-  HOOKE_ASSERT(&s0 != &s1, "cvode: s1 may not alias s0");
-  StepSummary out;
-  const double t1 = s0.t + h;
-  if (!(h > 0.0) || !std::isfinite(h) || !std::isfinite(s0.t) || !(t1 > s0.t)) {
-    out.status = Status::Fatal;
-    std::ostringstream os;
-    os << std::setprecision(10) << "cvode: cannot step from t = " << s0.t << " by h = " << h
-       << ": h must be positive, finite and above the round-off of t";
-    out.message = os.str();
-    return out;
-  }
-  if (!s0.is_finite()) {
-    out.status = Status::Fatal;
-    out.message = "cvode: the start state is not finite";
-    return out;
-  }
-  void* cv = m.mem.get();
-  Eigen::Map<Vec> Y = m.y_map();
-  // Continue CVODE's history only from exactly the state it returned last.
-  if (m.restart || s0.t != m.last.t || s0.x != m.last.x || s0.v != m.last.v) {
-    m.before = m.counters;
-    Y.head(n3) = s0.x;
-    Y.tail(n3) = s0.v;
-    const int flag = CVodeReInit(cv, s0.t, m.y.get());
-    if (flag < 0) {
-      out.status = Status::Fatal;
-      out.message = "cvode: CVodeReInit failed with flag " + std::to_string(flag);
-      return out;
-    }
-    ++m.restarts;
-    m.restart = false;
-  }
-  m.log.clear();
-  if (CVodeSetStopTime(cv, t1) < 0) {
-    m.restart = true;
-    out.status = Status::Fatal;
-    out.message = std::string("cvode: CVodeSetStopTime failed: ") + m.log.text;
-    return out;
-  }
-  const long newton0 = m.counters.nonlinear_iterations;
-  const long linear0 = m.counters.linear_iterations;
-  realtype t_reached = s0.t;
-  const int flag = CVode(cv, t1, m.y.get(), &t_reached, CV_NORMAL);
-  m.read_counters();
-  out.newton_iterations = int(m.counters.nonlinear_iterations - newton0);
-  out.iterations = int(m.counters.linear_iterations - linear0);
+int CvodeStepper::Impl::reinit(const State& s0) {
+  Eigen::Map<Vec> Y = y_map();
+  Y.head(n3) = s0.x;
+  Y.tail(n3) = s0.v;
+  return CVodeReInit(mem.get(), s0.t, y.get());
+}
 
-  s1.x.resize(n3);
-  s1.v.resize(n3);
-  s1.x = Y.head(n3);
-  s1.v = Y.tail(n3);
-  s1.t = flag >= 0 ? t1 : t_reached;
-  m.last.x = s1.x;
-  m.last.v = s1.v;
-  m.last.t = s1.t;
-  if (flag >= 0 && s1.is_finite()) return out;  // CV_SUCCESS or CV_TSTOP_RETURN at t1
+int CvodeStepper::Impl::solve(double t1, realtype* t_reached) {
+  return CVode(mem.get(), t1, y.get(), t_reached, CV_NORMAL);
+}
 
-  m.restart = true;
-  if (flag >= 0) {
-    out.status = Status::Fatal;
-    out.message = "cvode: the state became non-finite at t = " + std::to_string(t1) + "; " +
-                  m.counters.line();
-    return out;
-  }
+Status CvodeStepper::Impl::classify(int flag) {
   switch (flag) {
     case CV_TOO_MUCH_WORK:
     case CV_TOO_MUCH_ACC:
     case CV_ERR_FAILURE:
-    case CV_CONV_FAILURE:
-      out.status = Status::NotConverged;
-      break;
+    case CV_CONV_FAILURE: return Status::NotConverged;
     case CV_LSETUP_FAIL:
-    case CV_LSOLVE_FAIL:
-      out.status = Status::BrokeDown;
-      break;
-    default:
-      out.status = Status::Fatal;
+    case CV_LSOLVE_FAIL: return Status::BrokeDown;
+    default: return Status::Fatal;
   }
-  char* flag_name = CVodeGetReturnFlagName(flag);  // malloc'ed by SUNDIALS
-  std::ostringstream os;
-  os << std::setprecision(10) << "cvode: " << (flag_name ? flag_name : "unknown flag") << " ("
-     << flag << ") at t = " << t_reached << " on the step from t = " << s0.t << " to " << t1;
-  std::free(flag_name);
-  if (m.log.text[0]) os << ": " << m.log.text;
-  os << "; " << m.counters.line();
-  out.message = os.str();
-  return out;
+}
+
+StepSummary CvodeStepper::step(const State& s0, double h, State& s1) {
+  return sundials_detail::whole_step(*m_impl, "cvode", s0, h, s1);
 }
 
 }  // namespace hooke

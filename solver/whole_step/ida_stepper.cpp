@@ -41,20 +41,14 @@ P check_created(P p, const char* call) {
 
 }  // namespace
 
-struct IdaStepper::Impl {
+struct IdaStepper::Impl : sundials_detail::StepperState {
   const MassSpringSystem& system;
   IdaOptions options;
-  Index n3;
   MassSpringOde ode;                          // consistent y' = [P v; P M^-1 f] at (re)starts
   FirstOrderMatrix jac;                       // G = dF/dy + cj dF/dy' (Kind::Dae)
   std::unique_ptr<SchurPreconditioner> prec;  // spgmr only
   Vec f;                                      // 3n force scratch of the residual
   Vec scaled;                                 // 6n scratch of the preconditioner solve
-  SundialsErrorLog log;
-  State last;
-  bool restart = true;
-  long restarts = 0;
-  SundialsCounters before, counters;
   // SUNDIALS objects, freed in reverse order: the IDA memory first, the context last.
   SunPtr<SUNContext> ctx{nullptr, free_context};
   SunPtr<N_Vector> y{nullptr, free_vector};
@@ -64,7 +58,14 @@ struct IdaStepper::Impl {
   SunPtr<void*> mem{nullptr, free_ida};
 
   Impl(const MassSpringSystem& sys, IdaOptions opt);
+  // The integrator's part of sundials_detail::whole_step.
   void read_counters();
+  Eigen::Map<Vec> y_map() { return Eigen::Map<Vec>(N_VGetArrayPointer(y.get()), 2 * n3); }
+  int reinit(const State& s0);
+  int set_stop_time(double t1) { return IDASetStopTime(mem.get(), t1); }
+  int solve(double t1, realtype* t_reached);
+  static Status classify(int flag);
+  static char* flag_name(int flag) { return IDAGetReturnFlagName(flag); }
   long linearizations() const { return jac.linearizations() + (prec ? prec->linearizations() : 0); }
 
   /// F = [x' - P v; M v' - P f(x, v)].
@@ -151,14 +152,13 @@ struct IdaStepper::Impl {
 };
 
 IdaStepper::Impl::Impl(const MassSpringSystem& sys, IdaOptions opt)
-    : system(sys),
+    : StepperState(sys),
+      system(sys),
       options(std::move(opt)),
-      n3(sys.dofs()),
       ode(sys),
       jac(sys, FirstOrderMatrix::Kind::Dae),
       f(Vec::Zero(sys.dofs())),
-      scaled(Vec::Zero(2 * sys.dofs())),
-      last(sys.num_particles()) {
+      scaled(Vec::Zero(2 * sys.dofs())) {
   sundials_detail::ContextAndVector base("ida", 2 * n3);
   ctx = std::move(base.ctx);
   y = std::move(base.y);
@@ -230,99 +230,33 @@ SparseMatrix IdaStepper::iteration_matrix(ConstRef y, double cj) {
   return m_impl->jac.to_sparse(cj);
 }
 
-StepSummary IdaStepper::step(const State& s0, double h, State& s1) {
-  Impl& m = *m_impl;
-  const Index n3 = m.n3;
-  HOOKE_ASSERT(s0.x.size() == n3 && s0.v.size() == n3,
-               "ida: s0 has " << s0.x.size() << " positions for " << n3 << " dofs");
-  HOOKE_ASSERT(&s0 != &s1, "ida: s1 may not alias s0");
-  StepSummary out;
-  const double t1 = s0.t + h;
-  if (!(h > 0.0) || !std::isfinite(h) || !std::isfinite(s0.t) || !(t1 > s0.t)) {
-    out.status = Status::Fatal;
-    std::ostringstream os;
-    os << std::setprecision(10) << "ida: cannot step from t = " << s0.t << " by h = " << h
-       << ": h must be positive, finite and above the round-off of t";
-    out.message = os.str();
-    return out;
-  }
-  if (!s0.is_finite()) {
-    out.status = Status::Fatal;
-    out.message = "ida: the start state is not finite";
-    return out;
-  }
-  void* ida = m.mem.get();
-  Eigen::Map<Vec> Y(N_VGetArrayPointer(m.y.get()), 2 * n3);
-  Eigen::Map<Vec> YP(N_VGetArrayPointer(m.yp.get()), 2 * n3);
-  if (m.restart || s0.t != m.last.t || s0.x != m.last.x || s0.v != m.last.v) {
-    m.before = m.counters;
-    Y.head(n3) = s0.x;
-    Y.tail(n3) = s0.v;
-    m.ode.rhs(s0.t, Y, YP);  // consistent: F(t0, y0, y'0) = 0 up to round-off
-    const int flag = IDAReInit(ida, s0.t, m.y.get(), m.yp.get());
-    if (flag < 0) {
-      out.status = Status::Fatal;
-      out.message = "ida: IDAReInit failed with flag " + std::to_string(flag);
-      return out;
-    }
-    ++m.restarts;
-    m.restart = false;
-  }
-  m.log.clear();
-  if (IDASetStopTime(ida, t1) < 0) {
-    m.restart = true;
-    out.status = Status::Fatal;
-    out.message = std::string("ida: IDASetStopTime failed: ") + m.log.text;
-    return out;
-  }
-  const long newton0 = m.counters.nonlinear_iterations;
-  const long linear0 = m.counters.linear_iterations;
-  realtype t_reached = s0.t;
-  const int flag = IDASolve(ida, t1, &t_reached, m.y.get(), m.yp.get(), IDA_NORMAL);
-  m.read_counters();
-  out.newton_iterations = int(m.counters.nonlinear_iterations - newton0);
-  out.iterations = int(m.counters.linear_iterations - linear0);
+int IdaStepper::Impl::reinit(const State& s0) {
+  Eigen::Map<Vec> Y = y_map();
+  Eigen::Map<Vec> YP(N_VGetArrayPointer(yp.get()), 2 * n3);
+  Y.head(n3) = s0.x;
+  Y.tail(n3) = s0.v;
+  ode.rhs(s0.t, Y, YP);  // consistent: F(t0, y0, y'0) = 0 up to round-off
+  return IDAReInit(mem.get(), s0.t, y.get(), yp.get());
+}
 
-  s1.x.resize(n3);
-  s1.v.resize(n3);
-  s1.x = Y.head(n3);
-  s1.v = Y.tail(n3);
-  s1.t = flag >= 0 ? t1 : t_reached;
-  m.last.x = s1.x;
-  m.last.v = s1.v;
-  m.last.t = s1.t;
-  if (flag >= 0 && s1.is_finite()) return out;  // IDA_SUCCESS or IDA_TSTOP_RETURN at t1
+int IdaStepper::Impl::solve(double t1, realtype* t_reached) {
+  return IDASolve(mem.get(), t1, t_reached, y.get(), yp.get(), IDA_NORMAL);
+}
 
-  m.restart = true;
-  if (flag >= 0) {
-    out.status = Status::Fatal;
-    out.message =
-        "ida: the state became non-finite at t = " + std::to_string(t1) + "; " + m.counters.line();
-    return out;
-  }
+Status IdaStepper::Impl::classify(int flag) {
   switch (flag) {
     case IDA_TOO_MUCH_WORK:
     case IDA_TOO_MUCH_ACC:
     case IDA_ERR_FAIL:
-    case IDA_CONV_FAIL:
-      out.status = Status::NotConverged;
-      break;
+    case IDA_CONV_FAIL: return Status::NotConverged;
     case IDA_LSETUP_FAIL:
-    case IDA_LSOLVE_FAIL:
-      out.status = Status::BrokeDown;
-      break;
-    default:
-      out.status = Status::Fatal;
+    case IDA_LSOLVE_FAIL: return Status::BrokeDown;
+    default: return Status::Fatal;
   }
-  char* flag_name = IDAGetReturnFlagName(flag);  // malloc'ed by SUNDIALS
-  std::ostringstream os;
-  os << std::setprecision(10) << "ida: " << (flag_name ? flag_name : "unknown flag") << " (" << flag
-     << ") at t = " << t_reached << " on the step from t = " << s0.t << " to " << t1;
-  std::free(flag_name);
-  if (m.log.text[0]) os << ": " << m.log.text;
-  os << "; " << m.counters.line();
-  out.message = os.str();
-  return out;
+}
+
+StepSummary IdaStepper::step(const State& s0, double h, State& s1) {
+  return sundials_detail::whole_step(*m_impl, "ida", s0, h, s1);
 }
 
 }  // namespace hooke

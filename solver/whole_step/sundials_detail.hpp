@@ -8,7 +8,10 @@
 #include <sunmatrix/sunmatrix_sparse.h>
 
 #include <cstdint>
+#include <cstdlib>
+#include <iomanip>
 #include <memory>
+#include <sstream>
 #include <stdexcept>
 #include <string>
 #include <type_traits>
@@ -100,6 +103,97 @@ inline LinearSystem make_linear_system(const char* module, SundialsLinearSolver 
 inline void error_handler(int code, const char* module, const char* function, char* msg,
                           void* data) {
   static_cast<SundialsErrorLog*>(data)->record(code, module, function, msg);
+}
+
+/// What CvodeStepper::Impl and IdaStepper::Impl share beyond their SUNDIALS objects: the state
+/// the last step returned (CVODE and IDA continue their history only from exactly that state), the
+/// restart flag and count, the counters and the error log.
+struct StepperState {
+  explicit StepperState(const MassSpringSystem& sys) : n3(sys.dofs()), last(sys.num_particles()) {}
+  Index n3;
+  State last;           // the state step() returned last
+  bool restart = true;  // re-initialise at the next step whatever s0 is
+  long restarts = 0;
+  SundialsCounters before;  // totals of the runs before the current (re)initialisation
+  SundialsCounters counters;
+  SundialsErrorLog log;
+};
+
+/// One whole step of CVODE or IDA from s0 to s0.t + h in NORMAL mode with the stop time at t1,
+/// with the checks, restarts, counters and outcome mapping both share. Impl derives from
+/// StepperState and provides, for its integrator:
+///   int reinit(const State& s0)          loads s0 into y (and y') and re-initialises; a flag
+///   int set_stop_time(double t1)         ...SetStopTime
+///   int solve(double t1, realtype* t)   CVode / IDASolve in NORMAL mode; a flag
+///   void read_counters()                 counters = before + the integrator's own
+///   Status classify(int flag)            NotConverged / BrokeDown / Fatal for a negative flag
+///   char* flag_name(int flag)            ...GetReturnFlagName (malloc'ed)
+///   Eigen::Map<Vec> y_map()              y = [x; v]
+/// `module` ("cvode", "ida") starts every message.
+template <class Impl>
+StepSummary whole_step(Impl& m, const char* module, const State& s0, double h, State& s1) {
+  const Index n3 = m.n3;
+  HOOKE_ASSERT(s0.x.size() == n3 && s0.v.size() == n3,
+               module << ": s0 has " << s0.x.size() << " positions for " << n3 << " dofs");
+  HOOKE_ASSERT(&s0 != &s1, module << ": s1 may not alias s0");
+  StepSummary out;
+  const double t1 = s0.t + h;
+  auto fatal = [&](const std::string& message) {
+    out.status = Status::Fatal;
+    out.message = std::string(module) + ": " + message;
+    return out;
+  };
+  if (!(h > 0.0) || !std::isfinite(h) || !std::isfinite(s0.t) || !(t1 > s0.t)) {
+    std::ostringstream os;
+    os << std::setprecision(10) << "cannot step from t = " << s0.t << " by h = " << h
+       << ": h must be positive, finite and above the round-off of t";
+    return fatal(os.str());
+  }
+  if (!s0.is_finite()) return fatal("the start state is not finite");
+  // Continue the integrator's history only from exactly the state it returned last.
+  if (m.restart || s0.t != m.last.t || s0.x != m.last.x || s0.v != m.last.v) {
+    m.before = m.counters;
+    if (const int flag = m.reinit(s0); flag < 0)
+      return fatal("re-initialisation failed with flag " + std::to_string(flag));
+    ++m.restarts;
+    m.restart = false;
+  }
+  m.log.clear();
+  if (m.set_stop_time(t1) < 0) {
+    m.restart = true;
+    return fatal(std::string("setting the stop time failed: ") + m.log.text);
+  }
+  const long newton0 = m.counters.nonlinear_iterations;
+  const long linear0 = m.counters.linear_iterations;
+  realtype t_reached = s0.t;
+  const int flag = m.solve(t1, &t_reached);
+  m.read_counters();
+  out.newton_iterations = int(m.counters.nonlinear_iterations - newton0);
+  out.iterations = int(m.counters.linear_iterations - linear0);
+
+  const Eigen::Map<Vec> Y = m.y_map();
+  s1.x = Y.head(n3);
+  s1.v = Y.tail(n3);
+  s1.t = flag >= 0 ? t1 : t_reached;
+  m.last.x = s1.x;
+  m.last.v = s1.v;
+  m.last.t = s1.t;
+  if (flag >= 0 && s1.is_finite()) return out;  // SUCCESS or TSTOP_RETURN at t1
+
+  m.restart = true;
+  if (flag >= 0)
+    return fatal("the state became non-finite at t = " + std::to_string(t1) + "; " +
+                 m.counters.line());
+  out.status = m.classify(flag);
+  char* name = m.flag_name(flag);  // malloc'ed by SUNDIALS
+  std::ostringstream os;
+  os << std::setprecision(10) << module << ": " << (name ? name : "unknown flag") << " (" << flag
+     << ") at t = " << t_reached << " on the step from t = " << s0.t << " to " << t1;
+  std::free(name);
+  if (m.log.text[0]) os << ": " << m.log.text;
+  os << "; " << m.counters.line();
+  out.message = os.str();
+  return out;
 }
 
 }  // namespace hooke::sundials_detail
