@@ -222,34 +222,28 @@ double FastMassSpringStepper::local_step(ConstRef x) {
   return energy;
 }
 
-double FastMassSpringStepper::quadratic_terms(ConstRef x) const {
+double FastMassSpringStepper::quadratic_terms(ConstRef x, ConstRef x0, ConstRef y, double h) const {
   const Vec& m = m_sys.masses();
-  const State& s0 = *m_s0;
-  const double h = m_h;
   double q = 0.0;
   for (const Index p : m_free) {
     const Vec3 xp = x.segment<3>(3 * p);
     // Gravity's term is taken relative to y (a constant shift of g): its absolute value would
     // dwarf the differences between iterates and cost digits in every comparison of g.
-    const Vec3 dy = xp - m_y.segment<3>(3 * p);
+    const Vec3 dy = xp - y.segment<3>(3 * p);
     q += m[p] / (2 * h * h) * dy.squaredNorm() - m[p] * m_f.gravity.dot(dy);
     if (m_f.drag > 0.0)
-      q += m_f.drag / (2 * h) * (xp - s0.x.segment<3>(3 * p) - h * m_f.wind).squaredNorm();
+      q += m_f.drag / (2 * h) * (xp - x0.segment<3>(3 * p) - h * m_f.wind).squaredNorm();
   }
   return q;
 }
 
+double FastMassSpringStepper::quadratic_terms(ConstRef x) const {
+  return quadratic_terms(x, m_s0->x, m_y, m_h);
+}
+
 double FastMassSpringStepper::objective(const State& s0, double h, ConstRef x) const {
-  // A const evaluation: the same terms as the solver's, summed serially in spring order.
-  const Vec y = s0.x + h * s0.v;
-  const Vec& m = m_sys.masses();
-  double g = 0.0;
-  for (const Index p : m_free) {
-    const Vec3 xp = x.segment<3>(3 * p);
-    const Vec3 dy = xp - y.segment<3>(3 * p);
-    g += m[p] / (2 * h * h) * dy.squaredNorm() - m[p] * m_f.gravity.dot(dy);
-    if (m_f.drag > 0.0) g += m_f.drag / (2 * h) * (xp - s0.x.segment<3>(3 * p) - h * m_f.wind).squaredNorm();
-  }
+  // A const evaluation: the same terms as the solver's, the springs summed serially in order.
+  double g = quadratic_terms(x, s0.x, s0.x + h * s0.v, h);
   for (const SpringSet* sp : m_f.springs)
     for (size_t k = 0; k < sp->size(); ++k) {
       const double l = (x.segment<3>(3 * sp->i[k]) - x.segment<3>(3 * sp->j[k])).norm();

@@ -137,6 +137,9 @@ class FastMassSpringStepper final : public Stepper {
   void prepare(double h);
   void begin_step(const State& s0, double h);
   double local_step(ConstRef x);
+  /// The inertia, gravity and drag terms of g at x for a step from x0 with prediction y (3n).
+  double quadratic_terms(ConstRef x, ConstRef x0, ConstRef y, double h) const;
+  /// The same for the current step (m_s0, m_y, m_h).
   double quadratic_terms(ConstRef x) const;
   void gather(ConstRef x, Rows3& X) const;
   void scatter(const Rows3& X, VecRef x) const;
