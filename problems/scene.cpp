@@ -24,10 +24,40 @@ long long TimeSettings::steps() const {
   return static_cast<long long>(std::ceil(duration / dt * (1.0 - 1e-12)));
 }
 
+namespace {
+
+/// A mesh type: its name in [mesh] type and its builder (base_dir: the scene file's folder).
+struct MeshType {
+  const char* name;
+  void (*build)(TableReader& mesh, TableReader& springs, const std::string& base_dir, MeshBuild& out);
+};
+
+// The one table of mesh types (builders in problems/builders/).
+const std::vector<MeshType>& mesh_table() {
+  using R = TableReader;
+  static const std::vector<MeshType> table = {
+      {"grid", [](R& m, R& s, const std::string&, MeshBuild& b) { build_grid(m, s, b); }},
+      {"cantilever", [](R& m, R& s, const std::string&, MeshBuild& b) { build_cantilever(m, s, b); }},
+      {"chain", [](R& m, R& s, const std::string&, MeshBuild& b) { build_chain(m, s, b); }},
+      {"hair", [](R& m, R& s, const std::string&, MeshBuild& b) { build_hair(m, s, b); }},
+      {"damped-springs",
+       [](R& m, R& s, const std::string&, MeshBuild& b) { build_damped_springs(m, s, b); }},
+      {"two-particle",
+       [](R& m, R& s, const std::string&, MeshBuild& b) { build_two_particle(m, s, b); }},
+      {"particles", [](R& m, R& s, const std::string&, MeshBuild& b) { build_particles(m, s, b); }},
+      {"obj", build_obj},
+  };
+  return table;
+}
+
+}  // namespace
+
 const std::vector<std::string>& mesh_types() {
-  static const std::vector<std::string> types = {"grid",        "cantilever", "chain",
-                                                 "hair",        "damped-springs",
-                                                 "two-particle", "particles", "obj"};
+  static const std::vector<std::string> types = [] {
+    std::vector<std::string> v;
+    for (const auto& t : mesh_table()) v.push_back(t.name);
+    return v;
+  }();
   return types;
 }
 
@@ -68,14 +98,8 @@ void apply_override(toml::table& root, const std::string& item) {
 MeshBuild build_mesh(TableReader& mesh, TableReader& springs, const std::string& base_dir) {
   MeshBuild b;
   const std::string type = mesh.choice("type", std::nullopt, mesh_types());
-  if (type == "grid") build_grid(mesh, springs, b);
-  else if (type == "cantilever") build_cantilever(mesh, springs, b);
-  else if (type == "chain") build_chain(mesh, springs, b);
-  else if (type == "hair") build_hair(mesh, springs, b);
-  else if (type == "damped-springs") build_damped_springs(mesh, springs, b);
-  else if (type == "two-particle") build_two_particle(mesh, springs, b);
-  else if (type == "particles") build_particles(mesh, springs, b);
-  else build_obj(mesh, springs, base_dir, b);
+  for (const auto& t : mesh_table())
+    if (type == t.name) t.build(mesh, springs, base_dir, b);
   return b;
 }
 
