@@ -1,5 +1,5 @@
 # FindCHOLMOD: SuiteSparse 5.x on Debian ships neither a CMake config nor a pkg-config file
-# (see ../shared/PLATFORM.md), so find the headers and the libraries CHOLMOD links by hand.
+# (Debian 12: libsuitesparse-dev 5.12), so find the headers and the libraries CHOLMOD links by hand.
 # Defines CHOLMOD_FOUND and the imported target SuiteSparse::CHOLMOD.
 find_path(CHOLMOD_INCLUDE_DIR cholmod.h PATH_SUFFIXES suitesparse)
 set(_cholmod_libs cholmod amd camd colamd ccolamd suitesparseconfig metis)

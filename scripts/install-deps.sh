@@ -45,7 +45,7 @@ if [ ${#missing[@]} -gt 0 ]; then
 fi
 
 # Ceres installs ATLAS beside OpenBLAS; make sure BLAS/LAPACK resolve to OpenBLAS so CHOLMOD
-# does not silently run on the slower library (see ../shared/PLATFORM.md).
+# does not silently run on the slower library (Debian 12's libceres-dev pulls ATLAS in).
 arch=$(dpkg --print-architecture 2>/dev/null || echo amd64)
 triplet=$(gcc -print-multiarch 2>/dev/null || echo x86_64-linux-gnu)
 for lib in libblas.so.3 liblapack.so.3; do

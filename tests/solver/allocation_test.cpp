@@ -1,4 +1,4 @@
-// Claim of STYLE.md section 3: no heap allocation in the step loop. After one warm-up step, 200
+// Claim of CONTRIBUTING.md, "The step loop": no heap allocation in the step loop. After one warm-up step, 200
 // steps of every explicit method through Simulation::advance on a small cloth (HookeSpring,
 // SpringDamper, Gravity, AirDrag, StrainLimit, GroundPlane) and 50 Jacobian assemblies allocate
 // nothing.
@@ -281,7 +281,7 @@ int openmp_threads() {
 }
 }  // namespace
 
-// Claim of STYLE.md section 3 for the implicit methods: after 2 warm-up steps (the second makes
+// Claim of CONTRIBUTING.md, "The step loop", for the implicit methods: after 2 warm-up steps (the second makes
 // BDF2 take its first true two-step step), 50 steps of every implicit method with every linear
 // backend, linearised (1 Newton iteration) and Newton-converged (up to 10), allocate nothing,
 // except inside CHOLMOD's numeric refactorization (see CholmodAllocatesOnlyInFactor): for

@@ -1,4 +1,4 @@
-// Convergence-order measurement (STYLE.md section 4): halve h on a problem with an exact (or
+// Convergence-order measurement (CONTRIBUTING.md, "Tests"): halve h on a problem with an exact (or
 // reference) solution, check that the errors are usable for a fit, and fit the log-log slope.
 #pragma once
 
