@@ -17,7 +17,7 @@
 
 #include "bench/cloth_fixture.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
-#include "hooke/integrators/implicit_operator.hpp"
+#include "bench/implicit_operator.hpp"
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/linear/cholmod_solver.hpp"
 #include "hooke/linear/iterative_common.hpp"

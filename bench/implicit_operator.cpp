@@ -1,4 +1,4 @@
-#include "hooke/integrators/implicit_operator.hpp"
+#include "bench/implicit_operator.hpp"
 
 namespace hooke {
 

@@ -1,8 +1,8 @@
-// Claims of solver/integrators/implicit_operator.*: the matrix-free product equals the assembled
+// Claims of bench/implicit_operator.*: the matrix-free product equals the assembled
 // reduced matrix A = M - a D - b K (ReducedMatrix from the forces' own Jacobian blocks) applied to
 // the same vector, for stretched and compressed springs, with and without the clamp and the
 // dampers' position terms; and it gives the same bits on one or two threads.
-#include "hooke/integrators/implicit_operator.hpp"
+#include "bench/implicit_operator.hpp"
 
 #include <gtest/gtest.h>
 
