@@ -22,8 +22,11 @@ inline Scene make_cloth(long long springs, const std::string& extra = "", double
   const std::string text = "[mesh]\ntype = \"grid\"\nnx = " + std::to_string(side) +
                            "\nny = " + std::to_string(side) +
                            "\n[springs]\nstructural_stiffness = 1e4\nshear_stiffness = 1e3\n"
-                           "flexion_stiffness = 1e2\ndamping = " + std::to_string(damping) + "\n"
-                           "[forces]\ngravity = [0.0, -9.81, 0.0]\n" + extra;
+                           "flexion_stiffness = 1e2\ndamping = " +
+                           std::to_string(damping) +
+                           "\n"
+                           "[forces]\ngravity = [0.0, -9.81, 0.0]\n" +
+                           extra;
   return load_scene_from_string(text, "bench-cloth-" + std::to_string(side));
 }
 

@@ -17,12 +17,12 @@
 #include <chrono>
 #include <cstdlib>
 #include <map>
-#include <utility>
 #include <memory>
+#include <utility>
 
 #include "bench/cloth_fixture.hpp"
-#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "hooke/linear/cholmod_solver.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
 
 namespace {
 
@@ -112,7 +112,8 @@ void BM_Solve3Interleaved(benchmark::State& state) {
     benchmark::DoNotOptimize(X.data());
   }
   state.counters["springs"] = double(scene.edges.size());
-  state.counters["rel_diff"] = (Xc - Eigen::MatrixXd(X)).cwiseAbs().maxCoeff() / Xc.cwiseAbs().maxCoeff();
+  state.counters["rel_diff"] =
+      (Xc - Eigen::MatrixXd(X)).cwiseAbs().maxCoeff() / Xc.cwiseAbs().maxCoeff();
 }
 
 void BM_Iteration(benchmark::State& state) {
@@ -133,12 +134,14 @@ void BM_Iteration(benchmark::State& state) {
     std::swap(s0, s1);
   }
   const double it = double(std::max(1LL, iterations));
-  const double local = (fms.local_seconds() - local0) / it, global = (fms.global_seconds() - global0) / it;
+  const double local = (fms.local_seconds() - local0) / it,
+               global = (fms.global_seconds() - global0) / it;
   state.counters["springs"] = double(scene.edges.size());
   state.counters["local_ms"] = 1e3 * local;
   state.counters["global_ms"] = 1e3 * global;
   const auto s3 = solve3_seconds().find(state.range(0));
-  if (s3 != solve3_seconds().end()) state.counters["iter_over_solve3"] = (local + global) / s3->second;
+  if (s3 != solve3_seconds().end())
+    state.counters["iter_over_solve3"] = (local + global) / s3->second;
 }
 
 const int registered = [] {
@@ -148,17 +151,25 @@ const int registered = [] {
   benchmark::AddCustomContext("OPENBLAS_NUM_THREADS", threads ? threads : "(unset)");
   for (long long springs : {10000LL, 100000LL, 1000000LL}) {
     const bool big = springs >= 1000000;
-    auto* s = benchmark::RegisterBenchmark("LocalGlobal/Setup", BM_Setup)->Arg(springs)->UseManualTime()
+    auto* s = benchmark::RegisterBenchmark("LocalGlobal/Setup", BM_Setup)
+                  ->Arg(springs)
+                  ->UseManualTime()
                   ->Unit(benchmark::kMillisecond);
     if (big) s->Iterations(1);
-    auto* v = benchmark::RegisterBenchmark("LocalGlobal/Solve3", BM_Solve3)->Arg(springs)->UseRealTime()
+    auto* v = benchmark::RegisterBenchmark("LocalGlobal/Solve3", BM_Solve3)
+                  ->Arg(springs)
+                  ->UseRealTime()
                   ->Unit(benchmark::kMillisecond);
     if (big) v->Iterations(10);
     auto* w = benchmark::RegisterBenchmark("LocalGlobal/Solve3Interleaved", BM_Solve3Interleaved)
-                  ->Arg(springs)->UseRealTime()->Unit(benchmark::kMillisecond);
+                  ->Arg(springs)
+                  ->UseRealTime()
+                  ->Unit(benchmark::kMillisecond);
     if (big) w->Iterations(10);
-    auto* i = benchmark::RegisterBenchmark("LocalGlobal/Iteration", BM_Iteration)->Arg(springs)
-                  ->UseManualTime()->Unit(benchmark::kMillisecond);
+    auto* i = benchmark::RegisterBenchmark("LocalGlobal/Iteration", BM_Iteration)
+                  ->Arg(springs)
+                  ->UseManualTime()
+                  ->Unit(benchmark::kMillisecond);
     if (big) i->Iterations(3);
   }
   return 0;

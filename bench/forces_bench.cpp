@@ -11,7 +11,8 @@ namespace {
 void set_counters(benchmark::State& state, const hooke::Scene& scene, double bytes_per_iter) {
   state.counters["springs"] = double(scene.edges.size());
   state.counters["particles"] = double(scene.system->num_particles());
-  state.counters["bytes/s"] = benchmark::Counter(bytes_per_iter, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["bytes/s"] =
+      benchmark::Counter(bytes_per_iter, benchmark::Counter::kIsIterationInvariantRate);
 }
 
 void BM_ComputeForces(benchmark::State& state) {
@@ -40,5 +41,9 @@ void BM_AssembleJacobians(benchmark::State& state) {
 }  // namespace
 
 BENCHMARK(BM_ComputeForces)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
-BENCHMARK(BM_AssembleJacobians)->Arg(10000)->Arg(100000)->Arg(1000000)->Unit(benchmark::kMillisecond);
+BENCHMARK(BM_AssembleJacobians)
+    ->Arg(10000)
+    ->Arg(100000)
+    ->Arg(1000000)
+    ->Unit(benchmark::kMillisecond);
 BENCHMARK_MAIN();

@@ -18,7 +18,8 @@ ImplicitOperator::ImplicitOperator(const MassSpringSystem& system) : m_sys(syste
   m_Y.setZero();
 }
 
-void ImplicitOperator::set(ConstRef x, ConstRef v, double a, double b, const JacobianOptions& options) {
+void ImplicitOperator::set(ConstRef x, ConstRef v, double a, double b,
+                           const JacobianOptions& options) {
   HOOKE_ASSERT(x.size() == m_P.size() && v.size() == m_P.size(), "ImplicitOperator: sizes");
   m_x = x.data();
   m_v = v.data();
@@ -41,7 +42,8 @@ void ImplicitOperator::apply(ConstRef p, VecRef y) {
   for (const int d : m_pinned) m_Y[d] = 0.0;  // rows that are dropped; keep them bounded
   const Index n3 = m_P.size();
   const Eigen::Map<const Vec> x(m_x, n3), v(m_v, n3);
-  for (const auto& f : m_sys.forces()) f->add_jacobian_product(x, v, m_options, m_P, -m_a, -m_b, m_Y);
+  for (const auto& f : m_sys.forces())
+    f->add_jacobian_product(x, v, m_options, m_P, -m_a, -m_b, m_Y);
   parallel_for(nf, 1 << 16, [&](long long k) { y[k] = m_Y[free[k]]; });
 }
 

@@ -37,8 +37,8 @@ class ImplicitOperator {
   const MassSpringSystem& m_sys;
   std::vector<int> m_free;    // full DOF index of each free DOF
   std::vector<int> m_pinned;  // full DOF index of each pinned DOF
-  Vec m_mass;               // mass per full DOF
-  Vec m_P, m_Y;             // full-length scratch
+  Vec m_mass;                 // mass per full DOF
+  Vec m_P, m_Y;               // full-length scratch
   const double* m_x = nullptr;
   const double* m_v = nullptr;
   double m_a = 0.0, m_b = 0.0;

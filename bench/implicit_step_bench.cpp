@@ -63,10 +63,11 @@ const int registered = [] {
   for (const auto& info : hooke::linear_solvers()) {
     const std::string name = info.name;
     for (long long springs : {10000LL, 100000LL, 1000000LL}) {
-      auto* b = benchmark::RegisterBenchmark(("ImplicitStep/" + name).c_str(), BM_ImplicitStep, name)
-                    ->Arg(springs)
-                    ->Unit(benchmark::kMillisecond)
-                    ->UseRealTime();
+      auto* b =
+          benchmark::RegisterBenchmark(("ImplicitStep/" + name).c_str(), BM_ImplicitStep, name)
+              ->Arg(springs)
+              ->Unit(benchmark::kMillisecond)
+              ->UseRealTime();
       if (springs >= 1000000) b->Iterations(1);
     }
   }

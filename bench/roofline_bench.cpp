@@ -6,7 +6,6 @@
 // See bench/README.md.
 //   build/bench/hooke_bench_roofline --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
-
 #include <omp.h>
 
 #include <cstdlib>
@@ -16,12 +15,12 @@
 #include <vector>
 
 #include "bench/cloth_fixture.hpp"
-#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "bench/implicit_operator.hpp"
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/linear/cholmod_solver.hpp"
 #include "hooke/linear/iterative_common.hpp"
 #include "hooke/linear/supernodal_solve.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
 
 namespace {
 
@@ -80,8 +79,10 @@ int threads(benchmark::State& state) {
 void report(benchmark::State& state, double bytes, double flops, int t) {
   state.counters["MB"] = bytes / 1e6;
   state.counters["Mflop"] = flops / 1e6;
-  state.counters["GB/s"] = benchmark::Counter(bytes / 1e9, benchmark::Counter::kIsIterationInvariantRate);
-  state.counters["GFLOP/s"] = benchmark::Counter(flops / 1e9, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["GB/s"] =
+      benchmark::Counter(bytes / 1e9, benchmark::Counter::kIsIterationInvariantRate);
+  state.counters["GFLOP/s"] =
+      benchmark::Counter(flops / 1e9, benchmark::Counter::kIsIterationInvariantRate);
   const auto tr = triad().find(t);
   if (tr != triad().end()) state.counters["triad_GB/s"] = tr->second;
 }
@@ -135,7 +136,8 @@ void BM_JacobianAssembly(benchmark::State& state) {
     benchmark::DoNotOptimize(fx.J.K.valuePtr());
   }
   const double springs = double(fx.scene.edges.size());
-  report(state, 2.0 * 2 * 8 * double(fx.J.K.nonZeros()) + 2 * 24.0 * springs, 2 * 60.0 * springs, t);
+  report(state, 2.0 * 2 * 8 * double(fx.J.K.nonZeros()) + 2 * 24.0 * springs, 2 * 60.0 * springs,
+         t);
 }
 
 /// The implicit-step operator y = A x with A = M - h D - h^2 K (3n x 3n, CSR mirror, what CG
@@ -198,7 +200,8 @@ void BM_PcgIteration(benchmark::State& state) {
     benchmark::DoNotOptimize(x.data());
   }
   const double nnz = double(fx.csr.value.size());
-  report(state, 12.0 * nnz + 4.0 * double(n) + 11 * 8.0 * double(n), 2.0 * nnz + 12.0 * double(n), t);
+  report(state, 12.0 * nnz + 4.0 * double(n) + 11 * 8.0 * double(n), 2.0 * nnz + 12.0 * double(n),
+         t);
 }
 
 /// One forward and back substitution with 3 right-hand sides (x, y, z) on the fast-mass-spring
@@ -261,7 +264,12 @@ const int registered = [] {
   both(benchmark::RegisterBenchmark("Roofline/PcgIteration", BM_PcgIteration));
   both(benchmark::RegisterBenchmark("Roofline/TriangularSolves3", BM_TriangularSolves3));
   benchmark::RegisterBenchmark("Roofline/LocalGlobalIteration", BM_LocalGlobalIteration)
-      ->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseManualTime()->Iterations(3);
+      ->Arg(1)
+      ->Arg(2)
+      ->ArgName("threads")
+      ->Unit(benchmark::kMillisecond)
+      ->UseManualTime()
+      ->Iterations(3);
   return 0;
 }();
 

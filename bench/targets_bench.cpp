@@ -9,7 +9,8 @@
 //    springs), one linearised backward-Euler step (beta = 1) per h = 0.01 s at linear tolerance
 //    1e-6, averaged over a run of steps from rest (the first, with the one-off analysis, included:
 //    it is what a user pays; first_step_s and later_steps_s split it). Counters: PCG iterations,
-//    factorizations and their seconds, solve and assembly seconds per step. The target is 0.64 s per step (10x a classic Jacobi-PCG's 6.4 s).
+//    factorizations and their seconds, solve and assembly seconds per step. The target is 0.64 s
+//    per step (10x a classic Jacobi-PCG's 6.4 s).
 // Prints OPENBLAS_CORETYPE, OPENBLAS_NUM_THREADS and OMP_NUM_THREADS.
 //   build/bench/hooke_bench_targets --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
@@ -18,11 +19,11 @@
 #include <cstdlib>
 #include <string>
 
-#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/linear/conjugate_gradient.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "problems/scene.hpp"
 
 namespace {
@@ -30,8 +31,9 @@ namespace {
 using hooke::Clock;
 using hooke::seconds_since;
 
-
-std::string scene_path(const char* name) { return std::string(HOOKE_BENCH_SCENES_DIR) + "/" + name; }
+std::string scene_path(const char* name) {
+  return std::string(HOOKE_BENCH_SCENES_DIR) + "/" + name;
+}
 
 void BM_LocalGlobal411(benchmark::State& state) {
   const hooke::Scene scene = hooke::load_scene(scene_path("target_local_global_411.toml"));
@@ -70,9 +72,10 @@ void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int
   double factor = 0.0, solve = 0.0, assembly = 0.0, first = 0.0, later = 0.0;
   int factorizations = 0;
   for (auto _ : state) {
-    hooke::Simulation sim(*scene.system,
-                          hooke::make_stepper(scene.integrator.method, *scene.system, scene.integrator.options),
-                          scene.initial);
+    hooke::Simulation sim(
+        *scene.system,
+        hooke::make_stepper(scene.integrator.method, *scene.system, scene.integrator.options),
+        scene.initial);
     const auto t0 = Clock::now();
     for (int k = 0; k < steps; ++k) {
       if (k == 1) first += seconds_since(t0);
@@ -95,7 +98,7 @@ void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int
   }
   const double n = double(std::max(1LL, taken));
   state.counters["springs"] = double(scene.edges.size());
-  state.counters["first_step_s"] = first;  // with the one-off analysis and first factorization
+  state.counters["first_step_s"] = first;   // with the one-off analysis and first factorization
   state.counters["later_steps_s"] = later;  // mean of the other steps
   state.counters["lin_iters"] = double(iterations) / n;
   state.counters["factorizations"] = double(factorizations) / n * steps;
@@ -110,14 +113,20 @@ const int registered = [] {
     benchmark::AddCustomContext(v, value ? value : "(unset)");
   }
   benchmark::RegisterBenchmark("Target/LocalGlobal411/Iteration", BM_LocalGlobal411)
-      ->UseManualTime()->Iterations(3)->Unit(benchmark::kMillisecond);
+      ->UseManualTime()
+      ->Iterations(3)
+      ->Unit(benchmark::kMillisecond);
   // Steps per run: pcg-cholmod and pcg-nodal over the scene's 50 (their factorizations are
   // amortised over the run, as a user pays them), cholmod over 3, Jacobi-PCG over 2 (seconds each).
-  for (const auto& [solver, steps] : {std::pair<const char*, int>{"pcg-cholmod", 50}, {"pcg-nodal", 50},
-                                      {"cholmod", 3}, {"pcg", 2}})
+  for (const auto& [solver, steps] : {std::pair<const char*, int>{"pcg-cholmod", 50},
+                                      {"pcg-nodal", 50},
+                                      {"cholmod", 3},
+                                      {"pcg", 2}})
     benchmark::RegisterBenchmark(("Target/BackwardEuler256/Step/" + std::string(solver)).c_str(),
                                  BM_BackwardEuler256, std::string(solver), steps)
-        ->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
+        ->UseManualTime()
+        ->Iterations(1)
+        ->Unit(benchmark::kMillisecond);
   return 0;
 }();
 

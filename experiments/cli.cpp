@@ -37,7 +37,8 @@ void add_out(CLI::App* cmd, std::string& out, const std::string& default_text) {
 }
 
 void add_no_plot(CLI::App* cmd, bool& plot) {
-  cmd->add_flag_callback("--no-plot", [&plot] { plot = false; }, "write the CSV only");
+  cmd->add_flag_callback(
+      "--no-plot", [&plot] { plot = false; }, "write the CSV only");
 }
 
 CLI::Option* add_list(CLI::App* cmd, const std::string& name, std::string& text,

@@ -27,16 +27,21 @@
 namespace hooke {
 
 int run_crosscheck(const Scene& scene, const CrosscheckOptions& options) {
-  if (scene.is_ode()) throw InputError(scene.file, "ode", "crosscheck compares mass-spring methods; ODE scenes have an exact solution in log.csv instead");
+  if (scene.is_ode())
+    throw InputError(scene.file, "ode",
+                     "crosscheck compares mass-spring methods; ODE scenes have an exact solution "
+                     "in log.csv instead");
   const MassSpringSystem& sys = *scene.system;
   const long long N = scene.time.steps();
   if (N == 0) throw InputError(scene.file, "time.duration", "is 0: nothing to compare");
   const std::vector<long long> samples = sample_steps(N, options.samples);
 
   std::cerr << "crosscheck: reference cvode at rtol " << options.reference_rtol << " ...\n";
-  const Reference ref = compute_reference(scene, options.reference_rtol, options.reference_atol, samples, false);
+  const Reference ref =
+      compute_reference(scene, options.reference_rtol, options.reference_atol, samples, false);
   if (!ref.trajectory.complete) {
-    std::cerr << "error: " << scene.file << ": the CVODE reference did not complete: " << ref.trajectory.status << "\n";
+    std::cerr << "error: " << scene.file
+              << ": the CVODE reference did not complete: " << ref.trajectory.status << "\n";
     return 3;
   }
 
@@ -47,31 +52,35 @@ int run_crosscheck(const Scene& scene, const CrosscheckOptions& options) {
   namespace fs = std::filesystem;
   fs::create_directories(options.out_dir);
   std::ofstream csv(options.out_dir + "/crosscheck.csv");
-  csv << "method,dt,wall_s,rms_err_final,max_err_final,rms_err_traj,max_err_traj,energy_drift,status\n";
+  csv << "method,dt,wall_s,rms_err_final,max_err_final,rms_err_traj,max_err_traj,energy_drift,"
+         "status\n";
   csv.precision(9);
   std::ostringstream md;
-  md << "Scene `" << scene.file << "`: " << sys.num_particles() << " particles, " << scene.edges.size()
-     << " springs, t = 0.." << scene.time.duration << " s, " << samples.size()
+  md << "Scene `" << scene.file << "`: " << sys.num_particles() << " particles, "
+     << scene.edges.size() << " springs, t = 0.." << scene.time.duration << " s, " << samples.size()
      << " samples. Reference: " << ref.how << "\n\n";
-  md << "| method | dt (s) | wall (s) | RMS err final (m) | max err final (m) | RMS err traj (m) | max err traj (m) | E(T) - E(0) (J) | status |\n";
+  md << "| method | dt (s) | wall (s) | RMS err final (m) | max err final (m) | RMS err traj (m) | "
+        "max err traj (m) | E(T) - E(0) (J) | status |\n";
   md << "|---|---|---|---|---|---|---|---|---|\n";
   const double E0 = sys.kinetic_energy(scene.initial.v) + sys.potential_energy(scene.initial.x);
   RunLimits limits;
   limits.energy_limit = divergence_energy_limit(sys, scene.initial, scene.run.energy_growth_limit);
   for (const auto& name : names) {
     std::cerr << "crosscheck: " << name << " ...\n";
-    const Trajectory tr = run_trajectory(scene, name, options_for(name, scene.integrator.options), samples, false, limits);
+    const Trajectory tr = run_trajectory(scene, name, options_for(name, scene.integrator.options),
+                                         samples, false, limits);
     const Errors e = compare(tr, ref.trajectory);
     double drift = NAN;
     if (tr.complete) {
       const State& s = tr.samples.back();
       drift = sys.kinetic_energy(s.v) + sys.potential_energy(s.x) - E0;
     }
-    csv << name << "," << scene.time.dt << "," << tr.wall << "," << e.rms_final << "," << e.max_final
-        << "," << e.rms_traj << "," << e.max_traj << "," << drift << ",\"" << tr.status << "\"\n";
-    md << "| " << name << " | " << fmt(scene.time.dt) << " | " << fmt(tr.wall) << " | " << fmt(e.rms_final)
-       << " | " << fmt(e.max_final) << " | " << fmt(e.rms_traj) << " | " << fmt(e.max_traj) << " | "
-       << fmt(drift) << " | " << tr.status << " |\n";
+    csv << name << "," << scene.time.dt << "," << tr.wall << "," << e.rms_final << ","
+        << e.max_final << "," << e.rms_traj << "," << e.max_traj << "," << drift << ",\""
+        << tr.status << "\"\n";
+    md << "| " << name << " | " << fmt(scene.time.dt) << " | " << fmt(tr.wall) << " | "
+       << fmt(e.rms_final) << " | " << fmt(e.max_final) << " | " << fmt(e.rms_traj) << " | "
+       << fmt(e.max_traj) << " | " << fmt(drift) << " | " << tr.status << " |\n";
   }
   std::ofstream(options.out_dir + "/crosscheck.md") << md.str();
   std::cout << md.str();
@@ -90,12 +99,14 @@ Command add_crosscheck_command(CLI::App& app) {
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
-      "crosscheck", "Compare methods with a CVODE reference at tight tolerance on one scene; writes "
-                    "crosscheck.csv and crosscheck.md");
+      "crosscheck",
+      "Compare methods with a CVODE reference at tight tolerance on one scene; writes "
+      "crosscheck.csv and crosscheck.md");
   add_scene(cmd, a->scene);
   add_sets(cmd, a->sets);
   add_list(cmd, "--methods", a->methods, "comma-separated methods (default: all)");
-  cmd->add_option("--reference-rtol", a->cross.reference_rtol, "CVODE reference rtol (default 1e-10)");
+  cmd->add_option("--reference-rtol", a->cross.reference_rtol,
+                  "CVODE reference rtol (default 1e-10)");
   cmd->add_option("--samples", a->cross.samples, "trajectory samples (default 20)");
   add_out(cmd, a->out, "out/crosscheck-<scene>");
   return {cmd, [a] {

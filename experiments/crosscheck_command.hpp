@@ -8,11 +8,12 @@ namespace hooke {
 
 /// Options of `hooke crosscheck`.
 struct CrosscheckOptions {
-  std::vector<std::string> methods;  ///< methods to compare (empty: every method that supports the scene)
-  double reference_rtol = 1e-10;     ///< CVODE reference relative tolerance
-  double reference_atol = 0.0;       ///< absolute tolerance (0: 1e-3 * rtol * the scene's size)
-  int samples = 20;                  ///< trajectory samples (rounded so each falls on a step)
-  std::string out_dir;               ///< where crosscheck.csv / crosscheck.md go
+  std::vector<std::string>
+      methods;  ///< methods to compare (empty: every method that supports the scene)
+  double reference_rtol = 1e-10;  ///< CVODE reference relative tolerance
+  double reference_atol = 0.0;    ///< absolute tolerance (0: 1e-3 * rtol * the scene's size)
+  int samples = 20;               ///< trajectory samples (rounded so each falls on a step)
+  std::string out_dir;            ///< where crosscheck.csv / crosscheck.md go
 };
 
 /// `hooke crosscheck SCENE`: runs each method at the scene's dt and compares it with a CVODE

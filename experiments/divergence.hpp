@@ -10,6 +10,7 @@ double divergence_energy_scale(const MassSpringSystem& system, const State& s0);
 
 /// The total energy (J) above which a run from s0 counts as diverged: E(s0) + growth_limit times
 /// max(divergence_energy_scale, |E(s0)|) (the rule of `hooke run`, [run] energy_growth_limit).
-double divergence_energy_limit(const MassSpringSystem& system, const State& s0, double growth_limit);
+double divergence_energy_limit(const MassSpringSystem& system, const State& s0,
+                               double growth_limit);
 
 }  // namespace hooke

@@ -37,7 +37,8 @@ void print_scene_info(const Scene& scene, std::ostream& out) {
   // Memory of a run: state, scratch and force buffers (~12 vectors of 3n doubles), the Jacobian
   // pattern (two matrices of 9 scalars per block, 12 bytes each with indices) and spring arrays.
   const double nnz = 9.0 * double(sys.pattern().num_blocks());
-  const double bytes = 12.0 * 8 * double(sys.dofs()) + 2 * 12.0 * nnz + 60.0 * double(scene.edges.size());
+  const double bytes =
+      12.0 * 8 * double(sys.dofs()) + 2 * 12.0 * nnz + 60.0 * double(scene.edges.size());
   out << "\nmemory:     about " << bytes / (1 << 20) << " MiB (state, scratch, K and D with "
       << std::size_t(nnz) << " stored entries each)\n";
   const double w = largest_natural_frequency(sys, scene.initial);

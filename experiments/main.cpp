@@ -23,21 +23,22 @@
 #include "problems/input_error.hpp"
 
 namespace hooke::cli {
-Command add_run_command(CLI::App& app);           // run_command.cpp
-Command add_resume_command(CLI::App& app);        // run_command.cpp
-Command add_scenes_command(CLI::App& app);        // info_command.cpp
-Command add_info_command(CLI::App& app);          // info_command.cpp
-Command add_crosscheck_command(CLI::App& app);    // crosscheck_command.cpp
+Command add_run_command(CLI::App& app);               // run_command.cpp
+Command add_resume_command(CLI::App& app);            // run_command.cpp
+Command add_scenes_command(CLI::App& app);            // info_command.cpp
+Command add_info_command(CLI::App& app);              // info_command.cpp
+Command add_crosscheck_command(CLI::App& app);        // crosscheck_command.cpp
 Command add_step_convergence_command(CLI::App& app);  // step_convergence_command.cpp
-Command add_stability_command(CLI::App& app);     // stability_map.cpp
-Command add_workprecision_command(CLI::App& app);  // work_precision.cpp
-Command add_resolution_command(CLI::App& app);    // resolution_study.cpp
-Command add_scaling_command(CLI::App& app);       // scaling_study.cpp
+Command add_stability_command(CLI::App& app);         // stability_map.cpp
+Command add_workprecision_command(CLI::App& app);     // work_precision.cpp
+Command add_resolution_command(CLI::App& app);        // resolution_study.cpp
+Command add_scaling_command(CLI::App& app);           // scaling_study.cpp
 }  // namespace hooke::cli
 
 int main(int argc, char** argv) {
   using namespace hooke::cli;
-  CLI::App app{"hooke " HOOKE_VERSION ": a solver for stiff mass-spring systems (strings, hair, cloth)"};
+  CLI::App app{"hooke " HOOKE_VERSION
+               ": a solver for stiff mass-spring systems (strings, hair, cloth)"};
   app.require_subcommand(1);
   app.set_version_flag("--version", HOOKE_VERSION);
   std::vector<Command> commands;

@@ -22,9 +22,6 @@
 //         DIR/resolution.png and DIR/resolution.md.
 #include "experiments/resolution_study.hpp"
 
-#include "experiments/cli.hpp"
-#include "experiments/study_methods.hpp"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -32,7 +29,9 @@
 #include <filesystem>
 #include <iostream>
 
+#include "experiments/cli.hpp"
 #include "experiments/plot_script.hpp"
+#include "experiments/study_methods.hpp"
 #include "experiments/trajectory.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
@@ -174,8 +173,7 @@ int run_resolution(const ResolutionOptions& options, const std::string& scenes_d
     }
   }
   std::fclose(csv);
-  std::printf("resolution: wrote %s (%.1f s)\n", path.c_str(),
-              seconds_since(start));
+  std::printf("resolution: wrote %s (%.1f s)\n", path.c_str(), seconds_since(start));
   if (options.plot) run_plot_script("resolution.py", options.out_dir);
   return 0;
 }
@@ -192,21 +190,25 @@ Command add_resolution_command(CLI::App& app) {
   auto a = std::make_shared<Args>();
   ResolutionOptions& r = a->res;
   auto* cmd = app.add_subcommand(
-      "resolution", "Resolution study: static sag and first swing period of the same 1 m, 1 kg cloth at "
-                    "n x n particles, under three rules for k and drag; writes resolution.csv and resolution.png");
+      "resolution",
+      "Resolution study: static sag and first swing period of the same 1 m, 1 kg cloth at "
+      "n x n particles, under three rules for k and drag; writes resolution.csv and "
+      "resolution.png");
   cmd->add_flag("--full", r.full, "paper size: n = 8, 16, 32, 64, 128, 256");
   add_list(cmd, "--n", a->n, "comma-separated grid sizes (default 8,16,32)");
   cmd->add_option("--h", r.h, "step of the dynamic BDF2 run (s, default 5e-3)");
   cmd->add_option("--duration", r.duration, "simulated time of the dynamic run (s, default 4)");
-  cmd->add_option("--stiffness-scale", r.stiffness_scale,
-                  "multiplies the scene's spring stiffnesses at 16 x 16 (default 0.1: a soft cloth)");
+  cmd->add_option(
+      "--stiffness-scale", r.stiffness_scale,
+      "multiplies the scene's spring stiffnesses at 16 x 16 (default 0.1: a soft cloth)");
   add_out(cmd, a->out, "out/resolution");
   add_no_plot(cmd, r.plot);
   return {cmd, [a] {
             ResolutionOptions& r = a->res;
             r.n = integers(a->n, "--n", 2, 1 << 20);
             if (!(r.h > 0.0) || !(r.duration > 0.0) || !(r.stiffness_scale > 0.0))
-              throw InputError("<command line>", "--h", "--h, --duration and --stiffness-scale must be > 0");
+              throw InputError("<command line>", "--h",
+                               "--h, --duration and --stiffness-scale must be > 0");
             if (!a->out.empty()) r.out_dir = a->out;
             return run_resolution(r, scenes_dir().string());
           }};

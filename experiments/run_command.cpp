@@ -27,7 +27,8 @@ namespace fs = std::filesystem;
 /// A one-line progress display on a terminal, refreshed at most 4 times a second.
 class Progress {
  public:
-  Progress(bool enabled, long long total) : m_on(enabled && isatty(STDERR_FILENO)), m_total(total) {}
+  Progress(bool enabled, long long total)
+      : m_on(enabled && isatty(STDERR_FILENO)), m_total(total) {}
   void update(long long step, double t) {
     if (!m_on) return;
     const auto now = Clock::now();
@@ -35,8 +36,8 @@ class Progress {
     m_last = now;
     const double el = std::chrono::duration<double>(now - m_start).count();
     const double frac = m_total ? double(step) / double(m_total) : 1.0;
-    std::fprintf(stderr, "\rstep %lld/%lld  t = %.6g  %5.1f%%  %.1f s elapsed, %.1f s left   ", step,
-                 m_total, t, 100.0 * frac, el, frac > 0 ? el * (1 - frac) / frac : 0.0);
+    std::fprintf(stderr, "\rstep %lld/%lld  t = %.6g  %5.1f%%  %.1f s elapsed, %.1f s left   ",
+                 step, m_total, t, 100.0 * frac, el, frac > 0 ? el * (1 - frac) / frac : 0.0);
     std::fflush(stderr);
   }
   void done() {
@@ -75,7 +76,8 @@ class StopSignals {
   StopSignals& operator=(const StopSignals&) = delete;
 
  private:
-  struct sigaction m_old_int {}, m_old_term {};
+  struct sigaction m_old_int {
+  }, m_old_term{};
 };
 
 const char* signal_name(int sig) { return sig == SIGTERM ? "SIGTERM" : "SIGINT"; }
@@ -143,7 +145,8 @@ std::unique_ptr<Stepper> MassSpringRun::make_scene_stepper(const Scene& scene) {
     return make_stepper(scene.integrator.method, *scene.system, scene.integrator.options);
   } catch (const SetupError& e) {  // e.g. a factorization above the memory budget: refused up front
     const bool implicit = method_info(scene.integrator.method).kind == MethodKind::Implicit;
-    throw InputError(scene.file, implicit ? "integrator.linear_solver" : "integrator.method", e.what());
+    throw InputError(scene.file, implicit ? "integrator.linear_solver" : "integrator.method",
+                     e.what());
   }
 }
 
@@ -178,8 +181,9 @@ void MassSpringRun::restore(const Checkpoint& c) {
   const std::string path = m_dir + "/checkpoint.bin";
   const std::string& method = m_scene.integrator.method;
   if (c.method != method)
-    throw InputError(path, "checkpoint", "was written by method '" + c.method + "' but " + m_dir +
-                                             "/scene.toml asks for '" + method + "'");
+    throw InputError(path, "checkpoint",
+                     "was written by method '" + c.method + "' but " + m_dir +
+                         "/scene.toml asks for '" + method + "'");
   if (c.state.x.size() != m_sys.dofs())
     throw InputError(path, "checkpoint",
                      "holds " + std::to_string(c.state.x.size() / 3) + " particles; " + m_dir +
@@ -222,7 +226,8 @@ int MassSpringRun::run() {
     if (!accepted) return report_failure(step, sum);
     if (sum.status == Status::NotConverged && m_not_converged++ == 0) {
       m_progress.done();
-      std::fprintf(stderr, "warning: %s: step %lld (t = %.9g, %s): %s (continuing, "
+      std::fprintf(stderr,
+                   "warning: %s: step %lld (t = %.9g, %s): %s (continuing, "
                    "run.allow_not_converged = true; counted below)\n",
                    m_scene.file.c_str(), step, t_start, m_label.c_str(), sum.message.c_str());
     }
@@ -285,10 +290,10 @@ int MassSpringRun::report_divergence(long long step, double E) {
 int MassSpringRun::stop(long long step, int sig) {
   checkpoint(step);
   m_progress.done();
-  std::fprintf(stderr, "%s at step %lld of %lld (t = %.9g): wrote %s; continue with: hooke resume %s\n",
-               sig ? (std::string("interrupted by ") + signal_name(sig)).c_str()
-                   : "stopped (--stop-after)",
-               step, m_steps, m_sim.state().t, m_out->checkpoint_path().c_str(), m_dir.c_str());
+  std::fprintf(
+      stderr, "%s at step %lld of %lld (t = %.9g): wrote %s; continue with: hooke resume %s\n",
+      sig ? (std::string("interrupted by ") + signal_name(sig)).c_str() : "stopped (--stop-after)",
+      step, m_steps, m_sim.state().t, m_out->checkpoint_path().c_str(), m_dir.c_str());
   return sig == SIGTERM ? kExitTerminated : kExitInterrupted;
 }
 
@@ -309,17 +314,19 @@ int MassSpringRun::finish() {
   m_progress.done();
   const std::string& file = m_scene.file;
   if (m_not_converged > 0)
-    std::fprintf(stderr, "warning: %s: %lld of %lld steps did not converge to the requested tolerance\n",
+    std::fprintf(stderr,
+                 "warning: %s: %lld of %lld steps did not converge to the requested tolerance\n",
                  file.c_str(), m_not_converged, m_steps);
   if (m_sim.halved_steps() > 0)
-    std::fprintf(stderr, "note: %s: %lld of %lld steps were retried with a smaller h\n", file.c_str(),
-                 m_sim.halved_steps(), m_steps);
+    std::fprintf(stderr, "note: %s: %lld of %lld steps were retried with a smaller h\n",
+                 file.c_str(), m_sim.halved_steps(), m_steps);
   m_out->finish(m_sim.state());
   if (const std::string r = m_sim.stepper().report(); !r.empty())
     std::printf("%s: %s\n", m_scene.integrator.method.c_str(), r.c_str());
-  std::printf("%s: %lld steps of %s to t = %.6g in %.3f s; wrote %s/{scene.toml,log.csv,final.csv%s%s}\n",
-              file.c_str(), m_steps, m_scene.integrator.method.c_str(), m_sim.state().t, m_wall,
-              m_dir.c_str(), m_scene.output.vtk ? ",frames/" : "", m_scene.output.png ? ",final.png" : "");
+  std::printf(
+      "%s: %lld steps of %s to t = %.6g in %.3f s; wrote %s/{scene.toml,log.csv,final.csv%s%s}\n",
+      file.c_str(), m_steps, m_scene.integrator.method.c_str(), m_sim.state().t, m_wall,
+      m_dir.c_str(), m_scene.output.vtk ? ",frames/" : "", m_scene.output.png ? ",final.png" : "");
   return 0;
 }
 
@@ -352,15 +359,18 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
     if (step % scene.output.log_every == 0 || step == N) row(step);
     if (g_signal != 0 && step < N) {
       progress.done();
-      std::fprintf(stderr, "interrupted by %s at step %lld (t = %.9g); ODE scenes write no "
+      std::fprintf(stderr,
+                   "interrupted by %s at step %lld (t = %.9g); ODE scenes write no "
                    "checkpoint (they run in seconds): run them again\n",
                    signal_name(g_signal), step, t);
       return g_signal == SIGTERM ? kExitTerminated : kExitInterrupted;
     }
     if (!X.allFinite()) {
       progress.done();
-      std::fprintf(stderr, "error: %s: diverged at step %lld (t = %.9g, method %s): state became non-finite\n",
-                   scene.file.c_str(), step, t, scene.integrator.method.c_str());
+      std::fprintf(
+          stderr,
+          "error: %s: diverged at step %lld (t = %.9g, method %s): state became non-finite\n",
+          scene.file.c_str(), step, t, scene.integrator.method.c_str());
       return 3;
     }
     progress.update(step, t);
@@ -371,9 +381,11 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
   std::fprintf(fin.get(), "index,value,exact\n");
   for (Index k = 0; k < d; ++k)
     std::fprintf(fin.get(), "%lld,%.17g,%.17g\n", (long long)k, X[k], exact[k]);
-  std::printf("%s: %lld steps of %s to t = %.6g; max error vs exact %.3g; wrote %s/{scene.toml,log.csv,final.csv}\n",
-              scene.file.c_str(), N, scene.integrator.method.c_str(), t,
-              (X - exact).lpNorm<Eigen::Infinity>(), dir.c_str());
+  std::printf(
+      "%s: %lld steps of %s to t = %.6g; max error vs exact %.3g; wrote "
+      "%s/{scene.toml,log.csv,final.csv}\n",
+      scene.file.c_str(), N, scene.integrator.method.c_str(), t,
+      (X - exact).lpNorm<Eigen::Infinity>(), dir.c_str());
   return 0;
 }
 
@@ -386,15 +398,18 @@ int run_scene(Scene& scene, const RunOptions& options) {
   fs::create_directories(dir, ec);
   if (ec) throw std::runtime_error("cannot create output directory " + dir + ": " + ec.message());
   write_resolved_scene(scene, dir + "/scene.toml");
-  return scene.is_ode() ? run_ode(scene, dir, options) : MassSpringRun(scene, dir, options, nullptr).run();
+  return scene.is_ode() ? run_ode(scene, dir, options)
+                        : MassSpringRun(scene, dir, options, nullptr).run();
 }
 
 int resume_run(const std::string& dir, const RunOptions& options) {
   std::error_code ec;
-  if (!fs::is_directory(dir, ec)) throw InputError(dir, "directory", "is not an output directory of hooke run");
+  if (!fs::is_directory(dir, ec))
+    throw InputError(dir, "directory", "is not an output directory of hooke run");
   Scene scene = load_scene(dir + "/scene.toml");
   if (scene.is_ode())
-    throw InputError(dir + "/scene.toml", "ode", "ODE scenes write no checkpoints (they run in seconds): run them again");
+    throw InputError(dir + "/scene.toml", "ode",
+                     "ODE scenes write no checkpoints (they run in seconds): run them again");
   const Checkpoint c = read_checkpoint(dir + "/checkpoint.bin");
   std::fprintf(stderr, "resuming %s at step %lld of %lld (t = %.9g)\n", dir.c_str(), c.step,
                scene.time.steps(), c.state.t);
@@ -437,7 +452,8 @@ Command add_resume_command(CLI::App& app) {
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
-      "resume", "Continue a run stopped by SIGINT/SIGTERM (or --stop-after) from DIR/checkpoint.bin");
+      "resume",
+      "Continue a run stopped by SIGINT/SIGTERM (or --stop-after) from DIR/checkpoint.bin");
   cmd->add_option("dir", a->dir, "output directory of the stopped run")->required();
   cmd->add_flag("--no-progress", a->no_progress, "never show the progress line");
   cmd->add_option("--stop-after", a->run.stop_after,

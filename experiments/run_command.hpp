@@ -12,8 +12,8 @@ constexpr int kExitTerminated = 143;   ///< SIGTERM
 
 /// Options of `hooke run` that do not belong to the scene.
 struct RunOptions {
-  std::string out_dir;  ///< overrides [output] dir when not empty
-  bool progress = true; ///< show a progress line (only when stderr is a terminal)
+  std::string out_dir;   ///< overrides [output] dir when not empty
+  bool progress = true;  ///< show a progress line (only when stderr is a terminal)
   /// Testing aid: after this step, write a checkpoint and stop as if interrupted (exit 130),
   /// deterministically. -1: never.
   long long stop_after = -1;

@@ -23,7 +23,8 @@ CsvFile::~CsvFile() {
 void write_resolved_scene(const Scene& scene, const std::string& path) {
   std::ofstream out(path);
   if (!out) throw std::runtime_error("cannot write " + path);
-  out << "# Resolved scene: " << scene.file << " with every default filled in (written by hooke run).\n"
+  out << "# Resolved scene: " << scene.file
+      << " with every default filled in (written by hooke run).\n"
       << scene.resolved << "\n";
 }
 
@@ -36,9 +37,10 @@ std::string prepare_log(const std::string& dir, const Checkpoint* resume) {
     std::error_code ec;
     const auto size = fs::file_size(path, ec);
     if (ec || static_cast<long long>(size) < resume->log_bytes)
-      throw InputError(path, "log", "is shorter than the checkpoint says (" +
-                                        std::to_string(resume->log_bytes) + " bytes): it was "
-                                        "changed after the run stopped");
+      throw InputError(path, "log",
+                       "is shorter than the checkpoint says (" + std::to_string(resume->log_bytes) +
+                           " bytes): it was "
+                           "changed after the run stopped");
     fs::resize_file(path, static_cast<std::uintmax_t>(resume->log_bytes));
   }
   return path;

@@ -21,9 +21,6 @@
 // Peak memory: VmHWM of this process, reset before each run (/proc/self/clear_refs).
 #include "experiments/scaling_study.hpp"
 
-#include "experiments/cli.hpp"
-#include "experiments/study_methods.hpp"
-
 #include <omp.h>
 
 #include <algorithm>
@@ -35,12 +32,14 @@
 #include <iostream>
 #include <sstream>
 
+#include "experiments/cli.hpp"
 #include "experiments/plot_script.hpp"
-#include "hooke/whole_step/fast_mass_spring.hpp"
+#include "experiments/study_methods.hpp"
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/linear/conjugate_gradient.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "problems/scene.hpp"
 
 namespace hooke {
@@ -76,7 +75,6 @@ const std::vector<MethodSpec>& specs() {
   return s;
 }
 
-
 /// Resets the peak resident set size (Linux >= 4.0); false where unsupported.
 bool reset_peak_memory() {
   std::ofstream f("/proc/self/clear_refs");
@@ -99,8 +97,8 @@ std::string cloth_text(long long side, const std::string& integrator) {
   os << "[mesh]\ntype = \"grid\"\nnx = " << side << "\nny = " << side
      << "\norientation = \"vertical\"\ntotal_mass = 1.0\n"
      << "[springs]\nstructural_stiffness = 1e4\nshear_stiffness = 1e3\nflexion_stiffness = 1e2\n"
-     << "[forces]\ngravity = [0.0, -9.81, 0.0]\n[integrator]\n" << integrator
-     << "[time]\ndt = 0.01\nduration = 1.0\n[run]\nallow_not_converged = true\n";
+     << "[forces]\ngravity = [0.0, -9.81, 0.0]\n[integrator]\n"
+     << integrator << "[time]\ndt = 0.01\nduration = 1.0\n[run]\nallow_not_converged = true\n";
   return os.str();
 }
 
@@ -180,7 +178,8 @@ int run_scaling(const ScalingOptions& options) {
     if (options.full) springs.insert(springs.end(), {3e6, 6e6});
   }
   for (const auto& name : options.methods)
-    if (std::none_of(specs().begin(), specs().end(), [&](const MethodSpec& m) { return m.label == name; }))
+    if (std::none_of(specs().begin(), specs().end(),
+                     [&](const MethodSpec& m) { return m.label == name; }))
       throw InputError("<command line>", "--methods", "unknown method '" + name + "'");
   std::filesystem::create_directories(options.out_dir);
   const std::string csv_path = options.out_dir + "/scaling.csv";
@@ -201,13 +200,12 @@ int run_scaling(const ScalingOptions& options) {
             << r.steps << ',' << r.step_s << ',' << r.iterations_per_step << ',' << r.iteration_s
             << ',' << r.assembly_s << ',' << r.factor_s << ',' << r.solve_s << ',' << r.local_s
             << ',' << r.global_s << ',' << r.setup_s << ',' << r.peak_mib << ',' << r.factor_nnz
-            << ",\"" << r.status
-            << "\"\n";
+            << ",\"" << r.status << "\"\n";
         csv.flush();
         std::cout << std::left << std::setw(22) << r.method << " threads " << r.threads
                   << "  springs " << std::setw(9) << r.springs << " step " << std::setw(10)
-                  << r.step_s << " s  iteration " << std::setw(10) << r.iteration_s
-                  << " s  peak " << std::setw(8) << r.peak_mib << " MiB  " << r.status << std::endl;
+                  << r.step_s << " s  iteration " << std::setw(10) << r.iteration_s << " s  peak "
+                  << std::setw(8) << r.peak_mib << " MiB  " << r.status << std::endl;
       }
     }
   }
@@ -229,11 +227,13 @@ Command add_scaling_command(CLI::App& app) {
   std::string all;
   for (const auto& m : scaling_methods()) all += (all.empty() ? "" : ",") + m;
   auto* cmd = app.add_subcommand(
-      "scaling", "Scaling study: time per step and per iteration against springs (cloth grids of 1e4 "
-                 "to 1e6 springs, 6e6 with --full) per method, on 1 and 2 threads, with peak memory; "
-                 "writes scaling.csv, scaling.png and scaling.md (fitted exponents)");
+      "scaling",
+      "Scaling study: time per step and per iteration against springs (cloth grids of 1e4 "
+      "to 1e6 springs, 6e6 with --full) per method, on 1 and 2 threads, with peak memory; "
+      "writes scaling.csv, scaling.png and scaling.md (fitted exponents)");
   cmd->add_flag("--full", a->scal.full, "add 3e6 and 6e6 springs (1000 x 1000 particles)");
-  add_list(cmd, "--springs", a->springs, "comma-separated spring counts (default 1e4,3e4,1e5,3e5,1e6)");
+  add_list(cmd, "--springs", a->springs,
+           "comma-separated spring counts (default 1e4,3e4,1e5,3e5,1e6)");
   add_list(cmd, "--methods", a->methods, "comma-separated: " + all + " (default: all)");
   add_list(cmd, "--threads", a->threads, "comma-separated thread counts (default 1,2)");
   cmd->add_option("--steps", a->scal.steps, "timed steps after one warm-up step (default 4)");

@@ -9,8 +9,8 @@ struct ScalingOptions {
   std::vector<double> springs;  ///< target spring counts (empty: 1e4 .. 1e6; full: to 6e6)
   std::vector<int> threads = {1, 2};
   std::vector<std::string> methods;  ///< labels of scaling_methods() (empty: all)
-  int steps = 4;  ///< timed steps after one untimed warm-up step (2 is too few for pcg-cholmod, whose
-                  ///< refactorizations then fall in or out of the window)
+  int steps = 4;  ///< timed steps after one untimed warm-up step (2 is too few for pcg-cholmod,
+                  ///< whose refactorizations then fall in or out of the window)
   bool full = false;
   bool plot = true;
   std::string out_dir = "out/scaling";

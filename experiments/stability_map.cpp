@@ -22,8 +22,6 @@
 //         and DIR/stability_<case>.md.
 #include "experiments/stability_map.hpp"
 
-#include "experiments/cli.hpp"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -34,6 +32,7 @@
 #include <set>
 #include <sstream>
 
+#include "experiments/cli.hpp"
 #include "experiments/divergence.hpp"
 #include "experiments/natural_frequency.hpp"
 #include "experiments/plot_script.hpp"
@@ -194,8 +193,7 @@ int run_stability(const StabilityOptions& options, const std::string& scenes_dir
     }
   }
   std::fclose(csv);
-  std::printf("stability: wrote %s (%.1f s)\n", csv_path.c_str(),
-              seconds_since(start));
+  std::printf("stability: wrote %s (%.1f s)\n", csv_path.c_str(), seconds_since(start));
   if (options.plot) run_plot_script("stability.py", options.out_dir);
   return 0;
 }
@@ -212,12 +210,16 @@ Command add_stability_command(CLI::App& app) {
   auto a = std::make_shared<Args>();
   StabilitySettings& st = a->stab.settings;
   auto* cmd = app.add_subcommand(
-      "stability", "Stability map: the largest stable time step per stiffness k and method, with the "
-                   "theoretical explicit limits; writes stability.csv and stability_<case>.png");
+      "stability",
+      "Stability map: the largest stable time step per stiffness k and method, with the "
+      "theoretical explicit limits; writes stability.csv and stability_<case>.png");
   cmd->add_flag("--full", a->stab.full, "paper size: 16 x 16 cloth, k in half decades");
-  add_list(cmd, "--cases", a->cases, "comma-separated: two_particle,hanging_cloth,stiff_flexion (default: all)");
-  add_list(cmd, "--methods", a->methods, "comma-separated study labels or method names (default: all)");
-  add_list(cmd, "--k", a->k, "comma-separated stiffness values in N/m (default 1e1..1e7 by decades)");
+  add_list(cmd, "--cases", a->cases,
+           "comma-separated: two_particle,hanging_cloth,stiff_flexion (default: all)");
+  add_list(cmd, "--methods", a->methods,
+           "comma-separated study labels or method names (default: all)");
+  add_list(cmd, "--k", a->k,
+           "comma-separated stiffness values in N/m (default 1e1..1e7 by decades)");
   cmd->add_option("--h-min", st.h_min, "smallest step tried (s, default 1e-5)");
   cmd->add_option("--h-max", st.h_max, "largest step tried (s, default 1e-1)");
   cmd->add_option("--bisections", st.bisections, "bisections of the bracket in log h (default 4)");
@@ -228,11 +230,14 @@ Command add_stability_command(CLI::App& app) {
   add_out(cmd, a->out, "out/stability");
   add_no_plot(cmd, a->stab.plot);
   cmd->footer(
-      "A run of max(T, 100 h) simulated seconds (T = 1 s for two_particle, 0.2 s for the cloths, 0.5 s with --full) is "
+      "A run of max(T, 100 h) simulated seconds (T = 1 s for two_particle, 0.2 s for the cloths, "
+      "0.5 s with --full) is "
       "unstable if the step fails, the state becomes non-finite, the total energy exceeds E0 + "
       "growth-limit x the energy scale of `hooke run` (every spring stretched by its rest length, "
-      "plus kinetic energy and gravity's work over the initial extent), or a spring's strain exceeds "
-      "strain-bound (1 for two_particle: its particles meet). h is scanned down from h-max by half decades to the first stable run, then the "
+      "plus kinetic energy and gravity's work over the initial extent), or a spring's strain "
+      "exceeds "
+      "strain-bound (1 for two_particle: its particles meet). h is scanned down from h-max by half "
+      "decades to the first stable run, then the "
       "bracket is bisected. The theoretical explicit limit is y / omega_max (see `hooke info`).");
   return {cmd, [a] {
             a->stab.cases = split_list(a->cases);

@@ -21,11 +21,6 @@
 //         per method) and DIR/step_convergence.png (through experiments/plot/step_convergence.py).
 #include "experiments/step_convergence_command.hpp"
 
-#include "experiments/cli.hpp"
-
-#include "experiments/plot_script.hpp"
-#include "experiments/trajectory.hpp"
-
 #include <chrono>
 #include <cmath>
 #include <filesystem>
@@ -35,8 +30,11 @@
 #include <map>
 #include <sstream>
 
-#include "hooke/whole_step/fast_mass_spring.hpp"
+#include "experiments/cli.hpp"
+#include "experiments/plot_script.hpp"
+#include "experiments/trajectory.hpp"
 #include "hooke/registry.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "hooke_config.hpp"
 #include "problems/scene.hpp"
 
@@ -110,7 +108,9 @@ class StepErrors {
     m_gap = m_judge.objective(s0, h, y) - m_g_star;
     m_dx = (exact.x - s0.x).lpNorm<Eigen::Infinity>();
   }
-  double objective(ConstRef x) const { return (m_judge.objective(m_s0, m_h, x) - m_g_star) / m_gap; }
+  double objective(ConstRef x) const {
+    return (m_judge.objective(m_s0, m_h, x) - m_g_star) / m_gap;
+  }
   double position(ConstRef x) const { return (x - m_exact.x).lpNorm<Eigen::Infinity>() / m_dx; }
 
  private:
@@ -194,7 +194,8 @@ std::string table_header(const std::string& scene_path, double target) {
   md << "Iterations and wall time (ms) to bring the objective error below " << target
      << " on one backward-Euler step (" << scene_path << "); `-` = not reached within the budget "
      << "(its best error in brackets).\n\n"
-     << "| k (N/m) | h (s) | reference error | method | iterations | wall (ms) |\n|---|---|---|---|---|---|\n";
+     << "| k (N/m) | h (s) | reference error | method | iterations | wall (ms) "
+        "|\n|---|---|---|---|---|---|\n";
   return md.str();
 }
 
@@ -247,10 +248,10 @@ int run_step_convergence(const std::string& scene_path, const StepConvergenceOpt
   std::cerr << "error: step-convergence needs fast-mass-spring, which needs CHOLMOD\n";
   return 1;
 #else
-  const std::vector<double> ks = opt.full ? std::vector<double>{1e2, 1e3, 1e4, 1e5, 1e6}
-                                          : std::vector<double>{1e2, 1e4, 1e6};
-  const std::vector<double> hs = opt.full ? std::vector<double>{1e-3, 1e-2, 1.0 / 30.0}
-                                          : std::vector<double>{1e-2};
+  const std::vector<double> ks =
+      opt.full ? std::vector<double>{1e2, 1e3, 1e4, 1e5, 1e6} : std::vector<double>{1e2, 1e4, 1e6};
+  const std::vector<double> hs =
+      opt.full ? std::vector<double>{1e-3, 1e-2, 1.0 / 30.0} : std::vector<double>{1e-2};
   const int max_iterations = opt.full ? 3000 : 1000;
   std::filesystem::create_directories(opt.out_dir);
   std::ofstream csv(opt.out_dir + "/step_convergence.csv");
@@ -278,9 +279,10 @@ Command add_step_convergence_command(CLI::App& app) {
     StepConvergenceOptions conv;
   };
   auto a = std::make_shared<Args>();
-  auto* cmd = app.add_subcommand(
-      "step-convergence", "Objective error against iterations and wall time of one backward-Euler "
-                          "step: local/global (+ Chebyshev, L-BFGS), Newton, XPBD, vs Ceres");
+  auto* cmd =
+      app.add_subcommand("step-convergence",
+                         "Objective error against iterations and wall time of one backward-Euler "
+                         "step: local/global (+ Chebyshev, L-BFGS), Newton, XPBD, vs Ceres");
   cmd->add_option("scene", a->scene, "cloth scene (default hanging_cloth_16)");
   cmd->add_flag("--full", a->conv.full, "the paper's size: k = 1e2..1e6, h = 1e-3, 1e-2, 1/30");
   add_out(cmd, a->out, "out/step-convergence");

@@ -14,8 +14,7 @@
 
 namespace hooke {
 
-namespace {
-}
+namespace {}
 
 Trajectory run_trajectory(const Scene& scene, const std::string& method,
                           const MethodOptions& options, const std::vector<long long>& sample_steps,
@@ -154,8 +153,9 @@ Reference compute_reference(const Scene& scene, double rtol, double atol,
   ref.trajectory = run_trajectory(scene, "cvode", reference_options(scene, "cvode", rtol, atol),
                                   sample_steps, !constrained, none);
   if (!ref.trajectory.complete) return ref;
-  const Trajectory loose = run_trajectory(scene, "cvode", reference_options(scene, "cvode", 10 * rtol, atol),
-                                          sample_steps, !constrained, none);
+  const Trajectory loose =
+      run_trajectory(scene, "cvode", reference_options(scene, "cvode", 10 * rtol, atol),
+                     sample_steps, !constrained, none);
   ref.own_error = compare(loose, ref.trajectory);
   std::ostringstream how;
   how << "CVODE BDF (KLU, analytic Jacobian) at rtol " << rtol << " (" << fmt(ref.trajectory.wall)

@@ -23,8 +23,6 @@
 //         experiments/plot/work_precision.py, DIR/workprecision_<case>.png and .md.
 #include "experiments/work_precision.hpp"
 
-#include "experiments/cli.hpp"
-
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -34,6 +32,7 @@
 #include <optional>
 #include <utility>
 
+#include "experiments/cli.hpp"
 #include "experiments/divergence.hpp"
 #include "experiments/plot_script.hpp"
 #include "experiments/trajectory.hpp"
@@ -149,8 +148,8 @@ Trajectory run_method(const Scene& scene, const StudyMethod& m, double rtol, int
 
 /// Every run of method m on the case (method_runs), one CSV row each; stops at the first run that
 /// cannot load or is unsupported, and after one that takes over 60 s.
-void sweep_method(const WorkPrecisionCase& c, const StudyMethod& m, const std::vector<double>& rtols,
-                  int S, const Reference& ref, FILE* csv) {
+void sweep_method(const WorkPrecisionCase& c, const StudyMethod& m,
+                  const std::vector<double>& rtols, int S, const Reference& ref, FILE* csv) {
   for (const auto& [h, rtol] : method_runs(c, m, rtols, S)) {
     Scene scene;
     try {
@@ -169,9 +168,9 @@ void sweep_method(const WorkPrecisionCase& c, const StudyMethod& m, const std::v
                  m.label.c_str(), m.method.c_str(), h, rtol, tr.wall, tr.steps, e.rms_final,
                  e.max_final, e.rms_traj, e.max_traj, csv_quoted(tr.status).c_str());
     std::fflush(csv);
-    std::fprintf(stderr,
-                 "workprecision: %-14s %-20s h = %-9.3g rtol = %-7.2g wall %8.3f s  err %-9.3g %s\n",
-                 c.name.c_str(), m.label.c_str(), h, rtol, tr.wall, e.rms_final, tr.status.c_str());
+    std::fprintf(
+        stderr, "workprecision: %-14s %-20s h = %-9.3g rtol = %-7.2g wall %8.3f s  err %-9.3g %s\n",
+        c.name.c_str(), m.label.c_str(), h, rtol, tr.wall, e.rms_final, tr.status.c_str());
     // A method that takes 60 s for one run would take longer still at smaller h: stop it here.
     if (tr.wall > 60.0) {
       std::fprintf(stderr, "workprecision: %s: %s took %.0f s; smaller steps skipped\n",
@@ -224,13 +223,18 @@ Command add_workprecision_command(CLI::App& app) {
   };
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
-      "workprecision", "Work-precision: error against a CVODE reference versus wall time for every "
-                       "method over a range of h (rtol for cvode/ida); writes workprecision.csv, "
-                       "reference.csv and workprecision_<case>.png");
-  cmd->add_flag("--full", a->wp.full, "paper size: 16 x 16 cloths, 6 step sizes 1e-2..3e-5, longer runs");
-  add_list(cmd, "--cases", a->cases, "comma-separated: chain,hanging_cloth,stiff_cloth (default: all)");
-  add_list(cmd, "--methods", a->methods, "comma-separated study labels or method names (default: all)");
-  add_list(cmd, "--rtols", a->rtols, "comma-separated tolerances of cvode/ida (default 1e-3,1e-5,1e-7)");
+      "workprecision",
+      "Work-precision: error against a CVODE reference versus wall time for every "
+      "method over a range of h (rtol for cvode/ida); writes workprecision.csv, "
+      "reference.csv and workprecision_<case>.png");
+  cmd->add_flag("--full", a->wp.full,
+                "paper size: 16 x 16 cloths, 6 step sizes 1e-2..3e-5, longer runs");
+  add_list(cmd, "--cases", a->cases,
+           "comma-separated: chain,hanging_cloth,stiff_cloth (default: all)");
+  add_list(cmd, "--methods", a->methods,
+           "comma-separated study labels or method names (default: all)");
+  add_list(cmd, "--rtols", a->rtols,
+           "comma-separated tolerances of cvode/ida (default 1e-3,1e-5,1e-7)");
   cmd->add_option("--reference-rtol", a->wp.reference_rtol, "CVODE reference rtol (default 1e-10)");
   cmd->add_option("--samples", a->wp.samples, "trajectory samples (default 10)");
   add_out(cmd, a->out, "out/workprecision");

@@ -17,7 +17,8 @@ MethodOptions read_implicit(TableReader& r, const std::string& method) {
   o.preconditioner = r.string("preconditioner", o.preconditioner);
   if (const std::string why = linear_solver_unknown(o.linear_solver); !why.empty())
     r.fail("linear_solver", why);
-  if (const std::string why = linear_solver_unknown(o.linear_solver, o.preconditioner); !why.empty())
+  if (const std::string why = linear_solver_unknown(o.linear_solver, o.preconditioner);
+      !why.empty())
     r.fail("preconditioner", why);
   o.newton_iterations = r.int_field("newton_iterations", o.newton_iterations);
   o.newton_tolerance = r.number("tolerance", o.newton_tolerance);
@@ -107,20 +108,20 @@ struct ReaderEntry {
 // One line per method that takes options; each optional method under its build option.
 const std::vector<ReaderEntry>& readers() {
   static const std::vector<ReaderEntry> table = {
-      {"implicit", read_implicit},
-      {"implicit-midpoint", read_implicit},
-      {"bdf2", read_implicit},
+    {"implicit", read_implicit},
+    {"implicit-midpoint", read_implicit},
+    {"bdf2", read_implicit},
 #if HOOKE_WITH_SUNDIALS
-      {"cvode", read_cvode},
-      {"ida", read_ida},
+    {"cvode", read_cvode},
+    {"ida", read_ida},
 #endif
 #if HOOKE_WITH_CERES
-      {"ceres-implicit", read_ceres_implicit},
+    {"ceres-implicit", read_ceres_implicit},
 #endif
 #if HOOKE_WITH_CHOLMOD
-      {"fast-mass-spring", read_fast_mass_spring},
+    {"fast-mass-spring", read_fast_mass_spring},
 #endif
-      {"xpbd", read_xpbd},
+    {"xpbd", read_xpbd},
   };
   return table;
 }

@@ -29,7 +29,8 @@ namespace {
 /// A mesh type: its name in [mesh] type and its builder (base_dir: the scene file's folder).
 struct MeshType {
   const char* name;
-  void (*build)(TableReader& mesh, TableReader& springs, const std::string& base_dir, MeshBuild& out);
+  void (*build)(TableReader& mesh, TableReader& springs, const std::string& base_dir,
+                MeshBuild& out);
 };
 
 // The one table of mesh types (builders in problems/builders/).
@@ -37,7 +38,8 @@ const std::vector<MeshType>& mesh_table() {
   using R = TableReader;
   static const std::vector<MeshType> table = {
       {"grid", [](R& m, R& s, const std::string&, MeshBuild& b) { build_grid(m, s, b); }},
-      {"cantilever", [](R& m, R& s, const std::string&, MeshBuild& b) { build_cantilever(m, s, b); }},
+      {"cantilever",
+       [](R& m, R& s, const std::string&, MeshBuild& b) { build_cantilever(m, s, b); }},
       {"chain", [](R& m, R& s, const std::string&, MeshBuild& b) { build_chain(m, s, b); }},
       {"hair", [](R& m, R& s, const std::string&, MeshBuild& b) { build_hair(m, s, b); }},
       {"damped-springs",
@@ -277,10 +279,10 @@ toml::table parse_toml(const std::string& text, const std::string& file) {
     return toml::parse(text, file);
   } catch (const toml::parse_error& e) {
     const auto& src = e.source();
-    throw InputError(file,
-                     "line " + std::to_string(src.begin.line) + ", column " +
-                         std::to_string(src.begin.column),
-                     std::string(e.description()));
+    throw InputError(
+        file,
+        "line " + std::to_string(src.begin.line) + ", column " + std::to_string(src.begin.column),
+        std::string(e.description()));
   }
 }
 
@@ -295,15 +297,17 @@ Scene load_scene(const std::string& path, const std::vector<std::string>& overri
   namespace fs = std::filesystem;
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path, "file", "does not exist");
-  if (fs::is_directory(path, ec)) throw InputError(path, "file", "is a directory, not a scene file");
+  if (fs::is_directory(path, ec))
+    throw InputError(path, "file", "is a directory, not a scene file");
   // A device, FIFO or socket (/dev/zero, /dev/stdin) could be read forever: only regular files.
   if (!fs::is_regular_file(path, ec))
     throw InputError(path, "file", "is not a regular file (a device, FIFO or socket?)");
   const auto size = fs::file_size(path, ec);
   if (ec) throw InputError(path, "file", "cannot read its size: " + ec.message());
   if (size > (64u << 20))
-    throw InputError(path, "file", "is " + std::to_string(size >> 20) +
-                                       " MiB; scene files are limited to 64 MiB (use an obj mesh)");
+    throw InputError(path, "file",
+                     "is " + std::to_string(size >> 20) +
+                         " MiB; scene files are limited to 64 MiB (use an obj mesh)");
   std::ifstream in(path, std::ios::binary);
   if (!in) throw InputError(path, "file", "cannot be read");
   std::stringstream ss;

@@ -1,11 +1,11 @@
 #pragma once
+#include <toml++/toml.h>
+
 #include <array>
 #include <functional>
 #include <memory>
 #include <string>
 #include <vector>
-
-#include <toml++/toml.h>
 
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/model/ode_system.hpp"
@@ -18,7 +18,7 @@ namespace hooke {
 /// [integrator]: the time-stepping method and its options.
 struct IntegratorSettings {
   std::string method = "symplectic-euler";  ///< registry name (hooke::methods())
-  MethodOptions options;                     ///< the method's own Options (empty for explicit ones)
+  MethodOptions options;                    ///< the method's own Options (empty for explicit ones)
 };
 
 /// [time]: step size and simulated duration.
@@ -35,11 +35,11 @@ struct TimeSettings {
 
 /// [output]: where and how often to write.
 struct OutputSettings {
-  std::string dir;         ///< output directory (default out/<scene name>)
-  long long every = 0;     ///< write a VTK frame every N steps (0 = only the first and last)
-  long long log_every = 1; ///< write a log.csv row every N steps
-  bool vtk = true;         ///< write VTK frames at all
-  bool png = true;         ///< write final.png (a picture of the final state)
+  std::string dir;          ///< output directory (default out/<scene name>)
+  long long every = 0;      ///< write a VTK frame every N steps (0 = only the first and last)
+  long long log_every = 1;  ///< write a log.csv row every N steps
+  bool vtk = true;          ///< write VTK frames at all
+  bool png = true;          ///< write final.png (a picture of the final state)
 };
 
 /// [run]: divergence detection, numerical failures, checkpoints.

@@ -15,13 +15,20 @@ std::string fmt(double v) {
 }
 const char* type_name(const toml::node& n) {
   switch (n.type()) {
-    case toml::node_type::table: return "a table";
-    case toml::node_type::array: return "an array";
-    case toml::node_type::string: return "a string";
-    case toml::node_type::integer: return "an integer";
-    case toml::node_type::floating_point: return "a float";
-    case toml::node_type::boolean: return "a boolean";
-    default: return "a date/time";
+    case toml::node_type::table:
+      return "a table";
+    case toml::node_type::array:
+      return "an array";
+    case toml::node_type::string:
+      return "a string";
+    case toml::node_type::integer:
+      return "an integer";
+    case toml::node_type::floating_point:
+      return "a float";
+    case toml::node_type::boolean:
+      return "a boolean";
+    default:
+      return "a date/time";
   }
 }
 }  // namespace
@@ -59,11 +66,16 @@ double TableReader::to_number(const toml::node& n, const std::string& key) const
 
 void TableReader::record(const std::string& key, toml::node&& value) {
   // Copy into the resolved table; node&& is a concrete value/array created by the caller.
-  if (auto a = value.as_array()) m_out.insert_or_assign(key, std::move(*a));
-  else if (auto s = value.as_string()) m_out.insert_or_assign(key, s->get());
-  else if (auto i = value.as_integer()) m_out.insert_or_assign(key, i->get());
-  else if (auto f = value.as_floating_point()) m_out.insert_or_assign(key, f->get());
-  else if (auto b = value.as_boolean()) m_out.insert_or_assign(key, b->get());
+  if (auto a = value.as_array())
+    m_out.insert_or_assign(key, std::move(*a));
+  else if (auto s = value.as_string())
+    m_out.insert_or_assign(key, s->get());
+  else if (auto i = value.as_integer())
+    m_out.insert_or_assign(key, i->get());
+  else if (auto f = value.as_floating_point())
+    m_out.insert_or_assign(key, f->get());
+  else if (auto b = value.as_boolean())
+    m_out.insert_or_assign(key, b->get());
 }
 
 double TableReader::number(const std::string& key, std::optional<double> def) {
@@ -244,10 +256,11 @@ std::vector<std::vector<double>> TableReader::rows(
     const std::string item = key + "[" + std::to_string(k) + "]";
     const auto* row = a->get(k)->as_array();
     if (!row || row->size() < min_len || row->size() > max_len)
-      fail(item, "must be an array of " +
-                     (min_len == max_len ? std::to_string(min_len)
-                                         : std::to_string(min_len) + " to " + std::to_string(max_len)) +
-                     " numbers");
+      fail(item,
+           "must be an array of " +
+               (min_len == max_len ? std::to_string(min_len)
+                                   : std::to_string(min_len) + " to " + std::to_string(max_len)) +
+               " numbers");
     std::vector<double> r;
     toml::array rout;
     for (size_t c = 0; c < row->size(); ++c) {
@@ -280,7 +293,8 @@ void TableReader::reject_if_present(const std::string& key, const std::string& r
 }
 
 int TableReader::int_field(const std::string& key, int def) {
-  return static_cast<int>(integer(key, def, std::numeric_limits<int>::min(), std::numeric_limits<int>::max()));
+  return static_cast<int>(
+      integer(key, def, std::numeric_limits<int>::min(), std::numeric_limits<int>::max()));
 }
 
 void TableReader::check(const OptionError& err,

@@ -1,10 +1,10 @@
 #pragma once
+#include <toml++/toml.h>
+
 #include <optional>
 #include <set>
 #include <string>
 #include <vector>
-
-#include <toml++/toml.h>
 
 #include "hooke/core.hpp"
 #include "hooke/options.hpp"
@@ -37,7 +37,8 @@ class TableReader {
   /// A finite number >= 0.
   double non_negative(const std::string& key, std::optional<double> def = std::nullopt);
   /// An integer in [lo, hi].
-  long long integer(const std::string& key, std::optional<long long> def, long long lo, long long hi);
+  long long integer(const std::string& key, std::optional<long long> def, long long lo,
+                    long long hi);
   bool boolean(const std::string& key, std::optional<bool> def = std::nullopt);
   std::string string(const std::string& key, std::optional<std::string> def = std::nullopt);
   /// A string from `allowed`; the message lists them.
@@ -54,11 +55,13 @@ class TableReader {
   int int_field(const std::string& key, int def);
   /// Reports an Options struct's validate() result: fails at the key of the field that breaks a
   /// rule (keys maps field names to scene keys where they differ); returns if err.ok().
-  void check(const OptionError& err, const std::vector<std::pair<std::string, std::string>>& keys = {}) const;
+  void check(const OptionError& err,
+             const std::vector<std::pair<std::string, std::string>>& keys = {}) const;
   /// An array of exactly 3 finite numbers.
   Vec3 vec3(const std::string& key, std::optional<Vec3> def = std::nullopt);
   /// An array of finite numbers (empty allowed).
-  std::vector<double> numbers(const std::string& key, std::optional<std::vector<double>> def = std::nullopt);
+  std::vector<double> numbers(const std::string& key,
+                              std::optional<std::vector<double>> def = std::nullopt);
   /// An array of integers (empty allowed).
   std::vector<long long> integers(const std::string& key,
                                   std::optional<std::vector<long long>> def = std::nullopt);

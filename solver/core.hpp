@@ -60,10 +60,14 @@ enum class Status { Converged, NotConverged, BrokeDown, Fatal };
 /// Lowercase name of a status for logs and messages.
 inline const char* to_string(Status s) {
   switch (s) {
-    case Status::Converged: return "converged";
-    case Status::NotConverged: return "not-converged";
-    case Status::BrokeDown: return "broke-down";
-    case Status::Fatal: return "fatal";
+    case Status::Converged:
+      return "converged";
+    case Status::NotConverged:
+      return "not-converged";
+    case Status::BrokeDown:
+      return "broke-down";
+    case Status::Fatal:
+      return "fatal";
   }
   return "unknown";
 }
@@ -111,12 +115,12 @@ inline void parallel_for(long long n, long long threshold, Body&& body) {
 /// Checks a programmer-level precondition (sizes, invariants) and throws hooke::InternalError with
 /// the condition, location and message. Always active: only used at API boundaries, never per
 /// spring, so its cost is negligible.
-#define HOOKE_ASSERT(cond, msg)                                                        \
-  do {                                                                                 \
-    if (!(cond)) {                                                                     \
-      std::ostringstream hooke_assert_os_;                                             \
-      hooke_assert_os_ << __FILE__ << ":" << __LINE__ << ": assertion '" #cond "' failed: " \
-                       << msg;                                                         \
-      throw ::hooke::InternalError(hooke_assert_os_.str());                            \
-    }                                                                                  \
+#define HOOKE_ASSERT(cond, msg)                                      \
+  do {                                                               \
+    if (!(cond)) {                                                   \
+      std::ostringstream hooke_assert_os_;                           \
+      hooke_assert_os_ << __FILE__ << ":" << __LINE__                \
+                       << ": assertion '" #cond "' failed: " << msg; \
+      throw ::hooke::InternalError(hooke_assert_os_.str());          \
+    }                                                                \
   } while (false)

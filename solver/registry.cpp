@@ -50,7 +50,8 @@ const std::vector<ImplicitEntry>& implicit_table() {
       {{"implicit", MethodKind::Implicit,
         "beta-unified implicit step (beta = 1: backward Euler), Newton on a linear backend"},
        ImplicitScheme::Beta},
-      {{"implicit-midpoint", MethodKind::Implicit, "implicit midpoint rule, Newton on a linear backend"},
+      {{"implicit-midpoint", MethodKind::Implicit,
+        "implicit midpoint rule, Newton on a linear backend"},
        ImplicitScheme::Midpoint},
       {{"bdf2", MethodKind::Implicit, "two-step BDF, Newton on a linear backend"},
        ImplicitScheme::Bdf2},
@@ -69,37 +70,39 @@ struct WholeStepEntry {
 template <class T>
 WholeStepEntry whole_step(const char* name, const char* description,
                           std::string (*unsupported)(const MassSpringSystem&) = nullptr) {
-  auto make = [name](const MassSpringSystem& sys, const MethodOptions& m) -> std::unique_ptr<Stepper> {
+  auto make = [name](const MassSpringSystem& sys,
+                     const MethodOptions& m) -> std::unique_ptr<Stepper> {
     return std::make_unique<T>(sys, m.as<typename T::Options>(name));
   };
-  return {{name, MethodKind::WholeStep, description}, make, unsupported,
-          &typeid(typename T::Options)};
+  return {
+      {name, MethodKind::WholeStep, description}, make, unsupported, &typeid(typename T::Options)};
 }
 
 // Whole-step methods, each under its build option.
 const std::vector<WholeStepEntry>& whole_step_table() {
   static const std::vector<WholeStepEntry> table = {
 #if HOOKE_WITH_SUNDIALS
-      whole_step<CvodeStepper>(
-          "cvode", "SUNDIALS CVODE: adaptive BDF (or Adams) on x' = v, M v' = f, analytic Jacobian"),
-      whole_step<IdaStepper>(
-          "ida", "SUNDIALS IDA: adaptive BDF on the residual F(t, y, y') = 0, analytic Jacobian"),
+    whole_step<CvodeStepper>(
+        "cvode", "SUNDIALS CVODE: adaptive BDF (or Adams) on x' = v, M v' = f, analytic Jacobian"),
+    whole_step<IdaStepper>(
+        "ida", "SUNDIALS IDA: adaptive BDF on the residual F(t, y, y') = 0, analytic Jacobian"),
 #endif
 #if HOOKE_WITH_CERES
-      whole_step<CeresImplicitStepper>(
-          "ceres-implicit", "backward Euler solved exactly as nonlinear least squares with Ceres",
-          ceres_implicit_unsupported),
+    whole_step<CeresImplicitStepper>(
+        "ceres-implicit", "backward Euler solved exactly as nonlinear least squares with Ceres",
+        ceres_implicit_unsupported),
 #endif
 #if HOOKE_WITH_CHOLMOD
-      whole_step<FastMassSpringStepper>(
-          "fast-mass-spring",
-          "Liu et al. 2013 local/global backward Euler on a prefactored CHOLMOD matrix "
-          "(Chebyshev or L-BFGS acceleration)",
-          fast_mass_spring_unsupported),
+    whole_step<FastMassSpringStepper>(
+        "fast-mass-spring",
+        "Liu et al. 2013 local/global backward Euler on a prefactored CHOLMOD matrix "
+        "(Chebyshev or L-BFGS acceleration)",
+        fast_mass_spring_unsupported),
 #endif
-      whole_step<XpbdStepper>(
-          "xpbd", "extended position-based dynamics with substeps (Macklin et al. 2019), compliance 1/k",
-          xpbd_unsupported),
+    whole_step<XpbdStepper>(
+        "xpbd",
+        "extended position-based dynamics with substeps (Macklin et al. 2019), compliance 1/k",
+        xpbd_unsupported),
   };
   return table;
 }
@@ -107,7 +110,8 @@ const std::vector<WholeStepEntry>& whole_step_table() {
 /// The build option and Debian package of a known backend this build lacks, or "".
 std::string missing_backend(const std::string& name) {
   if ((name == "cvode" || name == "ida") && !HOOKE_WITH_SUNDIALS)
-    return "method '" + name + "' is not built: install libsundials-dev and reconfigure with "
+    return "method '" + name +
+           "' is not built: install libsundials-dev and reconfigure with "
            "-DHOOKE_WITH_SUNDIALS=ON";
   if (name == "fast-mass-spring" && !HOOKE_WITH_CHOLMOD)
     return "method 'fast-mass-spring' is not built: install libsuitesparse-dev and reconfigure "
@@ -140,7 +144,8 @@ std::string method_names() {
 const MethodInfo& method_info(const std::string& name) {
   for (const auto& m : methods())
     if (name == m.name) return m;
-  if (const std::string missing = missing_backend(name); !missing.empty()) throw UnknownMethod(missing);
+  if (const std::string missing = missing_backend(name); !missing.empty())
+    throw UnknownMethod(missing);
   throw UnknownMethod("unknown method '" + name + "'; available: " + method_names());
 }
 
@@ -148,7 +153,8 @@ std::unique_ptr<ExplicitStepper> make_explicit_stepper(const std::string& name) 
   for (const auto& e : explicit_table())
     if (name == e.info.name) return e.make();
   method_info(name);  // throws for unknown names
-  throw UnknownMethod("method '" + name + "' is not an explicit method and cannot run a generic ODE");
+  throw UnknownMethod("method '" + name +
+                      "' is not an explicit method and cannot run a generic ODE");
 }
 
 std::string default_linear_solver() { return HOOKE_WITH_CHOLMOD ? "cholmod" : "pcg-block"; }

@@ -7,15 +7,15 @@
 #include <typeinfo>
 #include <vector>
 
+#include "hooke/integrators/explicit_stepper.hpp"
+#include "hooke/integrators/implicit_stepper.hpp"
+#include "hooke/integrators/stepper.hpp"
+#include "hooke/model/mass_spring_system.hpp"
 #include "hooke/whole_step/ceres_implicit_stepper.hpp"
 #include "hooke/whole_step/cvode_stepper.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
 #include "hooke/whole_step/ida_stepper.hpp"
 #include "hooke/whole_step/xpbd.hpp"
-#include "hooke/integrators/explicit_stepper.hpp"
-#include "hooke/integrators/implicit_stepper.hpp"
-#include "hooke/integrators/stepper.hpp"
-#include "hooke/model/mass_spring_system.hpp"
 
 namespace hooke {
 
@@ -74,7 +74,7 @@ class MethodOptions {
 
 /// One entry of the method table.
 struct MethodInfo {
-  const char* name;         ///< registry name, as in scene files ("rk4")
+  const char* name;  ///< registry name, as in scene files ("rk4")
   MethodKind kind;
   const char* description;  ///< one line for --help and error messages
 };

@@ -8,10 +8,13 @@ namespace hooke {
 
 Simulation::Simulation(const MassSpringSystem& system, std::unique_ptr<Stepper> stepper,
                        State initial)
-    : m_system(system), m_stepper(std::move(stepper)), m_state(std::move(initial)), m_next(m_state) {
-  HOOKE_ASSERT(m_state.x.size() == system.dofs() && m_state.v.size() == system.dofs(),
-               "initial state has " << m_state.x.size() << " positions for " << system.dofs()
-                                    << " dofs");
+    : m_system(system),
+      m_stepper(std::move(stepper)),
+      m_state(std::move(initial)),
+      m_next(m_state) {
+  HOOKE_ASSERT(
+      m_state.x.size() == system.dofs() && m_state.v.size() == system.dofs(),
+      "initial state has " << m_state.x.size() << " positions for " << system.dofs() << " dofs");
 }
 
 StepSummary Simulation::advance(double h) { return advance_halving(h, 0); }

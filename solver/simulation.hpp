@@ -18,7 +18,8 @@ class Simulation {
  public:
   /// Called before each retry of a failed (sub)step: its start time t (s), its size h (s), the
   /// retry depth (1 = the first halving) and the failed step's summary.
-  using RetryObserver = std::function<void(double t, double h, int depth, const StepSummary& failed)>;
+  using RetryObserver =
+      std::function<void(double t, double h, int depth, const StepSummary& failed)>;
 
   Simulation(const MassSpringSystem& system, std::unique_ptr<Stepper> stepper, State initial);
   /// One step of size h, retried with halved steps on failure (see the class comment). On success

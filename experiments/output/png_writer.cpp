@@ -42,8 +42,9 @@ struct Image {
 }  // namespace
 
 void write_png_picture(const std::string& path, const State& s, const std::vector<char>& pinned,
-                       const std::vector<std::array<int, 2>>& edges, const std::vector<double>& rest,
-                       int width, int height, double max_strain_colour) {
+                       const std::vector<std::array<int, 2>>& edges,
+                       const std::vector<double>& rest, int width, int height,
+                       double max_strain_colour) {
   const Index n = s.num_particles();
   const double az = 30.0 * M_PI / 180.0, el = 20.0 * M_PI / 180.0;
   // Screen axes of an orthographic camera orbiting the y axis.
@@ -99,7 +100,8 @@ void write_png_picture(const std::string& path, const State& s, const std::vecto
   std::vector<png_byte> row(size_t(3) * width);
   for (int y = 0; y < height; ++y) {
     for (int k = 0; k < 3 * width; ++k)
-      row[size_t(k)] = png_byte(std::lround(255.0f * std::clamp(img.rgb[size_t(3) * y * width + k], 0.0f, 1.0f)));
+      row[size_t(k)] = png_byte(
+          std::lround(255.0f * std::clamp(img.rgb[size_t(3) * y * width + k], 0.0f, 1.0f)));
     png_write_row(png, row.data());
   }
   png_write_end(png, nullptr);

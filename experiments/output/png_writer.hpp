@@ -13,7 +13,8 @@ namespace hooke {
 /// writes a PNG (libpng). rest: rest length per edge (same order as edges).
 /// Throws std::runtime_error if the file cannot be written.
 void write_png_picture(const std::string& path, const State& s, const std::vector<char>& pinned,
-                       const std::vector<std::array<int, 2>>& edges, const std::vector<double>& rest,
-                       int width = 960, int height = 720, double max_strain_colour = 0.1);
+                       const std::vector<std::array<int, 2>>& edges,
+                       const std::vector<double>& rest, int width = 960, int height = 720,
+                       double max_strain_colour = 0.1);
 
 }  // namespace hooke

@@ -23,9 +23,9 @@ void pin_ids(TableReader& mesh, const std::string& key, const std::vector<long l
     long long id = ids[k];
     if (id < 0) id += n;
     if (id < 0 || id >= n)
-      mesh.fail(key + "[" + std::to_string(k) + "]",
-                "particle id " + std::to_string(ids[k]) + " out of range [0, " + std::to_string(n) +
-                    ") (negative ids count from the end)");
+      mesh.fail(key + "[" + std::to_string(k) + "]", "particle id " + std::to_string(ids[k]) +
+                                                         " out of range [0, " + std::to_string(n) +
+                                                         ") (negative ids count from the end)");
     out.pinned[static_cast<size_t>(id)] = 1;
   }
 }

@@ -43,7 +43,9 @@ void lattice(long long nx, long long ny, const Vec3& du, const Vec3& dw, double 
                  bool limited) {
     // Both ends must be inside: the second shear diagonal starts at i + 1, which is off the grid
     // in the last column (id(nx, j) would wrap to the start of row j + 1).
-    auto inside = [nx, ny](long long i, long long j) { return i >= 0 && i < nx && j >= 0 && j < ny; };
+    auto inside = [nx, ny](long long i, long long j) {
+      return i >= 0 && i < nx && j >= 0 && j < ny;
+    };
     if (!inside(i0, j0) || !inside(i1, j1)) return;
     const int a = id(i0, j0), b = id(i1, j1);
     const double L = (out.x.segment<3>(3 * a) - out.x.segment<3>(3 * b)).norm();
@@ -128,8 +130,8 @@ void build_cantilever(TableReader& mesh, TableReader& springs, MeshBuild& out) {
   const SpringKind structural = read_kind(mesh, springs, "structural", true, k, c);
   const SpringKind shear = read_kind(mesh, springs, "shear", true, k, c);
   const SpringKind flexion = read_kind(mesh, springs, "flexion", true, k, c);
-  lattice(nx, ny, Vec3(length / double(nx - 1), 0, 0), Vec3(0, -thickness / double(ny - 1), 0), mass,
-          structural, shear, flexion, 1, out);
+  lattice(nx, ny, Vec3(length / double(nx - 1), 0, 0), Vec3(0, -thickness / double(ny - 1), 0),
+          mass, structural, shear, flexion, 1, out);
   for (long long j = 0; j < ny; ++j) out.pinned[static_cast<size_t>(j * nx)] = 1;  // clamped end
 }
 

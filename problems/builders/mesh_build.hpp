@@ -11,19 +11,19 @@ namespace hooke {
 /// One spring as a builder describes it; the scene loader turns the list into forces.
 struct SpringSpec {
   int i = 0, j = 0;
-  double k = 0.0;         ///< stiffness (N/m)
-  double L = 0.0;         ///< rest length (m)
-  double c = 0.0;         ///< axial damping (N s/m)
-  bool limited = true;    ///< subject to strain limiting (false for bending/flexion springs)
+  double k = 0.0;       ///< stiffness (N/m)
+  double L = 0.0;       ///< rest length (m)
+  double c = 0.0;       ///< axial damping (N s/m)
+  bool limited = true;  ///< subject to strain limiting (false for bending/flexion springs)
 };
 
 /// What a mesh builder produces: particles, pins, springs and optionally an exact solution.
 struct MeshBuild {
-  Vec x, v;                       ///< 3n initial positions and velocities
-  Vec masses;                     ///< n masses
-  std::vector<char> pinned;       ///< n flags
+  Vec x, v;                  ///< 3n initial positions and velocities
+  Vec masses;                ///< n masses
+  std::vector<char> pinned;  ///< n flags
   std::vector<SpringSpec> springs;
-  ExactMassSpring exact;          ///< set by builders of scenes with a closed-form solution
+  ExactMassSpring exact;  ///< set by builders of scenes with a closed-form solution
 
   Index num_particles() const { return masses.size(); }
   void resize(Index n) {
@@ -51,6 +51,7 @@ void build_damped_springs(TableReader& mesh, TableReader& springs, MeshBuild& ou
 void build_two_particle(TableReader& mesh, TableReader& springs, MeshBuild& out);
 void build_particles(TableReader& mesh, TableReader& springs, MeshBuild& out);
 /// base_dir: directory of the scene file, against which a relative OBJ path is resolved.
-void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_dir, MeshBuild& out);
+void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_dir,
+               MeshBuild& out);
 
 }  // namespace hooke

@@ -41,7 +41,8 @@ ObjMesh read_obj(const std::string& path, TableReader& mesh) {
         if (!(ls >> tok)) fail("vertex needs 3 coordinates");
         char* end = nullptr;
         p[c] = std::strtod(tok.c_str(), &end);
-        if (end == tok.c_str() || *end != '\0') fail("vertex coordinate '" + tok + "' is not a number");
+        if (end == tok.c_str() || *end != '\0')
+          fail("vertex coordinate '" + tok + "' is not a number");
         if (!std::isfinite(p[c])) fail("vertex coordinate '" + tok + "' is not finite");
       }
       m.vertices.push_back(p);
@@ -67,8 +68,10 @@ ObjMesh read_obj(const std::string& path, TableReader& mesh) {
       if (face.size() < 3) fail("a face needs at least 3 vertices");
       for (size_t a = 0; a < face.size(); ++a)
         for (size_t b = a + 1; b < face.size(); ++b)
-          if (face[a] == face[b]) fail("face uses vertex " + std::to_string(face[a] + 1) + " twice");
-      for (size_t k = 1; k + 1 < face.size(); ++k) m.triangles.push_back({face[0], face[k], face[k + 1]});
+          if (face[a] == face[b])
+            fail("face uses vertex " + std::to_string(face[a] + 1) + " twice");
+      for (size_t k = 1; k + 1 < face.size(); ++k)
+        m.triangles.push_back({face[0], face[k], face[k + 1]});
       if (m.triangles.size() % 65536 < face.size() - 2)  // crossed a multiple of 64k triangles
         check_size(mesh, "file", double(m.vertices.size()), 3.0 * double(m.triangles.size()));
     }
@@ -83,8 +86,9 @@ ObjMesh read_obj(const std::string& path, TableReader& mesh) {
     for (int v : t) used[size_t(v)] = 1;
   for (size_t v = 0; v < used.size(); ++v)
     if (!used[v])
-      throw InputError(path, "line " + std::to_string(m.vertex_line[v]),
-                       "vertex " + std::to_string(v + 1) + " is not used by any face (isolated vertex)");
+      throw InputError(
+          path, "line " + std::to_string(m.vertex_line[v]),
+          "vertex " + std::to_string(v + 1) + " is not used by any face (isolated vertex)");
   std::map<std::array<double, 3>, size_t> seen;
   for (size_t v = 0; v < m.vertices.size(); ++v) {
     const std::array<double, 3> key = {m.vertices[v][0], m.vertices[v][1], m.vertices[v][2]};
@@ -106,10 +110,12 @@ void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_
   const fs::path p = fs::path(file).is_absolute() ? fs::path(file) : fs::path(base_dir) / file;
   std::error_code ec;
   if (!fs::exists(p, ec))
-    mesh.fail("file", "OBJ file '" + p.string() + "' does not exist" + (ec ? " (" + ec.message() + ")" : ""));
+    mesh.fail("file", "OBJ file '" + p.string() + "' does not exist" +
+                          (ec ? " (" + ec.message() + ")" : ""));
   if (!fs::is_regular_file(p, ec))
     mesh.fail("file", "OBJ file '" + p.string() + "' is not a regular file (" +
-                          (fs::is_directory(p, ec) ? "a directory" : "a device, FIFO or socket") + ")");
+                          (fs::is_directory(p, ec) ? "a directory" : "a device, FIFO or socket") +
+                          ")");
   // A bound on the file before a byte is read; read_obj checks the memory estimate as the vertex
   // count grows, so an absurd mesh is refused long before it is held in memory.
   const auto size = fs::file_size(p, ec);
@@ -143,8 +149,11 @@ void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_
       const int a = t[size_t(e)], b = t[size_t((e + 1) % 3)], o = t[size_t((e + 2) % 3)];
       edges[{std::min(a, b), std::max(a, b)}].push_back(o);
     }
-  auto rest = [&](int a, int b) { return (out.x.segment<3>(3 * a) - out.x.segment<3>(3 * b)).norm(); };
-  for (const auto& [e, opp] : edges) out.springs.push_back({e.first, e.second, k, rest(e.first, e.second), c, true});
+  auto rest = [&](int a, int b) {
+    return (out.x.segment<3>(3 * a) - out.x.segment<3>(3 * b)).norm();
+  };
+  for (const auto& [e, opp] : edges)
+    out.springs.push_back({e.first, e.second, k, rest(e.first, e.second), c, true});
   if (kb > 0.0 || cb > 0.0) {
     std::map<std::pair<int, int>, bool> bend_seen;
     for (const auto& [e, opp] : edges) {

@@ -10,7 +10,8 @@ void build_two_particle(TableReader& mesh, TableReader& springs, MeshBuild& out)
   const double m = mesh.positive("mass", 1.0);
   const double L = mesh.positive("rest_length", 1.0);
   const double s = mesh.number("stretch", 0.1 * L);
-  if (L + s <= 0.0) mesh.fail("stretch", "rest_length + stretch must be > 0 (particles would cross)");
+  if (L + s <= 0.0)
+    mesh.fail("stretch", "rest_length + stretch must be > 0 (particles would cross)");
   const double k = springs.non_negative("stiffness", 1e4);
   const double c = springs.non_negative("damping", 0.0);
   out.resize(2);

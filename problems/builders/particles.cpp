@@ -7,7 +7,8 @@ namespace hooke {
 
 namespace {
 int read_id(TableReader& mesh, const std::string& key, double d, Index n) {
-  if (d != std::floor(d)) mesh.fail(key, "particle id must be an integer, got " + std::to_string(d));
+  if (d != std::floor(d))
+    mesh.fail(key, "particle id must be an integer, got " + std::to_string(d));
   if (d < 0 || d >= double(n))
     mesh.fail(key, "particle id " + std::to_string(static_cast<long long>(d)) +
                        " out of range [0, " + std::to_string(n) + ")");
@@ -33,7 +34,8 @@ void build_particles(TableReader& mesh, TableReader& springs, MeshBuild& out) {
                               " particles");
     for (Index i = 0; i < n; ++i) {
       if (!(m[size_t(i)] > 0.0))
-        mesh.fail("masses[" + std::to_string(i) + "]", "mass must be > 0, got " + std::to_string(m[size_t(i)]));
+        mesh.fail("masses[" + std::to_string(i) + "]",
+                  "mass must be > 0, got " + std::to_string(m[size_t(i)]));
       out.masses[i] = m[size_t(i)];
     }
   } else {
@@ -54,8 +56,9 @@ void build_particles(TableReader& mesh, TableReader& springs, MeshBuild& out) {
     out.pinned[size_t(read_id(mesh, "pinned[" + std::to_string(k) + "]", double(pins[k]), n))] = 1;
 
   const double c_default = springs.non_negative("damping", 0.0);
-  const auto sp = mesh.has("springs") ? mesh.rows("springs", 3, 5)
-                                      : mesh.rows("springs", 3, 5, std::vector<std::vector<double>>{});
+  const auto sp = mesh.has("springs")
+                      ? mesh.rows("springs", 3, 5)
+                      : mesh.rows("springs", 3, 5, std::vector<std::vector<double>>{});
   for (size_t s = 0; s < sp.size(); ++s) {
     const std::string key = "springs[" + std::to_string(s) + "]";
     const auto& r = sp[s];

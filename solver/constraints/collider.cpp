@@ -2,8 +2,8 @@
 
 namespace hooke {
 
-void GroundPlane::project(ConstRef /*x0*/, double /*h*/, const std::vector<char>& pinned,
-                          VecRef x1, VecRef v1) const {
+void GroundPlane::project(ConstRef /*x0*/, double /*h*/, const std::vector<char>& pinned, VecRef x1,
+                          VecRef v1) const {
   const Index n = x1.size() / 3;
   for (Index i = 0; i < n; ++i) {
     if (pinned[i]) continue;

@@ -7,8 +7,8 @@ namespace hooke {
 
 /// A post-step correction of an end-of-step state (x1, v1): colliders and strain limiting.
 /// Called after every step with the step size h. Positions are projected; velocities are changed
-/// so that the state stays consistent (documented per constraint). Pinned particles (pinned[i] != 0)
-/// are never moved. Must not allocate.
+/// so that the state stays consistent (documented per constraint). Pinned particles (pinned[i] !=
+/// 0) are never moved. Must not allocate.
 class Constraint {
  public:
   virtual ~Constraint() = default;

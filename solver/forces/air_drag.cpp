@@ -18,8 +18,8 @@ void AirDrag::add_jacobians(ConstRef, ConstRef, const JacobianOptions&, SparseMa
   for (Index i = 0; i < m_n; ++i) add_block(D, m_diag[i], B);
 }
 
-bool AirDrag::add_jacobian_product(ConstRef, ConstRef, const JacobianOptions&, ConstRef p, double cv,
-                                   double, VecRef y) const {
+bool AirDrag::add_jacobian_product(ConstRef, ConstRef, const JacobianOptions&, ConstRef p,
+                                   double cv, double, VecRef y) const {
   y.head(3 * m_n) -= (cv * m_c) * p.head(3 * m_n);  // df/dv = -c I
   return true;
 }

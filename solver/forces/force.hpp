@@ -44,12 +44,15 @@ class Force {
   /// Matrix-free: y += cv (df/dv) p + cx (df/dx) p at (x, v) with the same options, without
   /// forming the matrices (3n vectors). Returns false if this force does not provide it (the
   /// default); then callers must assemble the matrices instead.
-  virtual bool add_jacobian_product(ConstRef /*x*/, ConstRef /*v*/, const JacobianOptions& /*options*/,
-                                    ConstRef /*p*/, double /*cv*/, double /*cx*/, VecRef /*y*/) const {
+  virtual bool add_jacobian_product(ConstRef /*x*/, ConstRef /*v*/,
+                                    const JacobianOptions& /*options*/, ConstRef /*p*/,
+                                    double /*cv*/, double /*cx*/, VecRef /*y*/) const {
     return false;
   }
   /// Largest relative elongation (l - L) / L over this force's springs; -infinity if it has none.
-  virtual double max_strain(ConstRef /*x*/) const { return -std::numeric_limits<double>::infinity(); }
+  virtual double max_strain(ConstRef /*x*/) const {
+    return -std::numeric_limits<double>::infinity();
+  }
   /// An energy scale (J) used to recognise a blown-up run: for springs, the energy of every spring
   /// stretched by its own rest length. 0 if the force has no natural scale.
   virtual double energy_scale() const { return 0.0; }

@@ -3,7 +3,8 @@
 namespace hooke {
 
 void Gravity::add_forces(ConstRef /*x*/, ConstRef /*v*/, VecRef f) const {
-  parallel_for(m_masses.size(), 1 << 15, [&](long long i) { f.segment<3>(3 * i) += m_masses[i] * m_g; });
+  parallel_for(m_masses.size(), 1 << 15,
+               [&](long long i) { f.segment<3>(3 * i) += m_masses[i] * m_g; });
 }
 
 double Gravity::potential_energy(ConstRef x) const {

@@ -15,8 +15,8 @@ inline Vec3 spring_vector(ConstRef x, int a, int b) {
 void HookeSpring::add_forces(ConstRef x, ConstRef /*v*/, VecRef f) const {
   const SpringSet& s = m_springs;
   s.for_each([&](size_t n) {
-    const Vec3 fa = hooke_spring_kernel::force(spring_vector(x, s.i[n], s.j[n]), s.coeff[n],
-                                               s.rest_length[n]);
+    const Vec3 fa =
+        hooke_spring_kernel::force(spring_vector(x, s.i[n], s.j[n]), s.coeff[n], s.rest_length[n]);
     f.segment<3>(3 * s.i[n]) += fa;
     f.segment<3>(3 * s.j[n]) -= fa;
   });

@@ -6,9 +6,9 @@ void SpringDamper::add_forces(ConstRef x, ConstRef v, VecRef f) const {
   const SpringSet& s = m_springs;
   s.for_each([&](size_t n) {
     const int a = s.i[n], b = s.j[n];
-    const Vec3 fa = spring_damper_kernel::force(x.segment<3>(3 * a) - x.segment<3>(3 * b),
-                                                v.segment<3>(3 * a) - v.segment<3>(3 * b),
-                                                s.coeff[n]);
+    const Vec3 fa =
+        spring_damper_kernel::force(x.segment<3>(3 * a) - x.segment<3>(3 * b),
+                                    v.segment<3>(3 * a) - v.segment<3>(3 * b), s.coeff[n]);
     f.segment<3>(3 * a) += fa;
     f.segment<3>(3 * b) -= fa;
   });

@@ -24,9 +24,9 @@ namespace hooke {
 /// loop's (a colouring would scatter it). On a cloth grid the remainder is empty, so nothing runs
 /// serially.
 struct SpringSet {
-  std::vector<int> i, j;           ///< endpoint particle ids
-  std::vector<double> coeff;       ///< stiffness (N/m) or damping (N s/m), per spring
-  std::vector<double> rest_length; ///< rest length L (m), per spring
+  std::vector<int> i, j;                        ///< endpoint particle ids
+  std::vector<double> coeff;                    ///< stiffness (N/m) or damping (N s/m), per spring
+  std::vector<double> rest_length;              ///< rest length L (m), per spring
   std::vector<std::array<BlockSlot, 4>> slots;  ///< filled by bind()
   std::vector<size_t> group_start;  ///< group g holds springs [group_start[g], group_start[g+1])
   std::array<size_t, 5> phase_start{};  ///< phase p runs groups [phase_start[p], phase_start[p+1]):
@@ -65,7 +65,8 @@ struct SpringSet {
 #pragma omp parallel
     for (int p = 0; p < 3; ++p) {
 #pragma omp for schedule(dynamic, 1)
-      for (long long g = (long long)phase_start[size_t(p)]; g < (long long)phase_start[size_t(p) + 1]; ++g)
+      for (long long g = (long long)phase_start[size_t(p)];
+           g < (long long)phase_start[size_t(p) + 1]; ++g)
         body(size_t(g));
     }
     for (size_t g = phase_start[3]; g < phase_start[4]; ++g) body(g);

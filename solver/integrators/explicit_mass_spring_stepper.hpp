@@ -11,7 +11,8 @@ namespace hooke {
 /// first-order state [x; v] in preallocated buffers.
 class ExplicitMassSpringStepper final : public Stepper {
  public:
-  ExplicitMassSpringStepper(const MassSpringSystem& system, std::unique_ptr<ExplicitStepper> method);
+  ExplicitMassSpringStepper(const MassSpringSystem& system,
+                            std::unique_ptr<ExplicitStepper> method);
   const char* name() const override { return m_method->name(); }
   StepSummary step(const State& s0, double h, State& s1) override;
 

@@ -16,17 +16,15 @@ std::unique_ptr<ExplicitRungeKutta> ExplicitRungeKutta::forward_euler() {
 }
 
 std::unique_ptr<ExplicitRungeKutta> ExplicitRungeKutta::midpoint() {
-  return std::make_unique<ExplicitRungeKutta>("midpoint",
-                                              std::vector<std::vector<double>>{{}, {0.5}},
-                                              std::vector<double>{0.0, 1.0},
-                                              std::vector<double>{0.0, 0.5});
+  return std::make_unique<ExplicitRungeKutta>(
+      "midpoint", std::vector<std::vector<double>>{{}, {0.5}}, std::vector<double>{0.0, 1.0},
+      std::vector<double>{0.0, 0.5});
 }
 
 std::unique_ptr<ExplicitRungeKutta> ExplicitRungeKutta::trapezoid() {
-  return std::make_unique<ExplicitRungeKutta>("trapezoid",
-                                              std::vector<std::vector<double>>{{}, {1.0}},
-                                              std::vector<double>{0.5, 0.5},
-                                              std::vector<double>{0.0, 1.0});
+  return std::make_unique<ExplicitRungeKutta>(
+      "trapezoid", std::vector<std::vector<double>>{{}, {1.0}}, std::vector<double>{0.5, 0.5},
+      std::vector<double>{0.0, 1.0});
 }
 
 std::unique_ptr<ExplicitRungeKutta> ExplicitRungeKutta::rk4() {
@@ -43,8 +41,9 @@ void ExplicitRungeKutta::resize(Index dim) {
 
 void ExplicitRungeKutta::step(OdeSystem& ode, double t, double h, ConstRef X0, VecRef X1) {
   const Index dim = ode.dimension();
-  HOOKE_ASSERT(X0.size() == dim && X1.size() == dim,
-               name() << ": state sizes " << X0.size() << ", " << X1.size() << " for dimension " << dim);
+  HOOKE_ASSERT(X0.size() == dim && X1.size() == dim, name()
+                                                         << ": state sizes " << X0.size() << ", "
+                                                         << X1.size() << " for dimension " << dim);
   if (m_stage.size() != dim) resize(dim);
   for (size_t s = 0; s < m_b.size(); ++s) {
     if (s == 0) {

@@ -1,10 +1,10 @@
 #include "hooke/integrators/implicit_stepper.hpp"
 
-#include "hooke/linear/linear_registry.hpp"
-
 #include <chrono>
 #include <cmath>
 #include <sstream>
+
+#include "hooke/linear/linear_registry.hpp"
 
 namespace hooke {
 
@@ -42,8 +42,12 @@ OptionError ImplicitOptions::validate() const {
 
 ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme scheme,
                                  std::unique_ptr<LinearSolver> solver, ImplicitOptions options)
-    : m_system(system), m_scheme(scheme), m_solver(std::move(solver)), m_options(options),
-      m_J(system.make_jacobians()), m_A(system) {
+    : m_system(system),
+      m_scheme(scheme),
+      m_solver(std::move(solver)),
+      m_options(options),
+      m_J(system.make_jacobians()),
+      m_A(system) {
   const OptionError err = m_options.validate();
   HOOKE_ASSERT(err.ok(), "ImplicitOptions: " << err.message);
   HOOKE_ASSERT(m_options.linear_solver.empty() ||
@@ -90,8 +94,9 @@ std::vector<double> ImplicitStepper::history() const {
 
 void ImplicitStepper::restore_history(const std::vector<double>& h) {
   const size_t N = size_t(m_prev_x.size()), nf = size_t(m_delta.size());
-  HOOKE_ASSERT(h.size() == 3 + 2 * N + nf, name() << ": history of " << h.size() << " numbers, expected "
-                                                  << 3 + 2 * N + nf << " for " << N << " dofs");
+  HOOKE_ASSERT(h.size() == 3 + 2 * N + nf, name() << ": history of " << h.size()
+                                                  << " numbers, expected " << 3 + 2 * N + nf
+                                                  << " for " << N << " dofs");
   m_has_prev = h[0] != 0.0;
   m_prev_h = h[1];
   m_prev_t1 = h[2];
@@ -102,9 +107,12 @@ void ImplicitStepper::restore_history(const std::vector<double>& h) {
 
 const char* ImplicitStepper::name() const {
   switch (m_scheme) {
-    case ImplicitScheme::Beta: return "implicit";
-    case ImplicitScheme::Midpoint: return "implicit-midpoint";
-    case ImplicitScheme::Bdf2: return "bdf2";
+    case ImplicitScheme::Beta:
+      return "implicit";
+    case ImplicitScheme::Midpoint:
+      return "implicit-midpoint";
+    case ImplicitScheme::Bdf2:
+      return "bdf2";
   }
   return "implicit";
 }
@@ -226,7 +234,8 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
     m_A.scatter_add(m_delta, m_v1);
     if (m_options.newton_iterations > 1) {
       delta_norm = m_delta.lpNorm<Eigen::Infinity>();
-      const double scale = std::max({m_v1.lpNorm<Eigen::Infinity>(), m_v0.lpNorm<Eigen::Infinity>(), 1e-12});
+      const double scale =
+          std::max({m_v1.lpNorm<Eigen::Infinity>(), m_v0.lpNorm<Eigen::Infinity>(), 1e-12});
       if (delta_norm <= m_options.newton_tolerance * scale) {
         converged = true;
         break;

@@ -23,10 +23,10 @@ class ReducedMatrix {
   void scatter_add(ConstRef free, VecRef full) const;
 
  private:
-  std::vector<int> m_free;    // full DOF index of each free DOF
-  std::vector<int> m_src;     // for each stored entry of A: its index in K/D values
-  std::vector<int> m_diag;    // for each free DOF: its diagonal entry in A
-  Vec m_mass;                 // mass of each free DOF
+  std::vector<int> m_free;  // full DOF index of each free DOF
+  std::vector<int> m_src;   // for each stored entry of A: its index in K/D values
+  std::vector<int> m_diag;  // for each free DOF: its diagonal entry in A
+  Vec m_mass;               // mass of each free DOF
   SparseMatrix m_A;
 };
 

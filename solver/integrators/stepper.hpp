@@ -11,31 +11,32 @@ namespace hooke {
 /// whole-step backends fill iterations (linear or nonlinear, as documented by each) and residual.
 struct StepSummary {
   Status status = Status::Converged;
-  int iterations = 0;     ///< linear solver iterations spent in this step (summed over Newton)
+  int iterations = 0;         ///< linear solver iterations spent in this step (summed over Newton)
   int newton_iterations = 0;  ///< Newton iterations (implicit methods; 0 for explicit ones)
-  double residual = 0.0;  ///< final residual norm of the step's solve (0 if none)
-  std::string message;    ///< empty on success; says what failed and with which numbers otherwise
+  double residual = 0.0;      ///< final residual norm of the step's solve (0 if none)
+  std::string message;  ///< empty on success; says what failed and with which numbers otherwise
 };
 
 /// What a stepper has done since it was made, cumulative over all its steps (in the spirit of
-/// Ceres' Solver::Summary and MuJoCo's timers): one type for every method, so studies and benchmarks
-/// read work and time without knowing the concrete stepper. A field a method has no use for stays 0.
+/// Ceres' Solver::Summary and MuJoCo's timers): one type for every method, so studies and
+/// benchmarks read work and time without knowing the concrete stepper. A field a method has no use
+/// for stays 0.
 struct StepperStats {
   long long steps = 0;              ///< step() calls
   long long internal_steps = 0;     ///< steps of adaptive integrators (CVODE, IDA); else 0
   long long iterations = 0;         ///< outer iterations: Newton (implicit methods, CVODE, IDA),
                                     ///< local/global iterations, XPBD substeps x sweeps, Ceres LM
   long long linear_iterations = 0;  ///< iterations of iterative linear solvers (CG, GMRES)
-  long long factorizations = 0;     ///< numeric factorizations (or matrix refreshes) of linear solvers
-  double last_residual = 0.0;       ///< residual of the last step's solve (its units: see StepSummary)
-  double assembly_seconds = 0.0;    ///< forces and Jacobian values (s)
-  double analyze_seconds = 0.0;     ///< symbolic analysis of sparsity patterns (s)
-  double factor_seconds = 0.0;      ///< numeric factorizations and preconditioner set-up (s)
-  double solve_seconds = 0.0;       ///< linear solves (s)
-  double local_seconds = 0.0;       ///< local steps of local/global methods (s)
-  double global_seconds = 0.0;      ///< global steps of local/global methods (s)
-  double total_seconds = 0.0;       ///< wall time inside step() (s); 0 if the method does not time it
-  double factor_nonzeros = 0.0;     ///< entries of the current factor (direct global solves)
+  long long factorizations = 0;  ///< numeric factorizations (or matrix refreshes) of linear solvers
+  double last_residual = 0.0;    ///< residual of the last step's solve (its units: see StepSummary)
+  double assembly_seconds = 0.0;  ///< forces and Jacobian values (s)
+  double analyze_seconds = 0.0;   ///< symbolic analysis of sparsity patterns (s)
+  double factor_seconds = 0.0;    ///< numeric factorizations and preconditioner set-up (s)
+  double solve_seconds = 0.0;     ///< linear solves (s)
+  double local_seconds = 0.0;     ///< local steps of local/global methods (s)
+  double global_seconds = 0.0;    ///< global steps of local/global methods (s)
+  double total_seconds = 0.0;     ///< wall time inside step() (s); 0 if the method does not time it
+  double factor_nonzeros = 0.0;   ///< entries of the current factor (direct global solves)
 };
 
 /// "N steps, I iterations, L linear iterations, F factorizations; assembly a s, ..." with the
@@ -74,7 +75,8 @@ class Stepper {
   /// Restores what history() returned on a stepper made with the same method, options and
   /// system. Throws InternalError if the data cannot be from such a stepper.
   virtual void restore_history(const std::vector<double>& history) {
-    HOOKE_ASSERT(history.empty(), name() << " keeps no history, got " << history.size() << " numbers");
+    HOOKE_ASSERT(history.empty(), name()
+                                      << " keeps no history, got " << history.size() << " numbers");
   }
   /// True if history() and restore_history() make a resumed run bit-identical to an uninterrupted
   /// one. False for backends with internal history they cannot export (CVODE, IDA: a resumed run

@@ -3,14 +3,13 @@
 #include <cholmod.h>
 
 #include <array>
-#include <sstream>
 #include <chrono>
+#include <sstream>
 #include <vector>
 
 namespace hooke {
 
-namespace {
-}  // namespace
+namespace {}  // namespace
 
 OptionError CholmodOptions::validate() const {
   if (!(flop_rate_ratio > 0.0) || !std::isfinite(flop_rate_ratio))
@@ -23,17 +22,17 @@ struct CholmodSolver::Impl {
   CholmodOptions options;
   cholmod_common c;
   cholmod_factor* L = nullptr;
-  cholmod_sparse A{};                 // header over our arrays (values shared with Eigen)
-  std::vector<SuiteSparse_long> p, i; // long-index copies of the pattern (made once)
-  cholmod_dense B{};                  // header over the right-hand side
-  cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;  // solve2 workspace, reused
-  cholmod_dense Bk{};                                      // header over a block of columns
+  cholmod_sparse A{};                  // header over our arrays (values shared with Eigen)
+  std::vector<SuiteSparse_long> p, i;  // long-index copies of the pattern (made once)
+  cholmod_dense B{};                   // header over the right-hand side
+  cholmod_dense *X = nullptr, *Y = nullptr, *E = nullptr;     // solve2 workspace, reused
+  cholmod_dense Bk{};                                         // header over a block of columns
   cholmod_dense *Xk = nullptr, *Yk = nullptr, *Ek = nullptr;  // its workspace
   Index n = 0;
   long long factorizations = 0;
   bool factored = false;
   std::array<std::unique_ptr<SupernodalSolver>, 4> sn;  // per K, made on first use
-  Vec column;                                            // simplicial fallback's one column
+  Vec column;                                           // simplicial fallback's one column
 
   SupernodalFactorView view() const {
     static_assert(sizeof(SuiteSparse_long) == sizeof(std::int64_t), "64-bit CHOLMOD indices");
@@ -78,7 +77,8 @@ CholmodSolver::~CholmodSolver() {
 
 LinearSummary CholmodSolver::analyze(const SparseMatrix& A) {
   const auto t0 = Clock::now();
-  HOOKE_ASSERT(A.rows() == A.cols() && A.isCompressed(), "cholmod: A must be square and compressed");
+  HOOKE_ASSERT(A.rows() == A.cols() && A.isCompressed(),
+               "cholmod: A must be square and compressed");
   LinearSummary s;
   m->n = A.rows();
   m->p.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.cols() + 1);
@@ -240,8 +240,6 @@ double CholmodSolver::factor_cost_in_solves() const {
 
 long long CholmodSolver::factorizations() const { return m->factorizations; }
 
-double CholmodSolver::factor_nonzeros() const {
-  return m->L ? double(m->c.lnz) : 0.0;
-}
+double CholmodSolver::factor_nonzeros() const { return m->L ? double(m->c.lnz) : 0.0; }
 
 }  // namespace hooke

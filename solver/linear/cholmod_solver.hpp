@@ -3,8 +3,8 @@
 #include <string>
 
 #include "hooke/linear/linear_solver.hpp"
-#include "hooke/options.hpp"
 #include "hooke/linear/supernodal_solve.hpp"
+#include "hooke/options.hpp"
 
 namespace hooke {
 
@@ -71,8 +71,8 @@ class CholmodSolver final : public LinearSolver {
   /// until the next analyze() or factor().
   SupernodalFactorView supernodal_view() const;
   /// CHOLMOD's flop count of one factorization over 4 nnz(L) (the flops of one solve), divided by
-  /// the measured ratio of their flop rates (the factorization runs as BLAS-3, the solve streams L):
-  /// see the definition. After analyze().
+  /// the measured ratio of their flop rates (the factorization runs as BLAS-3, the solve streams
+  /// L): see the definition. After analyze().
   double factor_cost_in_solves() const override;
   /// Nonzeros of the factor L (after factor()).
   double factor_nonzeros() const;

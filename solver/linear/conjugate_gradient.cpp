@@ -48,7 +48,8 @@ bool ConjugateGradientSolver::precondition(LinearSummary& s) {
   return false;
 }
 
-LinearSummary ConjugateGradientSolver::solve(ConstRef b, VecRef x, const LinearSolveOptions& options) {
+LinearSummary ConjugateGradientSolver::solve(ConstRef b, VecRef x,
+                                             const LinearSolveOptions& options) {
   LinearSummary s = run(b, x, options);
   int iterations = s.iterations;
   if (s.status != Status::Converged && m_pre->stale()) {
@@ -69,7 +70,8 @@ LinearSummary ConjugateGradientSolver::solve(ConstRef b, VecRef x, const LinearS
   return s;
 }
 
-LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x, const LinearSolveOptions& options) {
+LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x,
+                                           const LinearSolveOptions& options) {
   HOOKE_ASSERT(m_A, name() << ": solve before factor");
   HOOKE_ASSERT(b.size() == m_A->rows() && x.size() == m_A->rows(), name() << ": size mismatch");
   const auto t0 = Clock::now();

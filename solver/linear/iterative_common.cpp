@@ -1,7 +1,7 @@
+#include "hooke/linear/iterative_common.hpp"
+
 #include <Eigen/LU>
 #include <array>
-
-#include "hooke/linear/iterative_common.hpp"
 
 namespace hooke::linear_detail {
 
@@ -33,7 +33,8 @@ Index invert_diagonal_blocks(const SparseMatrix& A, const std::vector<std::array
   const double* v = A.valuePtr();
   for (size_t b = 0; b < pos.size(); ++b) {
     Mat3 B;
-    for (int e = 0; e < 9; ++e) B(e % 3, e / 3) = pos[b][size_t(e)] >= 0 ? v[pos[b][size_t(e)]] : 0.0;
+    for (int e = 0; e < 9; ++e)
+      B(e % 3, e / 3) = pos[b][size_t(e)] >= 0 ? v[pos[b][size_t(e)]] : 0.0;
     if (spd) {
       // Leading minors > 0 <=> symmetric part positive definite (Sylvester); cheap and exact.
       const Mat3 S = 0.5 * (B + B.transpose());

@@ -30,23 +30,24 @@ struct PreconditionerEntry {
 const std::vector<PreconditionerEntry>& preconditioner_table() {
   static const std::vector<PreconditionerEntry> t = {
 #if HOOKE_WITH_CHOLMOD
-      {{"cholmod", "a CHOLMOD factorization of an earlier step's A, refactored when that pays"},
-       [] {
-         CholmodOptions o;
-         o.ordering = hooke::CholmodOrdering::Metis;  // nested dissection: the least fill on cloth grids
-         return std::make_unique<ReusedFactorization>(std::make_unique<CholmodSolver>(o));
-       }},
-      {{"nodal",
-        "a CHOLMOD factorization of A's nodal n x n part (tr of each 3x3 block / 3) of an earlier "
-        "step, refactored when that pays; about a ninth of pcg-cholmod's factor memory"},
-       [] { return std::make_unique<ReusedFactorization>(std::make_unique<NodalPreconditioner>()); }},
+    {{"cholmod", "a CHOLMOD factorization of an earlier step's A, refactored when that pays"},
+     [] {
+       CholmodOptions o;
+       o.ordering =
+           hooke::CholmodOrdering::Metis;  // nested dissection: the least fill on cloth grids
+       return std::make_unique<ReusedFactorization>(std::make_unique<CholmodSolver>(o));
+     }},
+    {{"nodal",
+      "a CHOLMOD factorization of A's nodal n x n part (tr of each 3x3 block / 3) of an earlier "
+      "step, refactored when that pays; about a ninth of pcg-cholmod's factor memory"},
+     [] { return std::make_unique<ReusedFactorization>(std::make_unique<NodalPreconditioner>()); }},
 #endif
-      {{"block", "3x3 block-Jacobi (the inverse of each particle's diagonal block)"},
-       [] { return std::make_unique<BlockJacobiPreconditioner>(); }},
-      {{"jacobi", "Jacobi (inverse diagonal); \"pcg\" for short"},
-       [] { return std::make_unique<JacobiPreconditioner>(); }},
-      {{"none", "no preconditioner; \"cg\" for short"},
-       [] { return std::make_unique<IdentityPreconditioner>(); }},
+    {{"block", "3x3 block-Jacobi (the inverse of each particle's diagonal block)"},
+     [] { return std::make_unique<BlockJacobiPreconditioner>(); }},
+    {{"jacobi", "Jacobi (inverse diagonal); \"pcg\" for short"},
+     [] { return std::make_unique<JacobiPreconditioner>(); }},
+    {{"none", "no preconditioner; \"cg\" for short"},
+     [] { return std::make_unique<IdentityPreconditioner>(); }},
   };
   return t;
 }
@@ -55,14 +56,15 @@ const std::vector<PreconditionerEntry>& preconditioner_table() {
 const std::vector<Entry>& table() {
   static const std::vector<Entry> t = {
 #if HOOKE_WITH_CHOLMOD
-      {{"cholmod", "CHOLMOD supernodal Cholesky (SuiteSparse), analysed once, refactored per step"},
-       [] { return std::make_unique<CholmodSolver>(); }},
+    {{"cholmod", "CHOLMOD supernodal Cholesky (SuiteSparse), analysed once, refactored per step"},
+     [] { return std::make_unique<CholmodSolver>(); }},
 #endif
-      {{"colored-gauss-seidel", "multicolour 3x3-block Gauss-Seidel, parallel within a colour"},
-       [] { return std::make_unique<ColoredGaussSeidelSolver>(); }},
-      {{"gauss-seidel", "scalar Gauss-Seidel, natural order"},
-       [] { return std::make_unique<GaussSeidelSolver>(); }},
-      {{"jacobi", "3x3 block Jacobi iteration (per particle), parallel"}, [] { return std::make_unique<JacobiSolver>(); }},
+    {{"colored-gauss-seidel", "multicolour 3x3-block Gauss-Seidel, parallel within a colour"},
+     [] { return std::make_unique<ColoredGaussSeidelSolver>(); }},
+    {{"gauss-seidel", "scalar Gauss-Seidel, natural order"},
+     [] { return std::make_unique<GaussSeidelSolver>(); }},
+    {{"jacobi", "3x3 block Jacobi iteration (per particle), parallel"},
+     [] { return std::make_unique<JacobiSolver>(); }},
   };
   return t;
 }
@@ -99,7 +101,8 @@ const std::vector<PreconditionerInfo>& preconditioners() {
 
 std::string preconditioner_names() {
   std::string s;
-  for (const auto& e : preconditioner_table()) s += (s.empty() ? "" : ", ") + std::string(e.info.name);
+  for (const auto& e : preconditioner_table())
+    s += (s.empty() ? "" : ", ") + std::string(e.info.name);
   return s;
 }
 
@@ -117,9 +120,11 @@ const std::vector<LinearSolverInfo>& linear_solvers() {
     descriptions.reserve(pre.size());
     for (const auto& p : pre) {
       names.push_back(pcg_name(p.info.name));
-      descriptions.push_back(std::string("conjugate gradients, preconditioner: ") + p.info.description);
+      descriptions.push_back(std::string("conjugate gradients, preconditioner: ") +
+                             p.info.description);
     }
-    for (size_t k = 0; k < pre.size(); ++k) v.push_back({names[k].c_str(), descriptions[k].c_str()});
+    for (size_t k = 0; k < pre.size(); ++k)
+      v.push_back({names[k].c_str(), descriptions[k].c_str()});
     for (; it != direct.end(); ++it) v.push_back(it->info);
     return v;
   }();
@@ -144,16 +149,18 @@ std::string linear_solver_unknown(const std::string& name, const std::string& pr
              "\"pcg\"";
     if (!find_preconditioner(preconditioner))
       return preconditioner == "cholmod" || preconditioner == "nodal"
-                 ? "preconditioner '" + preconditioner + "' is not built: install libsuitesparse-dev "
-                   "and reconfigure with -DHOOKE_WITH_CHOLMOD=ON"
-                 : "unknown preconditioner '" + preconditioner + "'; available: " +
-                       preconditioner_names();
+                 ? "preconditioner '" + preconditioner +
+                       "' is not built: install libsuitesparse-dev "
+                       "and reconfigure with -DHOOKE_WITH_CHOLMOD=ON"
+                 : "unknown preconditioner '" + preconditioner +
+                       "'; available: " + preconditioner_names();
     return "";
   }
   for (const auto& e : linear_solvers())
     if (name == e.name) return "";
   if (name == "cholmod" || name == "pcg-cholmod" || name == "pcg-nodal")
-    return "linear solver '" + name + "' is not built: install libsuitesparse-dev and "
+    return "linear solver '" + name +
+           "' is not built: install libsuitesparse-dev and "
            "reconfigure with -DHOOKE_WITH_CHOLMOD=ON";
   return "unknown linear solver '" + name + "'; available: " + linear_solver_names();
 }

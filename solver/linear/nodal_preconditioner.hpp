@@ -18,9 +18,10 @@ namespace hooke {
 /// its isotropic part, the same shape as the prefactored global matrix M/h^2 + L of Liu et al. 2013
 /// that the issue-7 brief names as a preconditioner. Each entry of N stands for a 3x3 block of A,
 /// so its factor has about a ninth of the entries of A's own (pcg-cholmod's; 1/8.9 on a 48x48
-/// cloth, tested) and fits where A's factor does not (the 6M-spring cloth). It is not a solver for A: solve() returns (N (x) I3)^-1 b. Use it as
-/// ConjugateGradientSolver's factorization ("pcg-nodal"); it is not registered on its own.
-/// Ignores LinearSolveOptions (direct method). Requires A.rows() to be a multiple of 3.
+/// cloth, tested) and fits where A's factor does not (the 6M-spring cloth). It is not a solver for
+/// A: solve() returns (N (x) I3)^-1 b. Use it as ConjugateGradientSolver's factorization
+/// ("pcg-nodal"); it is not registered on its own. Ignores LinearSolveOptions (direct method).
+/// Requires A.rows() to be a multiple of 3.
 class NodalPreconditioner final : public LinearSolver {
  public:
   NodalPreconditioner();

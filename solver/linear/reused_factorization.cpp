@@ -43,9 +43,7 @@ LinearSummary ReusedFactorization::setup(const SparseMatrix& A) {
   return renew ? refresh() : LinearSummary{};
 }
 
-Status ReusedFactorization::apply(ConstRef r, VecRef z) {
-  return m_direct->solve(r, z, {}).status;
-}
+Status ReusedFactorization::apply(ConstRef r, VecRef z) { return m_direct->solve(r, z, {}).status; }
 
 void ReusedFactorization::solved(int iterations) {
   m_last_iterations = iterations;

@@ -18,7 +18,8 @@
 
 extern "C" {
 // LAPACK (OpenBLAS): inverse of a triangular matrix in place.
-void dtrtri_(const char* uplo, const char* diag, const int* n, double* a, const int* lda, int* info);
+void dtrtri_(const char* uplo, const char* diag, const int* n, double* a, const int* lda,
+             int* info);
 }
 
 namespace hooke {
@@ -30,13 +31,13 @@ using I = std::int64_t;
 /// of disjoint subtrees (each subtree a contiguous range of supernodes in postorder) and the top,
 /// the supernodes above them, processed serially.
 struct SplitView {
-  const I* top;           // per factor row: its index among the top's rows, or -1
-  I top_rows;             // rows (columns) of the top supernodes
-  const I* top_row;       // the factor row of each top row
-  I top_count;            // top supernodes, ascending
+  const I* top;      // per factor row: its index among the top's rows, or -1
+  I top_rows;        // rows (columns) of the top supernodes
+  const I* top_row;  // the factor row of each top row
+  I top_count;       // top supernodes, ascending
   const I* top_supernode;
-  const I* range;         // subtree ranges [first, last], bin 0's then bin 1's, ascending
-  I bin_start[3];         // bin b's ranges: range[2r .. 2r+1] for r in [bin_start[b], bin_start[b+1])
+  const I* range;  // subtree ranges [first, last], bin 0's then bin 1's, ascending
+  I bin_start[3];  // bin b's ranges: range[2r .. 2r+1] for r in [bin_start[b], bin_start[b+1])
 };
 
 /// The factor repacked by bind() (see "Panels" in supernodal_kernels.inc): per supernode, its
@@ -114,7 +115,7 @@ void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<
   // node's children's subtrees tile the range just below it. Check it (CHOLMOD postorders by
   // default); otherwise everything stays in the serial top.
   for (I p = 0; postordered && p < ns; ++p) {
-    I next = p - count[size_t(p)] + 1;  // where the first child's subtree must start
+    I next = p - count[size_t(p)] + 1;       // where the first child's subtree must start
     for (const I c : children[size_t(p)]) {  // ascending: pushed in increasing s
       postordered = postordered && c - count[size_t(c)] + 1 == next;
       next = c + 1;
@@ -138,8 +139,9 @@ void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<
       frontier.erase(frontier.begin() + std::ptrdiff_t(heaviest));
       frontier.insert(frontier.end(), children[size_t(x)].begin(), children[size_t(x)].end());
     }
-    std::sort(frontier.begin(), frontier.end(),
-              [&](I a, I b) { return work[size_t(a)] > work[size_t(b)] || (work[size_t(a)] == work[size_t(b)] && a < b); });
+    std::sort(frontier.begin(), frontier.end(), [&](I a, I b) {
+      return work[size_t(a)] > work[size_t(b)] || (work[size_t(a)] == work[size_t(b)] && a < b);
+    });
     std::vector<I> bins[2];
     double load[2] = {0.0, 0.0};
     for (const I x : frontier) {
@@ -232,8 +234,8 @@ void SupernodalSolver::bind(const SupernodalFactorView& f) {
     const int n = int(ncol);
     int info = 0;
     dtrtri_("L", "N", &n, A, &n, &info);
-    HOOKE_ASSERT(info == 0, "SupernodalSolver: diagonal block of supernode " << s
-                                << " is singular (dtrtri info " << info << ")");
+    HOOKE_ASSERT(info == 0, "SupernodalSolver: diagonal block of supernode "
+                                << s << " is singular (dtrtri info " << info << ")");
     double* out = m_packed.data() + m_inv_start[size_t(s)];
     for (I q = 0; q < c4 / 4; ++q) {
       pack(out, ncol, ncol, q, q, [&](I i, I j) { return i >= j ? A[j * ncol + i] : 0.0; });
@@ -271,8 +273,13 @@ SupernodalSolver::Shape SupernodalSolver::shape() const {
 
 void SupernodalSolver::solve(const double* b, double* x) {
   HOOKE_ASSERT(m_f.value, "SupernodalSolver: solve before bind");
-  SplitView split{m_top.data(), I(m_top_row.size()), m_top_row.data(), I(m_top_supernode.size()),
-                  m_top_supernode.data(), m_range.data(), {m_bin_start[0], m_bin_start[1], m_bin_start[2]}};
+  SplitView split{m_top.data(),
+                  I(m_top_row.size()),
+                  m_top_row.data(),
+                  I(m_top_supernode.size()),
+                  m_top_supernode.data(),
+                  m_range.data(),
+                  {m_bin_start[0], m_bin_start[1], m_bin_start[2]}};
   Work work[2];
   for (int w = 0; w < 2; ++w) {
     double* base = m_scratch.data() + w * m_stride;

@@ -57,7 +57,7 @@ class SupernodalSolver {
   SupernodalFactorView m_f;
   int m_K;
   bool m_avx2 = false;
-  std::vector<double> m_y;     // permuted right-hand sides, K n interleaved
+  std::vector<double> m_y;  // permuted right-hand sides, K n interleaved
   // Per thread (two): a supernode's own rows twice and its rows below, K contiguous columns each,
   // and the updates to the top's rows.
   std::vector<double> m_scratch;

@@ -38,7 +38,8 @@ void MassSpringSystem::finalize() {
 }
 
 Index MassSpringSystem::num_pinned() const {
-  return static_cast<Index>(std::count_if(m_pinned.begin(), m_pinned.end(), [](char p) { return p != 0; }));
+  return static_cast<Index>(
+      std::count_if(m_pinned.begin(), m_pinned.end(), [](char p) { return p != 0; }));
 }
 
 void MassSpringSystem::compute_forces(ConstRef x, ConstRef v, VecRef f) const {
@@ -79,9 +80,9 @@ Jacobians MassSpringSystem::make_jacobians() const {
 void MassSpringSystem::assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
                                           const JacobianOptions& options) const {
   HOOKE_ASSERT(m_finalized, "assemble_jacobians before finalize");
-  HOOKE_ASSERT(J.K.nonZeros() == 9 * m_pattern.num_blocks() &&
-                   J.D.nonZeros() == 9 * m_pattern.num_blocks(),
-               "Jacobians were not made from this system's pattern");
+  HOOKE_ASSERT(
+      J.K.nonZeros() == 9 * m_pattern.num_blocks() && J.D.nonZeros() == 9 * m_pattern.num_blocks(),
+      "Jacobians were not made from this system's pattern");
   std::fill(J.K.valuePtr(), J.K.valuePtr() + J.K.nonZeros(), 0.0);
   std::fill(J.D.valuePtr(), J.D.valuePtr() + J.D.nonZeros(), 0.0);
   for (const auto& force : m_forces) force->add_jacobians(x, v, options, J.K, J.D);

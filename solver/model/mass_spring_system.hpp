@@ -4,8 +4,8 @@
 
 #include "hooke/constraints/constraint.hpp"
 #include "hooke/forces/force.hpp"
-#include "hooke/sparse/block_pattern.hpp"
 #include "hooke/model/state.hpp"
+#include "hooke/sparse/block_pattern.hpp"
 
 namespace hooke {
 

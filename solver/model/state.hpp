@@ -5,9 +5,9 @@ namespace hooke {
 
 /// The state of a mass-spring system: a plain value, copyable and comparable in tests.
 struct State {
-  Vec x;          ///< positions, 3n vector [x0 y0 z0 x1 ...], metres
-  Vec v;          ///< velocities, 3n vector, m/s
-  double t = 0.0; ///< time, s
+  Vec x;           ///< positions, 3n vector [x0 y0 z0 x1 ...], metres
+  Vec v;           ///< velocities, 3n vector, m/s
+  double t = 0.0;  ///< time, s
 
   State() = default;
   /// A state of n particles at time t with zero positions and velocities.

@@ -20,7 +20,6 @@ namespace hooke {
 
 namespace {
 
-
 /// Ceres' type for each CeresLinearSolver, in the enum's order.
 constexpr ceres::LinearSolverType kLinearSolverTypes[] = {ceres::SPARSE_NORMAL_CHOLESKY,
                                                           ceres::DENSE_QR, ceres::CGNR};

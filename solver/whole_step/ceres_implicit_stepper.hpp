@@ -15,11 +15,13 @@ template <>
 struct EnumNames<CeresFormulation> {
   static constexpr std::array<const char*, 2> names = {"residual", "energy"};
 };
-/// Ceres' linear solver of each Levenberg-Marquardt iteration (CeresImplicitOptions::linear_solver).
+/// Ceres' linear solver of each Levenberg-Marquardt iteration
+/// (CeresImplicitOptions::linear_solver).
 enum class CeresLinearSolver { SparseNormalCholesky, DenseQr, Cgnr };
 template <>
 struct EnumNames<CeresLinearSolver> {
-  static constexpr std::array<const char*, 3> names = {"sparse-normal-cholesky", "dense-qr", "cgnr"};
+  static constexpr std::array<const char*, 3> names = {"sparse-normal-cholesky", "dense-qr",
+                                                       "cgnr"};
 };
 
 /// Options of CeresImplicitStepper, fixed for its lifetime. Ceres stops at the first of its three

@@ -12,8 +12,8 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "hooke/whole_step/sundials_detail.hpp"
 #include "hooke/model/mass_spring_ode.hpp"
+#include "hooke/whole_step/sundials_detail.hpp"
 
 namespace hooke {
 
@@ -255,10 +255,13 @@ Status CvodeStepper::Impl::classify(int flag) {
     case CV_TOO_MUCH_WORK:
     case CV_TOO_MUCH_ACC:
     case CV_ERR_FAILURE:
-    case CV_CONV_FAILURE: return Status::NotConverged;
+    case CV_CONV_FAILURE:
+      return Status::NotConverged;
     case CV_LSETUP_FAIL:
-    case CV_LSOLVE_FAIL: return Status::BrokeDown;
-    default: return Status::Fatal;
+    case CV_LSOLVE_FAIL:
+      return Status::BrokeDown;
+    default:
+      return Status::Fatal;
   }
 }
 

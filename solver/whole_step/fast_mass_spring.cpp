@@ -6,8 +6,8 @@
 #include <sstream>
 #include <stdexcept>
 
-#include "hooke/whole_step/spring_potential_forces.hpp"
 #include "hooke/linear/cholmod_solver.hpp"
+#include "hooke/whole_step/spring_potential_forces.hpp"
 
 namespace hooke {
 
@@ -46,8 +46,10 @@ OptionError FastMassSpringOptions::validate() const {
 }
 
 std::string fast_mass_spring_unsupported(const MassSpringSystem& system) {
-  return SpringPotentialForces::unsupported(system, "fast-mass-spring",
-                                             "the local/global split needs each force to be a spring potential, a constant or quadratic in x; spring dampers are not");
+  return SpringPotentialForces::unsupported(
+      system, "fast-mass-spring",
+      "the local/global split needs each force to be a spring potential, a constant or quadratic "
+      "in x; spring dampers are not");
 }
 
 FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
@@ -99,7 +101,8 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
       const Index ri = m_row[size_t(s.i[k])], rj = m_row[size_t(s.j[k])];
       auto& slot = m_slots[si][k];
       slot = {ri >= 0 ? m_diag[size_t(ri)] : -1, rj >= 0 ? m_diag[size_t(rj)] : -1,
-              ri >= 0 && rj >= 0 ? position(ri, rj) : -1, ri >= 0 && rj >= 0 ? position(rj, ri) : -1};
+              ri >= 0 && rj >= 0 ? position(ri, rj) : -1,
+              ri >= 0 && rj >= 0 ? position(rj, ri) : -1};
       if (ri >= 0 && rj < 0) m_pin_links.push_back({ri, Index(s.j[k]), si, k});
       if (rj >= 0 && ri < 0) m_pin_links.push_back({rj, Index(s.i[k]), si, k});
     }
@@ -109,7 +112,8 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
     m_inv_diag.setZero(nf);
   } else {
     CholmodOptions chol_options;
-    chol_options.ordering = hooke::CholmodOrdering::Metis;  // nested dissection: the least fill on cloth grids (measured)
+    chol_options.ordering = hooke::CholmodOrdering::Metis;  // nested dissection: the least fill on
+                                                            // cloth grids (measured)
     m_chol = std::make_unique<CholmodSolver>(chol_options);
   }
   if (m_chol && nf > 0) {
@@ -119,8 +123,7 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
 
   const Index dofs = 3 * n;
   for (Vec* v : {&m_y, &m_acc, &m_x, &m_xprev, &m_xhat}) v->setZero(dofs);
-  for (Rows3* M : {&m_const, &m_B, &m_X, &m_G, &m_Gnew, &m_D, &m_Xtrial})
-    M->setZero(nf, 3);
+  for (Rows3* M : {&m_const, &m_B, &m_X, &m_G, &m_Gnew, &m_D, &m_Xtrial}) M->setZero(nf, 3);
   if (m_opt.acceleration == Acceleration::Lbfgs) {
     m_s.assign(size_t(m_opt.lbfgs_history), Rows3::Zero(nf, 3));
     m_t = m_s;
@@ -253,11 +256,13 @@ double FastMassSpringStepper::objective(const State& s0, double h, ConstRef x) c
 }
 
 void FastMassSpringStepper::gather(ConstRef x, Rows3& X) const {
-  for (size_t r = 0; r < m_free.size(); ++r) X.row(Index(r)) = x.segment<3>(3 * m_free[r]).transpose();
+  for (size_t r = 0; r < m_free.size(); ++r)
+    X.row(Index(r)) = x.segment<3>(3 * m_free[r]).transpose();
 }
 
 void FastMassSpringStepper::scatter(const Rows3& X, VecRef x) const {
-  for (size_t r = 0; r < m_free.size(); ++r) x.segment<3>(3 * m_free[r]) = X.row(Index(r)).transpose();
+  for (size_t r = 0; r < m_free.size(); ++r)
+    x.segment<3>(3 * m_free[r]) = X.row(Index(r)).transpose();
 }
 
 void FastMassSpringStepper::jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X) {
@@ -287,8 +292,7 @@ void FastMassSpringStepper::jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X) {
   m_global_seconds += seconds_since(t0);
 }
 
-Status FastMassSpringStepper::global_solve(const Rows3& B, Rows3& X,
-                                           std::string& message) {
+Status FastMassSpringStepper::global_solve(const Rows3& B, Rows3& X, std::string& message) {
   const auto t0 = Clock::now();
   X.resize(B.rows(), 3);  // a no-op: every block is sized once
   const LinearSummary s = m_chol->solve_interleaved(B.data(), X.data(), 3);
@@ -308,7 +312,8 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
 
   bool converged = true;
   if (!m_free.empty())
-    converged = m_opt.acceleration == Acceleration::Lbfgs ? iterate_lbfgs(out) : iterate_local_global(out);
+    converged =
+        m_opt.acceleration == Acceleration::Lbfgs ? iterate_lbfgs(out) : iterate_local_global(out);
   if (out.status == Status::Fatal) return out;
   const int it = out.iterations;
   s1.t = s0.t + h;
@@ -323,8 +328,9 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
   if (!converged) {
     out.status = Status::NotConverged;
     std::ostringstream msg;
-    msg << "fast-mass-spring: objective decrease " << out.residual << " of the step's total still > tolerance "
-        << m_opt.tolerance << " after " << it << " iterations (raise [integrator] iterations)";
+    msg << "fast-mass-spring: objective decrease " << out.residual
+        << " of the step's total still > tolerance " << m_opt.tolerance << " after " << it
+        << " iterations (raise [integrator] iterations)";
     out.message = msg.str();
   }
   return out;
@@ -384,7 +390,8 @@ bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
       const int S = m_opt.chebyshev_delay;
       ++j;
       if (j == S) {
-        if (m_opt.chebyshev_rho == 0.0) rho = prev_update > 0.0 ? std::min(update / prev_update, 0.9999) : 0.0;
+        if (m_opt.chebyshev_rho == 0.0)
+          rho = prev_update > 0.0 ? std::min(update / prev_update, 0.9999) : 0.0;
         omega = rho > 0.0 ? 2.0 / (2.0 - rho * rho) : 1.0;
       } else if (j > S) {
         omega = 4.0 / (4.0 - rho * rho * omega);
@@ -523,13 +530,16 @@ StepperStats FastMassSpringStepper::stats() const {
 
 std::string FastMassSpringStepper::report() const {
   std::ostringstream r;
-  r << "fast-mass-spring (" << to_string(m_opt.acceleration) << ", " << to_string(m_opt.global_solver) << "): " << m_steps
-    << " steps, " << m_iterations << " iterations ("
-    << (m_steps ? double(m_iterations) / double(m_steps) : 0.0) << " per step), " << m_factorizations
-    << (m_chol ? " factorizations (" : " matrix refreshes (") << m_factor_seconds << " s), local steps "
-    << m_local_seconds << " s, global steps " << m_global_seconds << " s";
-  if (m_opt.acceleration == Acceleration::Lbfgs) r << ", " << m_line_search_trials << " line-search evaluations";
-  if (m_opt.acceleration == Acceleration::Chebyshev) r << ", " << m_chebyshev_restarts << " Chebyshev restarts";
+  r << "fast-mass-spring (" << to_string(m_opt.acceleration) << ", "
+    << to_string(m_opt.global_solver) << "): " << m_steps << " steps, " << m_iterations
+    << " iterations (" << (m_steps ? double(m_iterations) / double(m_steps) : 0.0) << " per step), "
+    << m_factorizations << (m_chol ? " factorizations (" : " matrix refreshes (")
+    << m_factor_seconds << " s), local steps " << m_local_seconds << " s, global steps "
+    << m_global_seconds << " s";
+  if (m_opt.acceleration == Acceleration::Lbfgs)
+    r << ", " << m_line_search_trials << " line-search evaluations";
+  if (m_opt.acceleration == Acceleration::Chebyshev)
+    r << ", " << m_chebyshev_restarts << " Chebyshev restarts";
   return r.str();
 }
 

@@ -5,11 +5,11 @@
 #include <string>
 #include <vector>
 
-#include "hooke/whole_step/spring_potential_forces.hpp"
 #include "hooke/forces/spring_set.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/options.hpp"
+#include "hooke/whole_step/spring_potential_forces.hpp"
 
 namespace hooke {
 
@@ -86,13 +86,13 @@ std::string fast_mass_spring_unsupported(const MassSpringSystem& system);
 /// grad g = 0 is exactly the backward-Euler step M (v1 - v0) = h f(x1, v1): gravity f_g is
 /// constant and linear drag -c (v - w) with v = (x - x0)/h is the gradient of the last term, so
 /// both are implicit and exact. The local step picks each spring's best direction
-/// d_s = L_s (x_i - x_j) / |x_i - x_j| (in parallel over particle ranges, deterministic); the global
-/// step solves (M/h^2 + C/h + L) x = M y / h^2 + f_g + C (x0 + h w)/h + J d for the free particles,
-/// with x, y and z as three right-hand sides of one n x n CHOLMOD factorization (METIS nested
-/// dissection ordering: less fill than AMD on cloth grids), solved by hooke's own
-/// supernodal triangular solves (SupernodalSolver: several times faster than cholmod_l_solve2
-/// here, see bench/fast_mass_spring_bench.cpp). Pinned particles
-/// are eliminated and move with their velocity (x1 = x0 + h v0, v1 = v0).
+/// d_s = L_s (x_i - x_j) / |x_i - x_j| (in parallel over particle ranges, deterministic); the
+/// global step solves (M/h^2 + C/h + L) x = M y / h^2 + f_g + C (x0 + h w)/h + J d for the free
+/// particles, with x, y and z as three right-hand sides of one n x n CHOLMOD factorization (METIS
+/// nested dissection ordering: less fill than AMD on cloth grids), solved by hooke's own supernodal
+/// triangular solves (SupernodalSolver: several times faster than cholmod_l_solve2 here, see
+/// bench/fast_mass_spring_bench.cpp). Pinned particles are eliminated and move with their velocity
+/// (x1 = x0 + h v0, v1 = v0).
 ///
 /// The matrix is analysed once (its pattern never changes) and factored again only when h or the
 /// system's revision() (a stiffness change) differs from the factored one. With global_solver =
@@ -158,28 +158,29 @@ class FastMassSpringStepper final : public Stepper {
   const MassSpringSystem& m_sys;
   FastMassSpringOptions m_opt;
   SpringPotentialForces m_f;  // springs, gravity, drag and wind of the system
-  std::vector<Index> m_free;             // free particle ids, by row of the global system
-  std::vector<Index> m_row;              // row of each particle, -1 if pinned
+  std::vector<Index> m_free;  // free particle ids, by row of the global system
+  std::vector<Index> m_row;   // row of each particle, -1 if pinned
 
-  SparseMatrix m_A;                      // global matrix, free x free, both triangles
-  std::vector<Index> m_diag;             // value index of each row's diagonal entry
-  std::vector<std::vector<std::array<Index, 4>>> m_slots;  // per set and spring: ii, jj, ij, ji (-1 if pinned)
+  SparseMatrix m_A;           // global matrix, free x free, both triangles
+  std::vector<Index> m_diag;  // value index of each row's diagonal entry
+  std::vector<std::vector<std::array<Index, 4>>>
+      m_slots;      // per set and spring: ii, jj, ij, ji (-1 if pinned)
   struct PinLink {  // a spring from free row r to pinned particle q: b_r += k y_q
     Index r, q;
     size_t set, spring;
   };
   std::vector<PinLink> m_pin_links;
   std::unique_ptr<CholmodSolver> m_chol;  // null with global_solver = "jacobi"
-  Vec m_inv_diag;                          // 1 / A_rr (global_solver = "jacobi")
+  Vec m_inv_diag;                         // 1 / A_rr (global_solver = "jacobi")
   double m_factored_h = 0.0;
   unsigned long long m_factored_revision = ~0ULL;
   int m_factorizations = 0;
   double m_last_factor_seconds = 0.0;
 
   // Per-step scratch (sized once).
-  Vec m_y, m_acc, m_x, m_xprev, m_xhat;  // 3n vectors, particle-major
+  Vec m_y, m_acc, m_x, m_xprev, m_xhat;                 // 3n vectors, particle-major
   Rows3 m_const, m_B, m_X, m_G, m_Gnew, m_D, m_Xtrial;  // free x 3
-  std::vector<Rows3> m_s, m_t;  // L-BFGS history
+  std::vector<Rows3> m_s, m_t;                          // L-BFGS history
   std::vector<double> m_rho_lbfgs, m_alpha;
   std::vector<double> m_group_energy;
   double m_h = 0.0;

@@ -10,15 +10,16 @@
 #include <stdexcept>
 #include <type_traits>
 
-#include "hooke/whole_step/sundials_detail.hpp"
 #include "hooke/model/mass_spring_ode.hpp"
+#include "hooke/whole_step/sundials_detail.hpp"
 
 namespace hooke {
 
 OptionError IdaOptions::validate() const {
   if (OptionError err = validate_shared("ida"); !err.ok()) return err;
   if (max_order < 1 || max_order > 5)
-    return {"max_order", "ida: max_order = " + std::to_string(max_order) + " must be in 1..5 (BDF)"};
+    return {"max_order",
+            "ida: max_order = " + std::to_string(max_order) + " must be in 1..5 (BDF)"};
   return {};
 }
 
@@ -248,10 +249,13 @@ Status IdaStepper::Impl::classify(int flag) {
     case IDA_TOO_MUCH_WORK:
     case IDA_TOO_MUCH_ACC:
     case IDA_ERR_FAIL:
-    case IDA_CONV_FAIL: return Status::NotConverged;
+    case IDA_CONV_FAIL:
+      return Status::NotConverged;
     case IDA_LSETUP_FAIL:
-    case IDA_LSOLVE_FAIL: return Status::BrokeDown;
-    default: return Status::Fatal;
+    case IDA_LSOLVE_FAIL:
+      return Status::BrokeDown;
+    default:
+      return Status::Fatal;
   }
 }
 

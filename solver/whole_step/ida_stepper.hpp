@@ -4,9 +4,9 @@
 #include <memory>
 #include <string>
 
-#include "hooke/whole_step/sundials_common.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "hooke/whole_step/sundials_common.hpp"
 
 namespace hooke {
 

@@ -11,8 +11,9 @@ std::string SpringPotentialForces::unsupported(const MassSpringSystem& system,
   for (const auto& f : system.forces())
     if (!dynamic_cast<const HookeSpring*>(f.get()) && !dynamic_cast<const Gravity*>(f.get()) &&
         !dynamic_cast<const AirDrag*>(f.get()))
-      return method + " handles Hooke springs, gravity and air drag (" + why + "); this scene has a '" +
-             f->name() + "' force (use air drag for damping, or an implicit method)";
+      return method + " handles Hooke springs, gravity and air drag (" + why +
+             "); this scene has a '" + f->name() +
+             "' force (use air drag for damping, or an implicit method)";
   return "";
 }
 

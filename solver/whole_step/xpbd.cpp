@@ -11,15 +11,17 @@
 namespace hooke {
 
 OptionError XpbdOptions::validate() const {
-  if (substeps < 1) return {"substeps", "substeps = " + std::to_string(substeps) + ": must be >= 1"};
+  if (substeps < 1)
+    return {"substeps", "substeps = " + std::to_string(substeps) + ": must be >= 1"};
   if (iterations < 1)
     return {"iterations", "iterations = " + std::to_string(iterations) + ": must be >= 1"};
   return {};
 }
 
 std::string xpbd_unsupported(const MassSpringSystem& system) {
-  return SpringPotentialForces::unsupported(system, "xpbd",
-                                             "springs become compliant distance constraints; spring dampers have no such form here");
+  return SpringPotentialForces::unsupported(
+      system, "xpbd",
+      "springs become compliant distance constraints; spring dampers have no such form here");
 }
 
 XpbdStepper::XpbdStepper(const MassSpringSystem& system, XpbdOptions options)
@@ -30,7 +32,8 @@ XpbdStepper::XpbdStepper(const MassSpringSystem& system, XpbdOptions options)
     throw std::invalid_argument("xpbd: " + why);
   const Index n = system.num_particles();
   m_w.resize(n);
-  for (Index p = 0; p < n; ++p) m_w[p] = system.pinned()[size_t(p)] ? 0.0 : 1.0 / system.masses()[p];
+  for (Index p = 0; p < n; ++p)
+    m_w[p] = system.pinned()[size_t(p)] ? 0.0 : 1.0 / system.masses()[p];
   m_p.setZero(3 * n);
   for (const SpringSet* s : m_f.springs) m_lambda.emplace_back(s->size(), 0.0);
 }

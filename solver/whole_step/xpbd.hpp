@@ -2,11 +2,11 @@
 #include <string>
 #include <vector>
 
-#include "hooke/whole_step/spring_potential_forces.hpp"
 #include "hooke/forces/spring_set.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/options.hpp"
+#include "hooke/whole_step/spring_potential_forces.hpp"
 
 namespace hooke {
 
@@ -30,7 +30,8 @@ std::string xpbd_unsupported(const MassSpringSystem& system);
 ///   p = x + hs v;  lambda = 0;
 ///   for each sweep, for each spring in mesh order (Gauss-Seidel):
 ///     dlambda = (-C(p) - alpha~ lambda) / (w_i + w_j + alpha~),  alpha~ = alpha / hs^2,
-///     p_i += w_i dlambda n,  p_j -= w_j dlambda n,  lambda += dlambda   (n = (p_i - p_j)/|p_i - p_j|);
+///     p_i += w_i dlambda n,  p_j -= w_j dlambda n,  lambda += dlambda   (n = (p_i - p_j)/|p_i -
+///     p_j|);
 ///   v = (p - x) / hs;  x = p.
 /// Pinned particles have w = 0 and move with their velocity. Springs with k = 0 are skipped.
 /// The sweep is serial (Gauss-Seidel order is part of the method), hence deterministic.
@@ -51,9 +52,9 @@ class XpbdStepper final : public Stepper {
  private:
   const MassSpringSystem& m_sys;
   XpbdOptions m_opt;
-  SpringPotentialForces m_f;  // springs, gravity, drag and wind of the system
-  Vec m_w;                           // inverse mass per particle (0 if pinned)
-  Vec m_p;                           // 3n predicted positions
+  SpringPotentialForces m_f;                  // springs, gravity, drag and wind of the system
+  Vec m_w;                                    // inverse mass per particle (0 if pinned)
+  Vec m_p;                                    // 3n predicted positions
   std::vector<std::vector<double>> m_lambda;  // per set and spring
   long long m_steps = 0;
   double m_seconds = 0.0;

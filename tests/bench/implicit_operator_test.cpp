@@ -45,7 +45,8 @@ TEST(ImplicitOperator, EqualsTheAssembledReducedMatrix) {
           Vec got(R.free_dofs());
           op.apply(p, got);
           EXPECT_LT((got - want).norm(), 1e-13 * want.norm())
-              << "rest_scale " << rest_scale << " clamp " << clamp << " position terms " << position_terms;
+              << "rest_scale " << rest_scale << " clamp " << clamp << " position terms "
+              << position_terms;
           ++checked;
         }
       }

@@ -134,8 +134,8 @@ TEST(GroundPlane, FrictionReducesTangentialVelocity) {
   std::vector<char> pinned(2, 0);
   Vec x1(6), v1(6);
   x1 << 0, -0.1, 0, 1, -0.1, 0;
-  v1 << 1.0, -1.0, 0.0,   // |vt| = 1, vn = -1: slides on with 1 - 0.5 * 1 = 0.5
-      0.2, -1.0, 0.0;     // |vt| = 0.2 < mu |vn|: sticks
+  v1 << 1.0, -1.0, 0.0,  // |vt| = 1, vn = -1: slides on with 1 - 0.5 * 1 = 0.5
+      0.2, -1.0, 0.0;    // |vt| = 0.2 < mu |vn|: sticks
   plane.project(x1, 0.01, pinned, x1, v1);
   EXPECT_LE((Vec3(v1.segment<3>(0)) - Vec3(0.5, 0, 0)).norm(), 1e-15);
   EXPECT_LE(Vec3(v1.segment<3>(3)).norm(), 1e-15);

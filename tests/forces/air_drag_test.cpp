@@ -1,6 +1,8 @@
 // Accuracy claims of solver/forces/air_drag.*: the force is -c (v - w) per particle (the wind w
 // pushes particles at rest and leaves particles moving with it alone), D = df/dv matches central
 // differences and equals -c I per diagonal block, and K = df/dx is zero.
+#include "hooke/forces/air_drag.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -9,7 +11,6 @@
 #include <random>
 #include <vector>
 
-#include "hooke/forces/air_drag.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"

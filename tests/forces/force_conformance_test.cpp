@@ -71,10 +71,14 @@ constexpr int kSamples = 4 * kSamplesPerConfig;  // per force and claim
 
 const char* config_name(Config c) {
   switch (c) {
-    case Config::Random: return "random";
-    case Config::Compressed: return "compressed";
-    case Config::NearCollinear: return "near-collinear";
-    case Config::NearZeroLength: return "near-zero-length";
+    case Config::Random:
+      return "random";
+    case Config::Compressed:
+      return "compressed";
+    case Config::NearCollinear:
+      return "near-collinear";
+    case Config::NearZeroLength:
+      return "near-zero-length";
   }
   return "?";
 }
@@ -91,13 +95,13 @@ struct Pair {
 struct Configuration {
   Config kind = Config::Random;
   int n = 0;
-  Vec x, v;                 ///< 3n positions (m) and velocities (m/s)
-  std::vector<Pair> pairs;  ///< springs and dampers
-  Vec masses;               ///< n masses (kg)
-  Vec3 g = Vec3::Zero();    ///< gravity (m/s^2)
-  double drag = 0.0;        ///< air drag coefficient (kg/s per particle)
-  Vec3 wind = Vec3::Zero(); ///< wind velocity (m/s)
-  Vec hx;                   ///< 3n FD steps of the positions
+  Vec x, v;                  ///< 3n positions (m) and velocities (m/s)
+  std::vector<Pair> pairs;   ///< springs and dampers
+  Vec masses;                ///< n masses (kg)
+  Vec3 g = Vec3::Zero();     ///< gravity (m/s^2)
+  double drag = 0.0;         ///< air drag coefficient (kg/s per particle)
+  Vec3 wind = Vec3::Zero();  ///< wind velocity (m/s)
+  Vec hx;                    ///< 3n FD steps of the positions
 };
 
 double length(const Configuration& c, const Pair& p) {
@@ -308,9 +312,8 @@ TEST_P(ForceConformance, ConservativeForceIsMinusEnergyGradient) {
         continue;
       }
       ASSERT_NE(E, 0.0);
-      const Vec grad = central_gradient(
-          [&](const Vec& y) { return s.force->potential_energy(y); }, s.c.x,
-          Vec(kEnergyStepFactor * s.c.hx));
+      const Vec grad = central_gradient([&](const Vec& y) { return s.force->potential_energy(y); },
+                                        s.c.x, Vec(kEnergyStepFactor * s.c.hx));
       const Vec f = force_at(*s.force, s.c.x, s.c.v);
       ASSERT_TRUE(near_entrywise(f, -grad, kRelTol, kFloorRel));
       EXPECT_EQ(f, force_at(*s.force, s.c.x, Vec::Zero(s.c.v.size())))
@@ -452,7 +455,8 @@ INSTANTIATE_TEST_SUITE_P(, ForceConformance, ::testing::ValuesIn(cases()),
 
 TEST(ForceConformanceCoverage, CasesCoverEveryForceAndTheExpectedProductProviders) {
   // Every concrete Force in solver/forces/, by name(): a new force must join cases().
-  const std::set<std::string> every_force = {"air-drag", "gravity", "hooke-spring", "spring-damper"};
+  const std::set<std::string> every_force = {"air-drag", "gravity", "hooke-spring",
+                                             "spring-damper"};
   // All of them give the matrix-free product, so ImplicitOperator (which needs every force of a
   // system to) works on any system built from them.
   const std::vector<std::string> expected_providers = {"HookeSpring", "SpringDamper", "Gravity",

@@ -1,5 +1,7 @@
-// Accuracy claims of solver/forces/gravity.*: f_i = m_i g, the force is minus the central-difference
-// gradient of the energy -sum m_i g . x_i, and K = D = 0 in an assembled system.
+// Accuracy claims of solver/forces/gravity.*: f_i = m_i g, the force is minus the
+// central-difference gradient of the energy -sum m_i g . x_i, and K = D = 0 in an assembled system.
+#include "hooke/forces/gravity.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -8,7 +10,6 @@
 #include <random>
 #include <vector>
 
-#include "hooke/forces/gravity.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"

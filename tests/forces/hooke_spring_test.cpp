@@ -4,6 +4,8 @@
 // energy; the internal forces sum to zero; K is symmetric with rigid translations in its null
 // space; and clamp_compressed makes K negative semi-definite while the exact K of a compressed
 // spring is indefinite.
+#include "hooke/forces/hooke_spring.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -13,7 +15,6 @@
 #include <random>
 #include <vector>
 
-#include "hooke/forces/hooke_spring.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"
@@ -126,8 +127,8 @@ Sample make_sample(Config kind, std::mt19937& rng) {
       x.resize(3 * n);
       const Vec3 dir = random_unit(rng), origin(U(rng), U(rng), U(rng));
       for (int i = 0; i < n; ++i)
-        x.segment<3>(3 * i) = origin + (0.8 * i + 0.2 * U(rng)) * dir +
-                              1e-5 * Vec3(U(rng), U(rng), U(rng));
+        x.segment<3>(3 * i) =
+            origin + (0.8 * i + 0.2 * U(rng)) * dir + 1e-5 * Vec3(U(rng), U(rng), U(rng));
       for (int i = 0; i + 1 < n; ++i) springs.push_back({i, i + 1, stiff(rng), 0.0});
       for (int i = 0; i + 2 < n; ++i) springs.push_back({i, i + 2, stiff(rng), 0.0});
       break;
@@ -147,16 +148,18 @@ Sample make_sample(Config kind, std::mt19937& rng) {
     }
   }
   for (auto& sp : springs)
-    if (sp.L == 0.0)
-      sp.L = ratio(rng) * (x.segment<3>(3 * sp.a) - x.segment<3>(3 * sp.b)).norm();
+    if (sp.L == 0.0) sp.L = ratio(rng) * (x.segment<3>(3 * sp.a) - x.segment<3>(3 * sp.b)).norm();
   return {make_spring_system(n, springs), x};
 }
 
 const char* config_name(Config c) {
   switch (c) {
-    case Config::Random: return "random";
-    case Config::NearCollinear: return "near-collinear";
-    case Config::NearZeroLength: return "near-zero-length";
+    case Config::Random:
+      return "random";
+    case Config::NearCollinear:
+      return "near-collinear";
+    case Config::NearZeroLength:
+      return "near-zero-length";
   }
   return "?";
 }
@@ -210,8 +213,9 @@ TEST(HookeSpring, AssembledJacobianMatchesCentralDifferences) {
       ++compared;
       const auto& sp = smp.sys.spring->springs();
       for (size_t n = 0; n < sp.size(); ++n)
-        compressed_springs += (smp.x.segment<3>(3 * sp.i[n]) - smp.x.segment<3>(3 * sp.j[n]))
-                                  .norm() < sp.rest_length[n];
+        compressed_springs +=
+            (smp.x.segment<3>(3 * sp.i[n]) - smp.x.segment<3>(3 * sp.j[n])).norm() <
+            sp.rest_length[n];
     }
   }
   EXPECT_EQ(compared, 3 * kSamplesPerConfig);
@@ -314,7 +318,8 @@ TEST(HookeSpring, ClampedCompressedStiffnessIsNegativeSemidefinite) {
     x.tail<3>() = x.head<3>() - d;  // x_a - x_b = d
     Eigen::SelfAdjointEigenSolver<Dense> K_exact(assembled_K(sys, x, false));
     Eigen::SelfAdjointEigenSolver<Dense> K_clamped(assembled_K(sys, x, true));
-    EXPECT_GT(K_exact.eigenvalues().maxCoeff(), 1e-3 * k) << "exact compressed K should be indefinite";
+    EXPECT_GT(K_exact.eigenvalues().maxCoeff(), 1e-3 * k)
+        << "exact compressed K should be indefinite";
     EXPECT_LE(K_clamped.eigenvalues().maxCoeff(), 1e-12 * k);
     ++checked;
   }

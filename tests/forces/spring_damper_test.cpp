@@ -2,6 +2,8 @@
 // kernel and assembled D and K of a system) match central differences at random positions and
 // velocities, short and near-collinear springs included; the damping force never does positive
 // work, and the internal forces sum to zero.
+#include "hooke/forces/spring_damper.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -11,7 +13,6 @@
 #include <random>
 #include <vector>
 
-#include "hooke/forces/spring_damper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"
@@ -130,11 +131,10 @@ TEST(SpringDamper, AssembledJacobiansMatchCentralDifferences) {
 
       hooke::Jacobians J = smp.system->make_jacobians();
       smp.system->assemble_jacobians(smp.x, smp.v, J);
-      const Dense fd_x = central_jacobian(
-          [&](const Vec& y) { return damper_force(smp, y, smp.v); }, smp.x, smp.hx);
-      const Dense fd_v = central_jacobian(
-          [&](const Vec& y) { return damper_force(smp, smp.x, y); }, smp.v,
-          Vec::Constant(smp.v.size(), kStepRel));
+      const Dense fd_x = central_jacobian([&](const Vec& y) { return damper_force(smp, y, smp.v); },
+                                          smp.x, smp.hx);
+      const Dense fd_v = central_jacobian([&](const Vec& y) { return damper_force(smp, smp.x, y); },
+                                          smp.v, Vec::Constant(smp.v.size(), kStepRel));
       ASSERT_TRUE(near_entrywise(Dense(J.K), fd_x, kRelTol, kFloorRel))
           << "kind " << kind << " sample " << s;
       ASSERT_TRUE(near_entrywise(Dense(J.D), fd_v, kRelTol, kFloorRel))

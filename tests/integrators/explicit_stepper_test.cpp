@@ -10,6 +10,8 @@
 // range and every error stays well above round-off (checked). Final times are generic: at a whole
 // period of an oscillation the phase error cancels to first order and symmetric methods look one
 // order better than they are.
+#include "hooke/integrators/explicit_stepper.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -21,7 +23,6 @@
 #include <vector>
 
 #include "hooke/forces/hooke_spring.hpp"
-#include "hooke/integrators/explicit_stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/registry.hpp"
 #include "support/order.hpp"
@@ -41,9 +42,8 @@ constexpr double kSpringStiffness = 1.0;
 
 /// Expected order of each explicit method; a registered method missing here fails the sweep.
 const std::map<std::string, int>& expected_orders() {
-  static const std::map<std::string, int> m = {{"forward-euler", 1}, {"symplectic-euler", 1},
-                                               {"midpoint", 2},      {"trapezoid", 2},
-                                               {"rk4", 4}};
+  static const std::map<std::string, int> m = {
+      {"forward-euler", 1}, {"symplectic-euler", 1}, {"midpoint", 2}, {"trapezoid", 2}, {"rk4", 4}};
   return m;
 }
 
@@ -85,8 +85,8 @@ Vec integrate(const std::string& method, hooke::OdeSystem& ode, const Vec& X0, d
 /// Runs the error function for N0, 2 N0, ... (N0 = N0_high for methods of order >= 3) and
 /// checks/prints the fitted order.
 template <class ErrorOf>
-void check_order(const std::string& method, const char* problem, double T, int N0_low,
-                 int N0_high, ErrorOf error_of) {
+void check_order(const std::string& method, const char* problem, double T, int N0_low, int N0_high,
+                 ErrorOf error_of) {
   const auto it = expected_orders().find(method);
   ASSERT_NE(it, expected_orders().end()) << "no expected order listed for method " << method;
   const int N0 = it->second >= 3 ? N0_high : N0_low;

@@ -14,6 +14,8 @@
 // kHalvings times; the order is the least-squares slope of log(error at the final time) against
 // log(h), asserted to within kOrderMargin of the measured integer order. Final times are generic
 // (not whole periods).
+#include "hooke/integrators/implicit_stepper.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/SparseCholesky>
@@ -27,7 +29,6 @@
 
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
-#include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/model/mass_spring_system.hpp"
@@ -117,8 +118,8 @@ struct Scheme {
   const char* label;   // test name suffix
   const char* method;  // registry name
   double beta;
-  bool converged;      // Newton-converged (else one Newton step)
-  int order;           // measured order (asserted to within kOrderMargin)
+  bool converged;  // Newton-converged (else one Newton step)
+  int order;       // measured order (asserted to within kOrderMargin)
 };
 
 /// Runs error_of(N) for N0, 2 N0, ..., fits, prints and asserts the order.
@@ -186,7 +187,8 @@ TEST(ImplicitStepper, EveryBackendTakesSameClothStep) {
     const std::string name = info.name;
     // The stationary backends do not reach 1e-12 on this cloth within a test's budget.
     if (hooke::test::is_stationary_backend(name)) {
-      std::printf("[ 32x32 dv ] %-22s skipped (stationary: does not reach 1e-12 here)\n", name.c_str());
+      std::printf("[ 32x32 dv ] %-22s skipped (stationary: does not reach 1e-12 here)\n",
+                  name.c_str());
       continue;
     }
     ++expected;
@@ -202,10 +204,11 @@ TEST(ImplicitStepper, EveryBackendTakesSameClothStep) {
     if (name == reference) dv_ref = dv;
     const double dist_ref = (dv - dv_ref).norm() / dv_ref.norm();
     const double dist_ind = (dv - dv_independent).norm() / dv_independent.norm();
-    std::printf("[ 32x32 dv ] %-22s %5d linear iterations, |dv - dv_%s|/|dv| %.2e, "
-                "|dv - dv_ldlt|/|dv| %.2e\n",
-                name.c_str(), sum.iterations, reference.empty() ? "ldlt" : reference.c_str(),
-                dist_ref, dist_ind);
+    std::printf(
+        "[ 32x32 dv ] %-22s %5d linear iterations, |dv - dv_%s|/|dv| %.2e, "
+        "|dv - dv_ldlt|/|dv| %.2e\n",
+        name.c_str(), sum.iterations, reference.empty() ? "ldlt" : reference.c_str(), dist_ref,
+        dist_ind);
     EXPECT_LT(dist_ref, 1e-8) << name;
     EXPECT_LT(dist_ind, 1e-8) << name;
     // x1 = x0 + h v1, pinned particles fixed.
@@ -314,8 +317,8 @@ TEST(ImplicitMidpoint, UndampedSpringEnergyIsConserved) {
   // quadratic, and one Newton step solves the (linear) step equations.
   TwoParticleSpring sp(kSpringStiffness);
   const double s = 0.1 * sp.L, h = 0.5 / sp.omega();
-  const State st = integrate("implicit-midpoint", options(1.0, false), *sp.system, sp.initial(s),
-                             500 * h, 500);
+  const State st =
+      integrate("implicit-midpoint", options(1.0, false), *sp.system, sp.initial(s), 500 * h, 500);
   const double E0 = sp.energy(sp.initial(s));
   EXPECT_NEAR(sp.energy(st) / E0, 1.0, 1e-10);
   EXPECT_GT(std::abs(st.v[0]), 1e-3);  // still oscillating
@@ -389,8 +392,8 @@ TEST_P(SpringOrder, MatchesMeasuredOrderAgainstExactSolution) {
   const double s = 0.1 * sp.L, w = sp.omega();
   const double T = 1.3 * kPi / w;  // 0.65 periods
   check_order(sc, "two-particle-spring", T, 20, [&](int N) {
-    const State st = integrate(sc.method, options(sc.beta, sc.converged), *sp.system,
-                               sp.initial(s), T, N);
+    const State st =
+        integrate(sc.method, options(sc.beta, sc.converged), *sp.system, sp.initial(s), T, N);
     EXPECT_NEAR(st.t, T, 1e-12 * T);
     return scaled_error(st, sp.exact_xv(s, T), w);
   });
@@ -456,9 +459,10 @@ TEST(ImplicitStepper, NewtonConvergedStepSolvesBackwardEulerEquations) {
     const Vec lhs = sys.mass_diagonal().cwiseProduct(s1.v - cloth.state.v).cwiseProduct(mask);
     const Vec rhs = (h * f).cwiseProduct(mask);
     const double rel = (lhs - rhs).norm() / rhs.norm();
-    std::printf("[ newton   ] %-22s %3d Newton iterations, %6d linear iterations, "
-                "relative residual %.2e\n",
-                info.name, sum.newton_iterations, sum.iterations, rel);
+    std::printf(
+        "[ newton   ] %-22s %3d Newton iterations, %6d linear iterations, "
+        "relative residual %.2e\n",
+        info.name, sum.newton_iterations, sum.iterations, rel);
     EXPECT_LT(rel, 1e-10) << info.name;
     EXPECT_GT(sum.newton_iterations, 2) << info.name;  // it did iterate
     ++checked;
@@ -525,8 +529,8 @@ TEST(ImplicitStepper, IndefiniteNewtonMatrixBreaksDownUnlessClamped) {
     const State sentinel = s1;
     const StepSummary sum = stepper->step(cloth.state, h, s1);
     EXPECT_EQ(sum.status, Status::BrokeDown) << info.name << ": " << sum.message;
-    EXPECT_NE(sum.message.find("positive definite"), std::string::npos) << info.name << ": "
-                                                                         << sum.message;
+    EXPECT_NE(sum.message.find("positive definite"), std::string::npos)
+        << info.name << ": " << sum.message;
     EXPECT_TRUE(s1 == sentinel) << info.name << ": a broken-down step wrote a state";
 
     opt.clamp_compressed = ImplicitOptions{}.clamp_compressed;  // the default: clamped
@@ -551,7 +555,8 @@ TEST(ImplicitOptions, ValidateRejectsBadValues) {
   for (double beta : {1.5, -0.1, nan}) {
     ImplicitOptions o;
     o.beta = beta;
-    EXPECT_NE(o.validate().message.find("beta"), std::string::npos) << beta << ": " << o.validate().message;
+    EXPECT_NE(o.validate().message.find("beta"), std::string::npos)
+        << beta << ": " << o.validate().message;
   }
   for (double beta : {0.0, 0.5, 1.0}) {
     ImplicitOptions o;
@@ -561,16 +566,20 @@ TEST(ImplicitOptions, ValidateRejectsBadValues) {
   ImplicitOptions o;
   o.newton_iterations = 0;
   EXPECT_EQ(o.validate().field, "newton_iterations") << o.validate().message;
-  EXPECT_NE(o.validate().message.find("newton_iterations"), std::string::npos) << o.validate().message;
+  EXPECT_NE(o.validate().message.find("newton_iterations"), std::string::npos)
+      << o.validate().message;
   o = {};
   o.newton_tolerance = 0.0;
-  EXPECT_NE(o.validate().message.find("newton_tolerance"), std::string::npos) << o.validate().message;
+  EXPECT_NE(o.validate().message.find("newton_tolerance"), std::string::npos)
+      << o.validate().message;
   o = {};
   o.linear_tolerance = -1e-8;
-  EXPECT_NE(o.validate().message.find("linear_tolerance"), std::string::npos) << o.validate().message;
+  EXPECT_NE(o.validate().message.find("linear_tolerance"), std::string::npos)
+      << o.validate().message;
   o = {};
   o.max_linear_iterations = 0;
-  EXPECT_NE(o.validate().message.find("max_linear_iterations"), std::string::npos) << o.validate().message;
+  EXPECT_NE(o.validate().message.find("max_linear_iterations"), std::string::npos)
+      << o.validate().message;
   // make_stepper refuses them.
   TwoParticleSpring sp(kSpringStiffness);
   ImplicitOptions mo;

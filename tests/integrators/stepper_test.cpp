@@ -52,7 +52,8 @@ TEST(StepperStats, ImplicitCountsNewtonLinearIterationsAndFactorizations) {
     EXPECT_EQ(st.linear_iterations, sums.iterations);
     EXPECT_EQ(st.last_residual, sums.last_residual);
     const bool direct = std::string(backend) == "cholmod";
-    EXPECT_EQ(st.factorizations, direct ? 12 : 0) << "one per Newton iteration for a direct backend";
+    EXPECT_EQ(st.factorizations, direct ? 12 : 0)
+        << "one per Newton iteration for a direct backend";
     EXPECT_EQ(st.linear_iterations > 0, !direct);
     EXPECT_GT(st.assembly_seconds, 0.0);
     EXPECT_GT(st.solve_seconds, 0.0);

@@ -15,7 +15,6 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/SparseCholesky>
-#include <unsupported/Eigen/KroneckerProduct>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -23,6 +22,7 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <unsupported/Eigen/KroneckerProduct>
 #include <vector>
 
 #include "hooke/integrators/reduced_matrix.hpp"
@@ -115,9 +115,9 @@ double relative_distance(const Vec& a, const Vec& ref) { return (a - ref).norm()
 
 std::string describe(const LinearSummary& s) {
   char buf[256];
-  std::snprintf(buf, sizeof buf, "status %s, %d iterations, residual %.3e, factor %.3g s, solve %.3g s",
-                hooke::to_string(s.status), s.iterations, s.residual, s.factor_seconds,
-                s.solve_seconds);
+  std::snprintf(
+      buf, sizeof buf, "status %s, %d iterations, residual %.3e, factor %.3g s, solve %.3g s",
+      hooke::to_string(s.status), s.iterations, s.residual, s.factor_seconds, s.solve_seconds);
   return std::string(buf) + (s.message.empty() ? "" : ", message: " + s.message);
 }
 
@@ -359,9 +359,10 @@ TEST(LinearConformanceProblem, ConditionNumberJustifiesComparisonTolerance) {
   const SparseMatrix& A = cloth_problem().A();
   const auto [lmin, lmax] = extreme_eigenvalues(A, 300);
   const double cond = lmax / lmin;
-  std::printf("[ problem  ] 32x32 cloth step matrix: n %ld, nnz %ld, lambda in [%.3e, %.3e], "
-              "cond ~ %.3e\n",
-              long(A.rows()), long(A.nonZeros()), lmin, lmax, cond);
+  std::printf(
+      "[ problem  ] 32x32 cloth step matrix: n %ld, nnz %ld, lambda in [%.3e, %.3e], "
+      "cond ~ %.3e\n",
+      long(A.rows()), long(A.nonZeros()), lmin, lmax, cond);
   EXPECT_GT(lmin, 0.0);
   // Residual 1e-12 bounds the relative error by cond * 1e-12. The estimate is converged to 0.2%
   // after 300 iterations (2000 give 4.756e3 instead of 4.746e3); keep a factor 1.5 for it.
@@ -571,7 +572,8 @@ TEST(Cholmod, IndefiniteMatrixBreaksDownInFactor) {
   // And it recovers on the next factor() of an SPD matrix with the same pattern.
   SparseMatrix C = A;
   for (Index k = 0; k < C.nonZeros(); ++k)
-    if (C.valuePtr()[k] == 2.0) C.valuePtr()[k] = 0.5;  // the off-diagonal pairs: eigenvalues 1.5, 0.5, 1
+    if (C.valuePtr()[k] == 2.0)
+      C.valuePtr()[k] = 0.5;  // the off-diagonal pairs: eigenvalues 1.5, 0.5, 1
   const LinearSummary g = chol->factor(C);
   EXPECT_EQ(g.status, Status::Converged) << describe(g);
   const Vec xstar = random_vector(30, 12);
@@ -744,7 +746,8 @@ TEST(SupernodalSolve, SameBitsWithOneOrTwoThreads) {
   hooke::SupernodalSolver sn(3);
   sn.bind(chol.supernodal_view());
   const auto shape = sn.shape();
-  ASSERT_GT(shape.diagonal_entries + shape.off_diagonal_entries, 1e5) << "large enough to run on two threads";
+  ASSERT_GT(shape.diagonal_entries + shape.off_diagonal_entries, 1e5)
+      << "large enough to run on two threads";
   EXPECT_GT(shape.bin_fraction[0], 0.2) << "both halves of the tree have work";
   EXPECT_GT(shape.bin_fraction[1], 0.2);
   EXPECT_NEAR(shape.top_fraction + shape.bin_fraction[0] + shape.bin_fraction[1], 1.0, 1e-12);
@@ -799,7 +802,8 @@ TEST(LinearSolveOptions, ValidateRejectsBadValues) {
     LinearSolveOptions o;
     o.tolerance = tol;
     const std::string err = o.validate();
-    EXPECT_NE(err.find("tolerance"), std::string::npos) << "tolerance " << tol << ": '" << err << "'";
+    EXPECT_NE(err.find("tolerance"), std::string::npos)
+        << "tolerance " << tol << ": '" << err << "'";
   }
   for (int it : {0, -5}) {
     LinearSolveOptions o;

@@ -150,7 +150,8 @@ TEST(NodalPreconditioner, FactorHasAboutANinthOfTheEntriesOfAsFactor) {
   const SparseMatrix& A = step->reduced->matrix();
   const auto pre = factored(A);
   hooke::CholmodOptions metis;
-  metis.ordering = hooke::CholmodOrdering::Metis;  // the ordering both pcg-cholmod and pcg-nodal use
+  metis.ordering =
+      hooke::CholmodOrdering::Metis;  // the ordering both pcg-cholmod and pcg-nodal use
   hooke::CholmodSolver full(metis);
   ASSERT_EQ(full.analyze(A).status, Status::Converged);
   ASSERT_EQ(full.factor(A).status, Status::Converged);

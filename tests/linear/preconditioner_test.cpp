@@ -1,7 +1,8 @@
-// Tests of the preconditioner concept (solver/linear/preconditioner.hpp, diagonal_preconditioners.*,
-// and the pairing in linear_registry.*): a Krylov method and a preconditioner are a pair of registry
-// names that make the same backend as the combined name, a preconditioner's failure stops the solve
-// with its status, and the diagonal preconditioners invert what they say they invert.
+// Tests of the preconditioner concept (solver/linear/preconditioner.hpp,
+// diagonal_preconditioners.*, and the pairing in linear_registry.*): a Krylov method and a
+// preconditioner are a pair of registry names that make the same backend as the combined name, a
+// preconditioner's failure stops the solve with its status, and the diagonal preconditioners invert
+// what they say they invert.
 #include <gtest/gtest.h>
 
 #include <memory>

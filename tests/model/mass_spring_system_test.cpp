@@ -2,6 +2,8 @@
 // pinned particles get zero velocity and acceleration through MassSpringOde while free ones get
 // f / m, and the assembled K and D of a system with several force types equal the central
 // differences of the whole system's compute_forces (the "assembled K and D" check).
+#include "hooke/model/mass_spring_system.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -16,7 +18,6 @@
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/forces/spring_damper.hpp"
 #include "hooke/model/mass_spring_ode.hpp"
-#include "hooke/model/mass_spring_system.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"
 

@@ -46,11 +46,13 @@ TEST(MethodReaders, ImplicitKeysFillImplicitOptions) {
   // The default linear backend is written into the resolved scene.
   const Scene d = load("method = \"bdf2\"\n");
   EXPECT_EQ(d.integrator.options.get<ImplicitOptions>()->linear_solver, default_linear_solver());
-  EXPECT_EQ(d.resolved["integrator"]["linear_solver"].value<std::string>(), default_linear_solver());
+  EXPECT_EQ(d.resolved["integrator"]["linear_solver"].value<std::string>(),
+            default_linear_solver());
 }
 
 TEST(MethodReaders, KrylovMethodAndPreconditionerAreAPairOfNames) {
-  const Scene s = load("method = \"implicit\"\nlinear_solver = \"pcg\"\npreconditioner = \"block\"\n");
+  const Scene s =
+      load("method = \"implicit\"\nlinear_solver = \"pcg\"\npreconditioner = \"block\"\n");
   const auto* o = s.integrator.options.get<ImplicitOptions>();
   ASSERT_NE(o, nullptr);
   EXPECT_EQ(o->preconditioner, "block");
@@ -66,7 +68,8 @@ TEST(MethodReaders, KrylovMethodAndPreconditionerAreAPairOfNames) {
   EXPECT_EQ(a.x, b.x);
   EXPECT_EQ(a.v, b.v);
   EXPECT_EQ(load_error("method = \"implicit\"\nlinear_solver = \"gauss-seidel\"\n"
-                       "preconditioner = \"jacobi\"\n").key(),
+                       "preconditioner = \"jacobi\"\n")
+                .key(),
             "integrator.preconditioner");
   const InputError unknown =
       load_error("method = \"implicit\"\nlinear_solver = \"pcg\"\npreconditioner = \"ilu\"\n");
@@ -85,7 +88,8 @@ TEST(MethodReaders, ValidateRulesAreReportedThroughTheSceneKey) {
   const InputError substeps = load_error("method = \"xpbd\"\nsubsteps = 0\n");
   EXPECT_EQ(substeps.key(), "integrator.substeps");
   // Integers beyond int are refused before they reach the options.
-  EXPECT_EQ(load_error("method = \"xpbd\"\niterations = 3000000000\n").key(), "integrator.iterations");
+  EXPECT_EQ(load_error("method = \"xpbd\"\niterations = 3000000000\n").key(),
+            "integrator.iterations");
 }
 
 TEST(MethodReaders, KeysOfAnotherMethodAreRefusedNamingTheMethod) {
@@ -120,11 +124,12 @@ TEST(MethodReaders, FastMassSpringChoicesAreEnumsAndCrossFieldRulesNameTheKey) {
   EXPECT_EQ(o->global_solver, GlobalSolver::Jacobi);
   EXPECT_EQ(o->warm_start, WarmStart::Previous);
   EXPECT_EQ(o->chebyshev_delay, 0);
-  const InputError unknown = load_error("method = \"fast-mass-spring\"\nacceleration = \"anderson\"\n");
+  const InputError unknown =
+      load_error("method = \"fast-mass-spring\"\nacceleration = \"anderson\"\n");
   EXPECT_EQ(unknown.key(), "integrator.acceleration");
   EXPECT_NE(unknown.reason().find("none, chebyshev, lbfgs"), std::string::npos) << unknown.reason();
-  const InputError lbfgs =
-      load_error("method = \"fast-mass-spring\"\nacceleration = \"lbfgs\"\nglobal_solver = \"jacobi\"\n");
+  const InputError lbfgs = load_error(
+      "method = \"fast-mass-spring\"\nacceleration = \"lbfgs\"\nglobal_solver = \"jacobi\"\n");
   EXPECT_EQ(lbfgs.key(), "integrator.global_solver");
   // chebyshev_delay >= 2 only when rho is estimated (chebyshev_rho = 0).
   EXPECT_EQ(load_error("method = \"fast-mass-spring\"\nchebyshev_delay = 1\n").key(),

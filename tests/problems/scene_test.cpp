@@ -2,6 +2,8 @@
 // every shipped scene loads, builders produce the springs and pins their formulas say, defaults
 // and --set overrides land in the resolved table, bad input is an InputError naming file and key,
 // and the two-particle exact solution solves the equations of motion.
+#include "problems/scene.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,8 +14,6 @@
 #include <map>
 #include <set>
 #include <sstream>
-
-#include "problems/scene.hpp"
 
 namespace hooke {
 namespace {
@@ -134,7 +134,8 @@ TEST(Scene, ResolvedTableReloadsToTheSameScene) {
     std::ostringstream text;
     text << a.resolved;
     // A different directory: paths in the resolved table must not depend on the scene's location.
-    const Scene b = load_scene_from_string(text.str(), "/nonexistent/elsewhere/" + f.filename().string());
+    const Scene b =
+        load_scene_from_string(text.str(), "/nonexistent/elsewhere/" + f.filename().string());
     EXPECT_EQ(a.integrator.method, b.integrator.method);
     EXPECT_EQ(a.time.dt, b.time.dt);
     EXPECT_EQ(a.time.duration, b.time.duration);
@@ -196,13 +197,15 @@ TEST(SceneGrid, SpringCountsMatchFormulas) {
 
 TEST(SceneGrid, FlexionStrideTwoStartsBendingSpringsAtEveryOtherParticle) {
   int checked = 0;
-  for (const auto& [nx, ny] : std::vector<std::pair<long long, long long>>{{3, 3}, {4, 5}, {7, 6}, {411, 411}}) {
-    const Scene s = load_scene_from_string(grid_text(nx, ny, true, true, true) + "flexion_stride = 2\n",
-                                           "grid.toml");
+  for (const auto& [nx, ny] :
+       std::vector<std::pair<long long, long long>>{{3, 3}, {4, 5}, {7, 6}, {411, 411}}) {
+    const Scene s = load_scene_from_string(
+        grid_text(nx, ny, true, true, true) + "flexion_stride = 2\n", "grid.toml");
     // Horizontal bending springs (i, j)-(i + 2, j) for even i <= nx - 3, vertical likewise.
     const long long structural = (nx - 1) * ny + nx * (ny - 1), shear = 2 * (nx - 1) * (ny - 1);
     const long long flexion = (nx - 1) / 2 * ny + nx * ((ny - 1) / 2);
-    EXPECT_EQ(static_cast<long long>(s.edges.size()), structural + shear + flexion) << nx << " x " << ny;
+    EXPECT_EQ(static_cast<long long>(s.edges.size()), structural + shear + flexion)
+        << nx << " x " << ny;
     long long bending = 0;
     for (const auto& e : s.edges) {
       const long long a = std::min(e[0], e[1]), b = std::max(e[0], e[1]);
@@ -220,10 +223,11 @@ TEST(SceneGrid, FlexionStrideTwoStartsBendingSpringsAtEveryOtherParticle) {
   }
   EXPECT_EQ(checked, 4);
   // The 411 x 411 grid of the local/global target has the 842k springs its description names.
-  const Scene target = load_scene_from_string(grid_text(411, 411, true, true, true) + "flexion_stride = 2\n",
-                                              "grid.toml");
+  const Scene target = load_scene_from_string(
+      grid_text(411, 411, true, true, true) + "flexion_stride = 2\n", "grid.toml");
   EXPECT_EQ(target.edges.size(), 841730u);
-  EXPECT_THROW(load_scene_from_string(grid_text(5, 5, true, true, true) + "flexion_stride = 3\n", "grid.toml"),
+  EXPECT_THROW(load_scene_from_string(grid_text(5, 5, true, true, true) + "flexion_stride = 3\n",
+                                      "grid.toml"),
                InputError);
 }
 
@@ -243,7 +247,8 @@ pins = [[-1, -1], [0, -1], [-5, -4], [2, -2]]
   EXPECT_EQ(pinned, (std::set<Index>{0, 12, 15, 19}));
   EXPECT_EQ(s.system->num_pinned(), 4);
 
-  const InputError e = load_error("[mesh]\ntype = \"grid\"\nnx = 5\nny = 4\npins = [[0, 0], [-6, 0]]\n");
+  const InputError e =
+      load_error("[mesh]\ntype = \"grid\"\nnx = 5\nny = 4\npins = [[0, 0], [-6, 0]]\n");
   EXPECT_EQ(e.key(), "mesh.pins[1]");
 }
 
@@ -313,10 +318,12 @@ TEST(SceneOverrides, ChangeValues) {
   // A section the scene did not have is created: gravity adds one force.
   EXPECT_EQ(s.system->forces().size(), base.system->forces().size() + 1);
 
-  const Scene q = load_scene_from_string(kTwoParticle, "two.toml", {"integrator.method=\"trapezoid\""});
+  const Scene q =
+      load_scene_from_string(kTwoParticle, "two.toml", {"integrator.method=\"trapezoid\""});
   EXPECT_EQ(q.integrator.method, "trapezoid");
   // Later overrides win.
-  const Scene r = load_scene_from_string(kTwoParticle, "two.toml", {"time.dt=0.002", "time.dt=0.004"});
+  const Scene r =
+      load_scene_from_string(kTwoParticle, "two.toml", {"time.dt=0.002", "time.dt=0.004"});
   EXPECT_EQ(r.time.dt, 0.004);
 }
 
@@ -325,15 +332,15 @@ TEST(SceneOverrides, BadPathIsAnInputError) {
     std::string item, file, key;
   };
   const std::vector<Case> cases = {
-      {"time.dtt=0.1", "two.toml", "time.dtt"},                // unknown key, found by the scene
-      {"time.dt.x=1", "<command line>", "time.dt.x"},          // dt is a number, not a table
-      {"time.dt", "<command line>", "time.dt"},                // no value
-      {"=3", "<command line>", "=3"},                          // no path
-      {"time..dt=1", "<command line>", "time..dt"},            // empty section name
-      {"time.=1", "<command line>", "time."},                  // empty key name
-      {"time.dt=-0.5", "two.toml", "time.dt"},                 // value out of range
+      {"time.dtt=0.1", "two.toml", "time.dtt"},        // unknown key, found by the scene
+      {"time.dt.x=1", "<command line>", "time.dt.x"},  // dt is a number, not a table
+      {"time.dt", "<command line>", "time.dt"},        // no value
+      {"=3", "<command line>", "=3"},                  // no path
+      {"time..dt=1", "<command line>", "time..dt"},    // empty section name
+      {"time.=1", "<command line>", "time."},          // empty key name
+      {"time.dt=-0.5", "two.toml", "time.dt"},         // value out of range
       {"integrator.method=rk5", "two.toml", "integrator.method"},  // unknown name
-      {"nosection=1", "two.toml", "nosection"},                // unknown top-level key
+      {"nosection=1", "two.toml", "nosection"},                    // unknown top-level key
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.item);
@@ -366,8 +373,8 @@ TEST(Scene, ResolvedTableHoldsDefaults) {
 }
 
 TEST(Scene, UnknownKeyNamesFileAndDottedKey) {
-  const InputError e = load_error(
-      "[mesh]\ntype = \"chain\"\n\n[springs]\nstifness = 500.0\n", "configs/my_chain.toml");
+  const InputError e = load_error("[mesh]\ntype = \"chain\"\n\n[springs]\nstifness = 500.0\n",
+                                  "configs/my_chain.toml");
   EXPECT_EQ(e.file(), "configs/my_chain.toml");
   EXPECT_EQ(e.key(), "springs.stifness");
   EXPECT_EQ(std::string(e.what()), "configs/my_chain.toml: springs.stifness: " + e.reason());
@@ -387,7 +394,8 @@ TEST(Scene, UnknownKeyNamesFileAndDottedKey) {
 }
 
 TEST(Scene, SyntaxErrorNamesTheLine) {
-  const InputError e = load_error("[mesh]\ntype = \"chain\"\n\n[time]\ndt = 1e-3\ndt = 2e-3\n", "dup.toml");
+  const InputError e =
+      load_error("[mesh]\ntype = \"chain\"\n\n[time]\ndt = 1e-3\ndt = 2e-3\n", "dup.toml");
   EXPECT_EQ(e.file(), "dup.toml");
   EXPECT_EQ(e.key().rfind("line 6", 0), 0u) << e.key();
 }

@@ -1,7 +1,7 @@
-// Claim of CONTRIBUTING.md, "The step loop": no heap allocation in the step loop. After one warm-up step, 200
-// steps of every explicit method through Simulation::advance on a small cloth (HookeSpring,
-// SpringDamper, Gravity, AirDrag, StrainLimit, GroundPlane) and 50 Jacobian assemblies allocate
-// nothing.
+// Claim of CONTRIBUTING.md, "The step loop": no heap allocation in the step loop. After one warm-up
+// step, 200 steps of every explicit method through Simulation::advance on a small cloth
+// (HookeSpring, SpringDamper, Gravity, AirDrag, StrainLimit, GroundPlane) and 50 Jacobian
+// assemblies allocate nothing.
 //
 // Counting: every global operator new / delete overload is replaced and counts through one atomic
 // counter. Eigen does not use operator new for its dense and sparse storage (it calls std::malloc
@@ -255,7 +255,8 @@ TEST(Allocation, JacobianAssemblyDoesNotAllocate) {
   clamp.clamp_compressed = true;
   sys->assemble_jacobians(s.x, s.v, J);  // warm-up
   const long before = g_allocations.load();
-  for (int k = 0; k < 50; ++k) sys->assemble_jacobians(s.x, s.v, J, (k % 2) ? clamp : hooke::JacobianOptions{});
+  for (int k = 0; k < 50; ++k)
+    sys->assemble_jacobians(s.x, s.v, J, (k % 2) ? clamp : hooke::JacobianOptions{});
   const long allocations = g_allocations.load() - before;
   EXPECT_EQ(allocations, 0) << "heap allocations in 50 Jacobian assemblies";
   EXPECT_GT(J.K.cwiseAbs().sum(), 0.0);
@@ -281,10 +282,10 @@ int openmp_threads() {
 }
 }  // namespace
 
-// Claim of CONTRIBUTING.md, "The step loop", for the implicit methods: after 2 warm-up steps (the second makes
-// BDF2 take its first true two-step step), 50 steps of every implicit method with every linear
-// backend, linearised (1 Newton iteration) and Newton-converged (up to 10), allocate nothing,
-// except inside CHOLMOD's numeric refactorization (see CholmodAllocatesOnlyInFactor): for
+// Claim of CONTRIBUTING.md, "The step loop", for the implicit methods: after 2 warm-up steps (the
+// second makes BDF2 take its first true two-step step), 50 steps of every implicit method with
+// every linear backend, linearised (1 Newton iteration) and Newton-converged (up to 10), allocate
+// nothing, except inside CHOLMOD's numeric refactorization (see CholmodAllocatesOnlyInFactor): for
 // "cholmod" the test asserts a fixed count per factorization (per Newton iteration), identical at
 // every step, i.e. no growth; every other backend must allocate nothing at all.
 //
@@ -303,8 +304,8 @@ TEST(Allocation, ImplicitStepsDoNotAllocate) {
     if (method.kind != hooke::MethodKind::Implicit) continue;
     for (const auto& backend : hooke::linear_solvers()) {
       for (int newton : {1, 10}) {
-        const std::string label = std::string(method.name) + " / " + backend.name +
-                                  " / newton " + std::to_string(newton);
+        const std::string label =
+            std::string(method.name) + " / " + backend.name + " / newton " + std::to_string(newton);
         hooke::ImplicitOptions opt;
         opt.linear_solver = backend.name;
         opt.newton_iterations = newton;
@@ -319,8 +320,8 @@ TEST(Allocation, ImplicitStepsDoNotAllocate) {
         bool messages = false;
         // cholmod factors every Newton iteration; pcg-cholmod and pcg-nodal reuse a factorization
         // and refactor only some steps: count the factorizations of each step.
-        const bool reuses = std::string(backend.name) != "cholmod" &&
-                            sim.stepper().stats().factorizations > 0;
+        const bool reuses =
+            std::string(backend.name) != "cholmod" && sim.stepper().stats().factorizations > 0;
         for (int k = 0; k < 50; ++k) {
           const long before = g_allocations.load();
           const long long factored_before = sim.stepper().stats().factorizations;
@@ -349,8 +350,9 @@ TEST(Allocation, ImplicitStepsDoNotAllocate) {
               per_factor = per_step[size_t(k)] / factorizations[size_t(k)];
           ASSERT_GT(factored, 0) << label;
           refactoring_runs += reuses;
-          std::printf("[ alloc    ] %-40s %ld allocations per CHOLMOD factorization, %d in 50 steps\n",
-                      label.c_str(), per_factor, factored);
+          std::printf(
+              "[ alloc    ] %-40s %ld allocations per CHOLMOD factorization, %d in 50 steps\n",
+              label.c_str(), per_factor, factored);
           for (int k = 0; k < 50; ++k)
             EXPECT_EQ(per_step[size_t(k)], per_factor * factorizations[size_t(k)])
                 << label << " step " << k << " (" << factorizations[size_t(k)]
@@ -366,7 +368,8 @@ TEST(Allocation, ImplicitStepsDoNotAllocate) {
   EXPECT_EQ(runs, 3 * 2 * int(hooke::linear_solvers().size()));
   // pcg-cholmod renews its factorization within the 50 steps: the per-factorization check ran.
   bool reusing = false;
-  for (const auto& b : hooke::linear_solvers()) reusing = reusing || std::string(b.name) == "pcg-cholmod";
+  for (const auto& b : hooke::linear_solvers())
+    reusing = reusing || std::string(b.name) == "pcg-cholmod";
   if (reusing) {
     EXPECT_GT(refactoring_runs, 0);
   }
@@ -433,14 +436,17 @@ TEST(Allocation, LocalGlobalAndXpbdStepsDoNotAllocate) {
     for (double tol : {0.0, 1e-6}) {
       hooke::FastMassSpringOptions o;
       const std::string variant = a;
-      o.acceleration = *hooke::from_string<hooke::Acceleration>(variant.substr(0, variant.find('/')));
-      if (variant.find("/jacobi") != std::string::npos) o.global_solver = hooke::GlobalSolver::Jacobi;
+      o.acceleration =
+          *hooke::from_string<hooke::Acceleration>(variant.substr(0, variant.find('/')));
+      if (variant.find("/jacobi") != std::string::npos)
+        o.global_solver = hooke::GlobalSolver::Jacobi;
       o.tolerance = tol;
       o.iterations = 20;
       o.chebyshev_delay = 4;
       if (hooke::method_unsupported("fast-mass-spring", *sys).empty() &&
           std::string(hooke::method_names()).find("fast-mass-spring") != std::string::npos)
-        runs.push_back({"fast-mass-spring", "fast-mass-spring / " + variant + " / tol " + std::to_string(tol), o});
+        runs.push_back({"fast-mass-spring",
+                        "fast-mass-spring / " + variant + " / tol " + std::to_string(tol), o});
     }
   runs.push_back({"xpbd", "xpbd", {}});
   for (const auto& [name, label, opt] : runs) {

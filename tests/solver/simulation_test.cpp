@@ -2,12 +2,13 @@
 // set_max_step_halvings(M) it is retried as two half steps (recursively, down to h / 2^M) that end
 // exactly at t + h, each retry reported to the observer, iterations summed, and the count of
 // retried steps kept.
+#include "hooke/simulation.hpp"
+
 #include <gtest/gtest.h>
 
 #include <memory>
 #include <vector>
 
-#include "hooke/simulation.hpp"
 #include "support/systems.hpp"
 
 namespace hooke {
@@ -17,7 +18,8 @@ namespace {
 /// h_max, and 1 iteration per accepted step.
 class FailsAboveStep final : public Stepper {
  public:
-  FailsAboveStep(const MassSpringSystem& sys, double h_max) : m_sys(sys), m_h_max(h_max), m_f(sys.dofs()) {}
+  FailsAboveStep(const MassSpringSystem& sys, double h_max)
+      : m_sys(sys), m_h_max(h_max), m_f(sys.dofs()) {}
   const char* name() const override { return "fails-above-step"; }
   StepSummary step(const State& s0, double h, State& s1) override {
     ++calls;
@@ -82,7 +84,8 @@ TEST(Simulation, FailedStepIsRetriedAsHalvesThatLandOnTPlusH) {
   EXPECT_EQ(raw->calls, 1 + 2 + 4);
   EXPECT_EQ(sim.halved_steps(), 1);
   // A step that needs three halvings fails with two, at the substep that failed.
-  Simulation short_of(*sp.system, std::make_unique<FailsAboveStep>(*sp.system, 0.001), sp.initial(0.1));
+  Simulation short_of(*sp.system, std::make_unique<FailsAboveStep>(*sp.system, 0.001),
+                      sp.initial(0.1));
   short_of.set_accept_not_converged(false);
   short_of.set_max_step_halvings(2);
   EXPECT_EQ(short_of.advance(h).status, Status::NotConverged);

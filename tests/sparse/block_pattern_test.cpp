@@ -2,14 +2,14 @@
 // (row, col) entries of that block in the matrix from make_matrix(), declared pairs are stored
 // symmetrically, undeclared blocks are rejected with hooke::InternalError, and every diagonal block
 // exists even when nothing was declared.
+#include "hooke/sparse/block_pattern.hpp"
+
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
 #include <set>
 #include <utility>
 #include <vector>
-
-#include "hooke/sparse/block_pattern.hpp"
 
 namespace {
 
@@ -89,8 +89,8 @@ TEST(BlockPattern, UndeclaredBlockThrows) {
   EXPECT_THROW(p.slot(0, 2), hooke::InternalError);
   EXPECT_THROW(p.slot(4, 1), hooke::InternalError);
   EXPECT_THROW(p.slot(1, 4), hooke::InternalError);
-  EXPECT_THROW(p.slot(0, 5), hooke::InternalError);   // outside the pattern
-  EXPECT_THROW(p.slot(-1, 0), hooke::InternalError);  // outside the pattern
+  EXPECT_THROW(p.slot(0, 5), hooke::InternalError);      // outside the pattern
+  EXPECT_THROW(p.slot(-1, 0), hooke::InternalError);     // outside the pattern
   EXPECT_THROW(p.add_pair(0, 4), hooke::InternalError);  // after finalize
 }
 

@@ -1,6 +1,6 @@
 // Scenes shared by the whole-step backend tests (ceres-implicit, fast-mass-spring, xpbd): a cloth
-// hanging from two corners with gravity and wind drag, a stiff chain, and hooke's own Newton-iterated
-// backward Euler step as the reference step.
+// hanging from two corners with gravity and wind drag, a stiff chain, and hooke's own
+// Newton-iterated backward Euler step as the reference step.
 #pragma once
 
 #include <cmath>
@@ -25,7 +25,8 @@ struct Scene {
 /// gravity and folds in 3D. Structural, shear and flexion HookeSprings (k 1e4 / 1e3 / 1e2 N/m,
 /// rest lengths rest_scale times the grid distances), Gravity, and AirDrag c (kg/s) with a wind,
 /// so that every supported term is used. stiffness_scale multiplies all three stiffnesses.
-inline Scene hanging_cloth(int n, double drag, double rest_scale = 1.0, double stiffness_scale = 1.0) {
+inline Scene hanging_cloth(int n, double drag, double rest_scale = 1.0,
+                           double stiffness_scale = 1.0) {
   const int np = n * n;
   const double s = 1.0 / (n - 1), m = 1.0 / np;
   std::vector<char> pinned(size_t(np), 0);

@@ -1,5 +1,6 @@
 // Central finite differences and the entrywise comparison of an analytic matrix with them, shared
-// by the Jacobian accuracy tests (CONTRIBUTING.md, "Tests": relative tolerance with an absolute floor).
+// by the Jacobian accuracy tests (CONTRIBUTING.md, "Tests": relative tolerance with an absolute
+// floor).
 #pragma once
 
 #include <gtest/gtest.h>

@@ -23,11 +23,11 @@
 #include <utility>
 #include <vector>
 
-#include "hooke/whole_step/ceres_implicit_stepper.hpp"
 #include "hooke/forces/air_drag.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/registry.hpp"
+#include "hooke/whole_step/ceres_implicit_stepper.hpp"
 #include "support/backend_scenes.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"
@@ -54,7 +54,6 @@ CeresImplicitOptions with_formulation(const char* formulation) {
   o.formulation = hooke::from_string<hooke::CeresFormulation>(formulation).value();
   return o;
 }
-
 
 /// Free DOFs of a system (3 per unpinned particle, in increasing particle id).
 std::vector<Index> free_dofs(const MassSpringSystem& system) {
@@ -419,7 +418,8 @@ TEST(CeresImplicitStepper, OptionsValidateRejectsBadValues) {
   // Choices are enums: names that are none of them are refused where text is read (scenes).
   EXPECT_FALSE(hooke::from_string<hooke::CeresFormulation>("newton"));
   EXPECT_FALSE(hooke::from_string<hooke::CeresLinearSolver>("qr"));
-  EXPECT_EQ(hooke::choice_names<hooke::CeresLinearSolver>(), "sparse-normal-cholesky, dense-qr, cgnr");
+  EXPECT_EQ(hooke::choice_names<hooke::CeresLinearSolver>(),
+            "sparse-normal-cholesky, dense-qr, cgnr");
 }
 
 TEST(CeresImplicitStepper, FailureIsAStatusNotAnException) {

@@ -15,8 +15,6 @@
 
 #if HOOKE_WITH_SUNDIALS  // the whole file tests a backend this build may lack
 
-#include "hooke/whole_step/cvode_stepper.hpp"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -26,6 +24,7 @@
 #include <string>
 
 #include "hooke/registry.hpp"
+#include "hooke/whole_step/cvode_stepper.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"
 #include "support/systems.hpp"

@@ -17,10 +17,10 @@
 #include <string>
 #include <vector>
 
-#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/forces/spring_damper.hpp"
 #include "hooke/registry.hpp"
+#include "hooke/whole_step/fast_mass_spring.hpp"
 #include "support/backend_scenes.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"
@@ -48,7 +48,8 @@ State moving_state(const Scene& scene, double h, int steps) {
   return s;
 }
 
-FastMassSpringOptions with(const std::string& acceleration, int iterations, double tolerance = 0.0) {
+FastMassSpringOptions with(const std::string& acceleration, int iterations,
+                           double tolerance = 0.0) {
   FastMassSpringOptions o;
   o.acceleration = hooke::from_string<hooke::Acceleration>(acceleration).value();
   o.chebyshev_delay = 10;
@@ -80,7 +81,8 @@ TEST(FastMassSpring, ObjectiveGradientIsTheBackwardEulerResidual) {
     Vec x = y + test::random_vec(y.size(), -0.02, 0.02, rng);
     for (Index p = 0; p < scene.system->num_particles(); ++p)
       if (scene.system->pinned()[size_t(p)]) x.segment<3>(3 * p) = y.segment<3>(3 * p);
-    const Vec fd = test::central_gradient([&](const Vec& z) { return fms.objective(s0, h, z); }, x, 1e-6);
+    const Vec fd =
+        test::central_gradient([&](const Vec& z) { return fms.objective(s0, h, z); }, x, 1e-6);
     Vec f(x.size());
     const Vec v1 = (x - s0.x) / h;
     scene.system->compute_forces(x, v1, f);
@@ -146,7 +148,8 @@ INSTANTIATE_TEST_SUITE_P(Accelerations, FastMassSpringConvergence,
                                            Variant{"chebyshev", 100, "jacobi"}),
                          [](const auto& info) {
                            return std::string(info.param.acceleration) +
-                                  (std::string(info.param.global_solver) == "jacobi" ? "Jacobi" : "");
+                                  (std::string(info.param.global_solver) == "jacobi" ? "Jacobi"
+                                                                                     : "");
                          });
 
 TEST(FastMassSpring, PlainIterationsLowerTheObjectiveEveryTime) {

@@ -14,8 +14,6 @@
 
 #if HOOKE_WITH_SUNDIALS  // the whole file tests a backend this build may lack
 
-#include "hooke/whole_step/ida_stepper.hpp"
-
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
@@ -25,6 +23,7 @@
 #include <string>
 
 #include "hooke/whole_step/cvode_stepper.hpp"
+#include "hooke/whole_step/ida_stepper.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"
 #include "support/systems.hpp"

@@ -2,12 +2,13 @@
 // two-particle spring at first order in the substep (Macklin et al. 2019); one constraint update
 // solves its compliant constraint C + alpha~ lambda = 0 exactly; pinned particles move with their
 // velocity; unsupported forces and bad options are refused.
+#include "hooke/whole_step/xpbd.hpp"
+
 #include <gtest/gtest.h>
 
 #include <cmath>
 #include <vector>
 
-#include "hooke/whole_step/xpbd.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/registry.hpp"
 #include "support/backend_scenes.hpp"
@@ -41,15 +42,17 @@ TEST(Xpbd, ConvergesToTheExactSpringMotionAtFirstOrder) {
     err.push_back((s.x - exact.head(6)).lpNorm<Eigen::Infinity>());
   }
   const double order = test::fitted_order(hs, err);
-  std::printf("[ xpbd     ] errors %.3e %.3e %.3e %.3e, order %.3f\n", err[0], err[1], err[2], err[3], order);
+  std::printf("[ xpbd     ] errors %.3e %.3e %.3e %.3e, order %.3f\n", err[0], err[1], err[2],
+              err[3], order);
   EXPECT_NEAR(order, 1.0, 0.2);
   EXPECT_LT(err.back(), 0.1 * A);
 }
 
 TEST(Xpbd, OneUpdateSolvesASingleCompliantConstraint) {
   // A single spring, one substep, one sweep, particles at rest: the update solves
-  // C' + alpha~ lambda = 0 with C' = C + (w_i + w_j) lambda exactly (moving along the spring changes
-  // its length linearly), so the new length is l' = L + (l - L) alpha~ / (w_i + w_j + alpha~).
+  // C' + alpha~ lambda = 0 with C' = C + (w_i + w_j) lambda exactly (moving along the spring
+  // changes its length linearly), so the new length is l' = L + (l - L) alpha~ / (w_i + w_j +
+  // alpha~).
   const test::TwoParticleSpring spring(50.0, 2.0, 1.0);
   const double h = 0.01, A = 0.2;
   XpbdStepper xpbd(*spring.system, substeps(1));

@@ -2,11 +2,10 @@
 // relative coordinate matches the exact cosine after one period.
 #include <cmath>
 #include <cstdio>
-#include <memory>
-
 #include <hooke/forces/hooke_spring.hpp>
 #include <hooke/registry.hpp>
 #include <hooke/simulation.hpp>
+#include <memory>
 
 int main() {
   hooke::Vec masses = hooke::Vec::Ones(2);
