@@ -13,7 +13,7 @@ FUZZ_SECONDS ?= 600
 # in Release). Their code paths stay covered by the unit tests of the same backends.
 SANITIZE_LABELS_EXCLUDE ?= accuracy|perf-target|install
 
-.PHONY: all deps configure build demo test paper sanitize fuzz clean
+.PHONY: all deps configure build demo test paper sanitize fuzz format check-format clean
 
 all: build
 
@@ -63,6 +63,14 @@ fuzz:
 	cd build-fuzz && ./bin/hooke_scene_fuzz -max_total_time=$(FUZZ_SECONDS) -timeout=30 \
 	  -print_final_stats=1 -artifact_prefix=$(CURDIR)/build-fuzz/ corpus \
 	  $(CURDIR)/problems/scenes $(CURDIR)/tests/problems/malformed
+
+# clang-format every C++ source in place (.clang-format); check-format only lists the unformatted.
+format:
+	bash scripts/install-deps.sh format
+	git ls-files '*.cpp' '*.hpp' '*.inc' | grep -v '^tests/problems/malformed/' | xargs clang-format -i
+
+check-format:
+	bash scripts/check-format.sh
 
 clean:
 	rm -rf $(BUILD) build-asan build-fuzz out

@@ -29,6 +29,10 @@ fi
 if [ "${1:-}" = "fuzz" ]; then
   packages+=(clang-14 libclang-rt-14-dev)
 fi
+# `install-deps.sh format`: also clang-format (make format, scripts/check-format.sh).
+if [ "${1:-}" = "format" ]; then
+  packages+=(clang-format)
+fi
 
 missing=()
 for p in "${packages[@]}"; do
