@@ -30,10 +30,10 @@
 #include "hooke_config.hpp"
 #if HOOKE_WITH_CHOLMOD
 #include "hooke/linear/cholmod_solver.hpp"
-#include "hooke/linear/reused_factorization.hpp"
 #endif
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/linear/linear_solver.hpp"
+#include "hooke/linear/reused_factorization.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/registry.hpp"
 #include "support/random.hpp"
