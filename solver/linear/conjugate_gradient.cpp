@@ -72,17 +72,10 @@ LinearSummary ConjugateGradientSolver::solve(ConstRef b, VecRef x,
 
 LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x,
                                            const LinearSolveOptions& options) {
-  HOOKE_ASSERT(m_A, name() << ": solve before factor");
-  HOOKE_ASSERT(b.size() == m_A->rows() && x.size() == m_A->rows(), name() << ": size mismatch");
   const auto t0 = Clock::now();
   LinearSummary s;
-  if (!options.warm_start) x.setZero();
-  const double bnorm = b.norm();
-  if (bnorm == 0.0) {
-    x.setZero();
-    s.solve_seconds = seconds_since(t0);
-    return s;
-  }
+  const double bnorm = linear_detail::begin_solve(name(), m_A, b, x, options, t0, s);
+  if (bnorm == 0.0) return s;
   m_csr.multiply(x, m_r);
   m_r = b - m_r;
   double res = m_r.norm() / bnorm;

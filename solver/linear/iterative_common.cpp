@@ -89,4 +89,17 @@ void CsrMirror::multiply(ConstRef x, VecRef y) const {
   }
 }
 
+double begin_solve(const char* name, const SparseMatrix* A, ConstRef b, VecRef x,
+                   const LinearSolveOptions& options, Clock::time_point t0, LinearSummary& s) {
+  HOOKE_ASSERT(A, name << ": solve before factor");
+  HOOKE_ASSERT(b.size() == A->rows() && x.size() == A->rows(), name << ": size mismatch");
+  if (!options.warm_start) x.setZero();
+  const double bnorm = b.norm();
+  if (bnorm == 0.0) {
+    x.setZero();
+    s.solve_seconds = seconds_since(t0);
+  }
+  return bnorm;
+}
+
 }  // namespace hooke::linear_detail

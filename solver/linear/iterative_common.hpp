@@ -42,5 +42,11 @@ struct CsrMirror {
   void multiply(ConstRef x, VecRef y) const;
 };
 
+/// The opening every iterative solve shares: A factored, sizes match, x zeroed for a cold start
+/// (!options.warm_start), and b = 0 answered with x = 0. Returns ||b||; 0 means the solve is done
+/// (s.solve_seconds is then set from t0).
+double begin_solve(const char* name, const SparseMatrix* A, ConstRef b, VecRef x,
+                   const LinearSolveOptions& options, Clock::time_point t0, LinearSummary& s);
+
 }  // namespace linear_detail
 }  // namespace hooke
