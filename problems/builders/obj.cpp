@@ -2,6 +2,7 @@
 // every interior edge (shared by exactly two triangles) between the two opposite vertices.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <fstream>
 #include <map>
@@ -12,6 +13,23 @@
 namespace hooke {
 
 namespace {
+
+/// text for a message: at most 24 characters, bytes outside printable ASCII as \xNN (a binary file
+/// read as OBJ must not write raw bytes to the terminal).
+std::string printable(const std::string& text) {
+  std::string out;
+  for (size_t i = 0; i < text.size() && i < 24; ++i) {
+    const unsigned char c = static_cast<unsigned char>(text[i]);
+    if (c >= 0x20 && c < 0x7f) {
+      out += char(c);
+    } else {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "\\x%02X", c);
+      out += hex;
+    }
+  }
+  return text.size() > 24 ? out + "..." : out;
+}
 
 struct ObjMesh {
   std::vector<Vec3> vertices;
@@ -29,11 +47,22 @@ ObjMesh read_obj(const std::string& path, TableReader& mesh) {
   auto fail = [&](const std::string& reason) -> void {
     throw InputError(path, "line " + std::to_string(lineno), reason);
   };
+  // Statements that carry nothing hooke simulates (texture and normal coordinates, lines, object,
+  // group, smoothing and material statements) are accepted and skipped; any other is an error, so
+  // a typo such as "V 1 0 0" cannot silently drop a vertex.
+  static const std::vector<std::string> skipped = {"vt", "vn", "vp",     "l",     "o",
+                                                   "g",  "s",  "usemtl", "mtllib"};
   while (std::getline(in, line)) {
     ++lineno;
+    // A UTF-8 byte-order mark before the first statement, and Windows line ends, are not content.
+    if (lineno == 1 && line.rfind("\xEF\xBB\xBF", 0) == 0) line.erase(0, 3);
+    if (!line.empty() && line.back() == '\r') line.pop_back();
     std::istringstream ls(line);
     std::string tag;
     if (!(ls >> tag) || tag[0] == '#') continue;
+    if (tag != "v" && tag != "f" && std::find(skipped.begin(), skipped.end(), tag) == skipped.end())
+      fail("unknown OBJ statement '" + printable(tag) +
+           "'; expected v, f, or one of vt, vn, vp, l, o, g, s, " + "usemtl, mtllib (skipped)");
     if (tag == "v") {
       Vec3 p;
       for (int c = 0; c < 3; ++c) {
@@ -75,7 +104,6 @@ ObjMesh read_obj(const std::string& path, TableReader& mesh) {
       if (m.triangles.size() % 65536 < face.size() - 2)  // crossed a multiple of 64k triangles
         check_size(mesh, "file", double(m.vertices.size()), 3.0 * double(m.triangles.size()));
     }
-    // Other statements (vt, vn, o, g, s, usemtl, mtllib, l, ...) carry nothing hooke simulates.
   }
   if (m.vertices.empty()) throw InputError(path, "file", "no vertices ('v' lines) in the OBJ file");
   if (m.triangles.empty()) throw InputError(path, "file", "no faces ('f' lines) in the OBJ file");

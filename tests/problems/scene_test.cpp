@@ -479,6 +479,32 @@ TEST(SceneObj, MeshPathIsRelativeToTheSceneFile) {
   EXPECT_EQ(e.key(), "mesh.file");
 }
 
+TEST(SceneObj, ByteOrderMarkAndWindowsLineEndsAreNotContent) {
+  // The same two-triangle square three times: plain, with a UTF-8 byte-order mark before the first
+  // vertex (which used to swallow that vertex and shift every face index), and with CRLF line ends.
+  const std::string body = "v 0 0 0\nv 1 0 0\nv 1 0 1\nv 0 0 1\nf 1 2 3\nf 1 3 4\n";
+  std::string crlf;
+  for (char c : body) crlf += c == '\n' ? std::string("\r\n") : std::string(1, c);
+  const fs::path dir = fs::temp_directory_path() / "hooke_scene_test_obj";
+  fs::create_directories(dir);
+  const std::vector<std::pair<std::string, std::string>> files = {
+      {"plain.obj", body}, {"bom.obj", "\xEF\xBB\xBF" + body}, {"crlf.obj", crlf}};
+  std::vector<Vec> positions;
+  for (const auto& [name, text] : files) {
+    std::ofstream(dir / name, std::ios::binary) << text;
+    const Scene s = load_scene_from_string(
+        "[mesh]\ntype = \"obj\"\nfile = \"" + name + "\"\ntotal_mass = 0.1\npinned = [0]\n",
+        (dir / "scene.toml").string());
+    EXPECT_EQ(s.system->num_particles(), 4) << name;
+    positions.push_back(s.initial.x);
+  }
+  ASSERT_EQ(positions.size(), 3u);
+  EXPECT_EQ(positions[1], positions[0]) << "byte-order mark";
+  EXPECT_EQ(positions[2], positions[0]) << "CRLF";
+  EXPECT_EQ(positions[0].segment<3>(3), Vec3(1, 0, 0));
+  fs::remove_all(dir);
+}
+
 // ---------------------------------------------------------------------------------------------
 // Two-particle exact solution
 
