@@ -420,6 +420,15 @@ int resume_run(const std::string& dir, const RunOptions& options) {
 
 namespace hooke::cli {
 
+namespace {
+/// --stop-after N stops after step N >= 1 (the default -1: never); 0 or less would never trigger.
+void check_stop_after(long long stop_after) {
+  if (stop_after != -1 && stop_after < 1)
+    throw InputError("<command line>", "--stop-after",
+                     "must be a step number >= 1, got " + std::to_string(stop_after));
+}
+}  // namespace
+
 Command add_run_command(CLI::App& app) {
   struct Args {
     std::string scene;
@@ -437,7 +446,10 @@ Command add_run_command(CLI::App& app) {
   cmd->add_option("--stop-after", a->run.stop_after,
                   "testing aid: checkpoint after step N and stop as if interrupted (exit 130)");
   cmd->footer("Methods: " + method_names() + "\nLinear solvers: " + linear_solver_names());
-  return {cmd, [a] {
+  return {cmd, [a, cmd] {
+            check_stop_after(a->run.stop_after);
+            if (cmd->count("--out") > 0 && a->run.out_dir.empty())
+              throw InputError("<command line>", "--out", "must not be empty");
             Scene scene = load_scene(resolve_scene(a->scene), a->sets);
             a->run.progress = !a->no_progress;
             return run_scene(scene, a->run);
@@ -459,6 +471,7 @@ Command add_resume_command(CLI::App& app) {
   cmd->add_option("--stop-after", a->run.stop_after,
                   "testing aid: checkpoint after step N and stop as if interrupted (exit 130)");
   return {cmd, [a] {
+            check_stop_after(a->run.stop_after);
             a->run.progress = !a->no_progress;
             return resume_run(a->dir, a->run);
           }};

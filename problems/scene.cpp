@@ -73,6 +73,10 @@ void apply_override(toml::table& root, const std::string& item) {
   if (eq == std::string::npos || eq == 0)
     throw InputError("<command line>", item, "expected section.key=value");
   const std::string path = item.substr(0, eq), text = item.substr(eq + 1);
+  // One key per --set: a value spanning lines would parse as several keys and lose all but one.
+  if (text.find_first_of("\r\n") != std::string::npos)
+    throw InputError("<command line>", path,
+                     "the value spans several lines; give each key its own --set");
   toml::table parsed;
   try {
     parsed = toml::parse("v = " + text);

@@ -339,8 +339,9 @@ TEST(SceneOverrides, BadPathIsAnInputError) {
       {"time..dt=1", "<command line>", "time..dt"},    // empty section name
       {"time.=1", "<command line>", "time."},          // empty key name
       {"time.dt=-0.5", "two.toml", "time.dt"},         // value out of range
-      {"integrator.method=rk5", "two.toml", "integrator.method"},  // unknown name
-      {"nosection=1", "two.toml", "nosection"},                    // unknown top-level key
+      {"integrator.method=rk5", "two.toml", "integrator.method"},      // unknown name
+      {"time.dt=1e-3\ntime.duration=2", "<command line>", "time.dt"},  // a second line
+      {"nosection=1", "two.toml", "nosection"},                        // unknown top-level key
   };
   for (const auto& c : cases) {
     SCOPED_TRACE(c.item);
