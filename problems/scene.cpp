@@ -273,6 +273,16 @@ Scene load_parsed(toml::table tbl, const std::string& file,
   if (scene.system) {
     const std::string why = method_unsupported(scene.integrator.method, *scene.system);
     if (!why.empty()) throw InputError(file, "integrator.method", why);
+  } else if (method_info(scene.integrator.method).kind != MethodKind::Explicit) {
+    std::string explicit_methods;
+    for (const auto& m : methods())
+      if (m.kind == MethodKind::Explicit)
+        explicit_methods += (explicit_methods.empty() ? "" : ", ") + std::string(m.name);
+    throw InputError(file, "integrator.method",
+                     "'" + scene.integrator.method +
+                         "' steps a mass-spring system; an [ode] scene "
+                         "runs the explicit methods: " +
+                         explicit_methods);
   }
   root.finish();
   return scene;
