@@ -12,7 +12,7 @@ namespace hooke {
 namespace fs = std::filesystem;
 
 CsvFile::CsvFile(const std::string& path, bool append)
-    : m_path(path), m_f(std::fopen(path.c_str(), append ? "a" : "w")) {
+    : m_f(std::fopen(path.c_str(), append ? "a" : "w")) {
   if (!m_f) throw std::runtime_error("cannot write " + path);
 }
 

@@ -18,10 +18,8 @@ class CsvFile {
   CsvFile(const CsvFile&) = delete;
   CsvFile& operator=(const CsvFile&) = delete;
   FILE* get() { return m_f; }
-  const std::string& path() const { return m_path; }
 
  private:
-  std::string m_path;
   FILE* m_f;
 };
 
