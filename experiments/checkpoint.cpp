@@ -1,35 +1,43 @@
 #include "experiments/checkpoint.hpp"
 
-#include <unistd.h>
+#include <toml++/toml.h>
 
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <iterator>
+#include <sstream>
 #include <stdexcept>
 
+#include "experiments/output/output_file.hpp"
 #include "problems/input_error.hpp"
 
 namespace hooke {
 
 namespace {
 
-constexpr char kMagic[8] = {'H', 'O', 'O', 'K', 'E', 'C', 'K', '1'};
+constexpr char kMagic[8] = {'H', 'O', 'O', 'K', 'E', 'C', 'K', '2'};
+constexpr char kMagicV1[8] = {'H', 'O', 'O', 'K', 'E', 'C', 'K', '1'};
 // Upper bounds that no real run reaches; they keep a corrupt length from allocating without limit.
-constexpr std::uint64_t kMaxDofs = std::uint64_t(1) << 34;
 constexpr std::uint64_t kMaxString = std::uint64_t(1) << 16;
+constexpr std::uint64_t kMaxScene = std::uint64_t(1) << 24;
 constexpr std::uint64_t kMaxFrames = std::uint64_t(1) << 32;
 
-std::uint64_t fnv1a(const std::string& bytes) {
-  std::uint64_t h = 1469598103934665603ull;
-  for (unsigned char c : bytes) {
-    h ^= c;
-    h *= 1099511628211ull;
+class Fnv1a {
+ public:
+  void add(const void* data, std::size_t n) {
+    const auto* p = static_cast<const unsigned char*>(data);
+    for (std::size_t k = 0; k < n; ++k) {
+      m_h ^= p[k];
+      m_h *= 1099511628211ull;
+    }
   }
-  return h;
-}
+  std::uint64_t value() const { return m_h; }
+
+ private:
+  std::uint64_t m_h = 1469598103934665603ull;
+};
 
 class Writer {
  public:
@@ -43,8 +51,7 @@ class Writer {
     i64(static_cast<long long>(s.size()));
     m_bytes += s;
   }
-  void doubles(const double* p, std::size_t n) {
-    i64(static_cast<long long>(n));
+  void raw(const double* p, std::size_t n) {
     m_bytes.append(reinterpret_cast<const char*>(p), n * sizeof(double));
   }
   std::string& bytes() { return m_bytes; }
@@ -53,127 +60,211 @@ class Writer {
   std::string m_bytes;
 };
 
+/// Reads a checkpoint file front to back, never past its size, hashing every byte it reads.
 class Reader {
  public:
-  Reader(const std::string& bytes, const std::string& path) : m_b(bytes), m_path(path) {}
+  explicit Reader(const std::string& path) : m_path(path), m_in(path, std::ios::binary) {
+    std::error_code ec;
+    m_size = std::filesystem::file_size(path, ec);
+    if (!m_in || ec) fail("cannot be read");
+  }
   [[noreturn]] void fail(const std::string& why) const {
     throw InputError(m_path, "checkpoint", why);
   }
+  std::uint64_t remaining() const { return m_size - m_at; }
+  std::uint64_t size() const { return m_size; }
+  std::uint64_t at() const { return m_at; }
+  void bytes(void* out, std::size_t n, const char* where) {
+    if (remaining() < n) fail(std::string("truncated (ends inside ") + where + ")");
+    if (!m_in.read(static_cast<char*>(out), std::streamsize(n))) fail("cannot be read");
+    m_hash.add(out, n);
+    m_at += n;
+  }
   template <class T>
-  T pod() {
-    if (m_b.size() - m_at < sizeof(T)) fail("truncated (ends inside a field)");
+  T pod(const char* where) {
     T v;
-    std::memcpy(&v, m_b.data() + m_at, sizeof v);
-    m_at += sizeof v;
+    bytes(&v, sizeof v, where);
     return v;
   }
-  long long i64() { return static_cast<long long>(pod<std::int64_t>()); }
-  double f64() { return pod<double>(); }
-  std::size_t length(std::uint64_t max, const char* what) {
-    const long long n = i64();
-    if (n < 0 || std::uint64_t(n) > max)
-      fail(std::string("implausible ") + what + " length " + std::to_string(n));
-    return std::size_t(n);
+  long long i64(const char* where) { return static_cast<long long>(pod<std::int64_t>(where)); }
+  double f64(const char* where) { return pod<double>(where); }
+  std::uint64_t length(std::uint64_t max, const char* what) {
+    const long long n = i64(what);
+    if (n < 0 || std::uint64_t(n) > max || std::uint64_t(n) > remaining())
+      fail(std::string("corrupt (implausible ") + what + " length " + std::to_string(n) + ")");
+    return std::uint64_t(n);
   }
-  std::string str() {
-    const std::size_t n = length(kMaxString, "string");
-    if (m_b.size() - m_at < n) fail("truncated (ends inside a string)");
-    std::string s = m_b.substr(m_at, n);
-    m_at += n;
+  std::string str(std::uint64_t max, const char* what) {
+    std::string s(length(max, what), '\0');
+    bytes(s.data(), s.size(), what);
     return s;
   }
-  std::vector<double> doubles() {
-    const std::size_t n = length(kMaxDofs, "vector");
-    if ((m_b.size() - m_at) / sizeof(double) < n) fail("truncated (ends inside a vector)");
-    std::vector<double> v(n);
-    if (n) std::memcpy(v.data(), m_b.data() + m_at, n * sizeof(double));
-    m_at += n * sizeof(double);
+  Vec vec(std::uint64_t n, const char* what) {
+    Vec v(static_cast<Index>(n));
+    if (n) bytes(v.data(), n * sizeof(double), what);
     return v;
   }
-  std::size_t at() const { return m_at; }
+  std::uint64_t hash() const { return m_hash.value(); }
 
  private:
-  const std::string& m_b;
   const std::string& m_path;
-  std::size_t m_at = 0;
+  std::ifstream m_in;
+  std::uint64_t m_size = 0, m_at = 0;
+  Fnv1a m_hash;
 };
+
+/// The fixed-size part of the header after the three strings (see write_checkpoint).
+struct Sizes {
+  long long particles, dofs, history, frames, frame_bytes;
+};
+
+std::string frame_table(const Checkpoint& c) {
+  Writer w;
+  for (const auto& [t, name] : c.frames) {
+    w.f64(t);
+    w.str(name);
+  }
+  return w.bytes();
+}
 
 }  // namespace
 
+std::uint64_t initial_state_hash(const State& initial, const std::vector<char>& pinned) {
+  Fnv1a h;
+  h.add(initial.x.data(), std::size_t(initial.x.size()) * sizeof(double));
+  h.add(initial.v.data(), std::size_t(initial.v.size()) * sizeof(double));
+  h.add(pinned.data(), pinned.size());
+  return h.value();
+}
+
 void write_checkpoint(const std::string& path, const Checkpoint& c) {
+  const std::string frames = frame_table(c);
   Writer w;
   w.bytes().append(kMagic, sizeof kMagic);
+  w.str(c.version);
   w.str(c.method);
+  w.str(c.scene);
+  w.pod(c.initial_hash);
+  w.i64(c.state.x.size() / 3);
+  w.i64(c.state.x.size());
+  w.i64(static_cast<long long>(c.history.size()));
+  w.i64(static_cast<long long>(c.frames.size()));
+  w.i64(static_cast<long long>(frames.size()));
   w.i64(c.step);
   w.i64(c.log_bytes);
   w.i64(c.not_converged);
   w.i64(c.halved_steps);
   w.f64(c.wall);
   w.f64(c.state.t);
-  w.doubles(c.state.x.data(), std::size_t(c.state.x.size()));
-  w.doubles(c.state.v.data(), std::size_t(c.state.v.size()));
-  w.doubles(c.history.data(), c.history.size());
-  w.i64(static_cast<long long>(c.frames.size()));
-  for (const auto& [t, name] : c.frames) {
-    w.f64(t);
-    w.str(name);
-  }
-  w.pod(fnv1a(w.bytes()));
-
-  const std::string tmp = path + ".tmp";
-  FILE* f = std::fopen(tmp.c_str(), "wb");
-  if (!f) throw std::runtime_error("cannot write checkpoint " + tmp);
-  const std::string& b = w.bytes();
-  const bool ok = std::fwrite(b.data(), 1, b.size(), f) == b.size() && std::fflush(f) == 0 &&
-                  fsync(fileno(f)) == 0;
-  if (std::fclose(f) != 0 || !ok) throw std::runtime_error("cannot write checkpoint " + tmp);
-  std::filesystem::rename(tmp, path);
+  w.raw(c.state.x.data(), std::size_t(c.state.x.size()));
+  w.raw(c.state.v.data(), std::size_t(c.state.v.size()));
+  w.raw(c.history.data(), c.history.size());
+  w.bytes() += frames;
+  Fnv1a h;
+  h.add(w.bytes().data(), w.bytes().size());
+  w.pod(h.value());
+  write_file(path, w.bytes());
 }
 
-Checkpoint read_checkpoint(const std::string& path) {
+Checkpoint read_checkpoint(const std::string& path, long long dofs) {
   std::error_code ec;
   if (!std::filesystem::is_regular_file(path, ec))
     throw InputError(
         path, "checkpoint",
         "does not exist (nothing to resume: the run finished, or it was stopped before "
         "its first checkpoint)");
-  std::ifstream in(path, std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  if (bytes.size() < sizeof kMagic + sizeof(std::uint64_t) ||
-      std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0)
-    throw InputError(path, "checkpoint", "not a hooke checkpoint (no HOOKECK1 header)");
-  const std::string body = bytes.substr(0, bytes.size() - sizeof(std::uint64_t));
-  std::uint64_t stored;
-  std::memcpy(&stored, bytes.data() + body.size(), sizeof stored);
-  if (stored != fnv1a(body)) throw InputError(path, "checkpoint", "corrupt (checksum mismatch)");
-
-  Reader r(body, path);
-  r.pod<std::uint64_t>();  // the 8 magic bytes, checked above
+  Reader r(path);
+  char magic[sizeof kMagic];
+  if (r.size() < sizeof magic) r.fail("not a hooke checkpoint (no HOOKECK2 header)");
+  r.bytes(magic, sizeof magic, "the header");
+  if (std::memcmp(magic, kMagicV1, sizeof magic) == 0)
+    r.fail(
+        "was written by an older hooke (format HOOKECK1, without the scene it belongs to): "
+        "run the scene again");
+  if (std::memcmp(magic, kMagic, sizeof magic) != 0)
+    r.fail("not a hooke checkpoint (no HOOKECK2 header)");
   Checkpoint c;
-  c.method = r.str();
-  c.step = r.i64();
-  c.log_bytes = r.i64();
-  c.not_converged = r.i64();
-  c.halved_steps = r.i64();
-  c.wall = r.f64();
-  c.state.t = r.f64();
-  const std::vector<double> x = r.doubles(), v = r.doubles();
-  if (x.size() != v.size() || x.size() % 3 != 0)
-    r.fail("positions and velocities have " + std::to_string(x.size()) + " and " +
-           std::to_string(v.size()) + " entries");
-  c.state.x = Eigen::Map<const Vec>(x.data(), Index(x.size()));
-  c.state.v = Eigen::Map<const Vec>(v.data(), Index(v.size()));
-  c.history = r.doubles();
-  const long long frames = r.i64();
-  if (frames < 0 || std::uint64_t(frames) > kMaxFrames) r.fail("implausible frame count");
-  for (long long k = 0; k < frames; ++k) {
-    const double t = r.f64();
-    c.frames.emplace_back(t, r.str());
+  c.version = r.str(kMaxString, "the version");
+  c.method = r.str(kMaxString, "the method name");
+  c.scene = r.str(kMaxScene, "the scene");
+  c.initial_hash = r.pod<std::uint64_t>("the header");
+  Sizes n{};
+  for (long long* f : {&n.particles, &n.dofs, &n.history, &n.frames, &n.frame_bytes})
+    *f = r.i64("the header");
+  c.step = r.i64("the header");
+  c.log_bytes = r.i64("the header");
+  c.not_converged = r.i64("the header");
+  c.halved_steps = r.i64("the header");
+  c.wall = r.f64("the header");
+  c.state.t = r.f64("the header");
+  if (n.dofs != 3 * n.particles || n.particles < 0 || n.history < 0 || n.frames < 0 ||
+      std::uint64_t(n.frames) > kMaxFrames || n.frame_bytes < 0 || c.step < 0 || c.log_bytes < 0 ||
+      c.not_converged < 0 || c.halved_steps < 0)
+    r.fail("corrupt (inconsistent sizes or negative counters in the header)");
+  if (n.dofs != dofs)
+    r.fail("holds " + std::to_string(n.particles) + " particles but the scene has " +
+           std::to_string(dofs / 3) + ": it belongs to another scene");
+  // Every size is known now: the file must be exactly that long, or it is not what it says.
+  const std::uint64_t expected = r.at() + 8 * std::uint64_t(2 * n.dofs + n.history) +
+                                 std::uint64_t(n.frame_bytes) + sizeof(std::uint64_t);
+  if (std::uint64_t(n.history) > 64 * std::uint64_t(dofs) + 64 || expected != r.size())
+    r.fail("corrupt (" + std::to_string(r.size()) + " bytes where its header describes " +
+           std::to_string(expected) + ")");
+  c.state.x = r.vec(std::uint64_t(n.dofs), "the positions");
+  c.state.v = r.vec(std::uint64_t(n.dofs), "the velocities");
+  const Vec history = r.vec(std::uint64_t(n.history), "the history");
+  c.history.assign(history.data(), history.data() + history.size());
+  const std::uint64_t frames_end = r.at() + std::uint64_t(n.frame_bytes);
+  for (long long k = 0; k < n.frames; ++k) {
+    const double t = r.f64("the frame table");
+    c.frames.emplace_back(t, r.str(kMaxString, "a frame name"));
   }
-  if (r.at() != body.size()) r.fail("trailing bytes after the last field");
-  if (c.step < 0 || c.log_bytes < 0 || c.not_converged < 0 || c.halved_steps < 0)
-    r.fail("negative counter");
+  if (r.at() != frames_end) r.fail("corrupt (the frame table has another size than declared)");
+  const std::uint64_t computed = r.hash();
+  if (r.pod<std::uint64_t>("the checksum") != computed) r.fail("corrupt (checksum mismatch)");
   return c;
+}
+
+namespace {
+
+std::string node_text(const toml::node& n) {
+  std::ostringstream os;
+  os << toml::node_view<const toml::node>(&n);
+  return os.str();
+}
+
+void add_changes(const toml::table& was, const toml::table& now, const std::string& prefix,
+                 std::vector<std::string>& out) {
+  for (const auto& [k, v] : was) {
+    const std::string key = prefix + std::string(k.str());
+    if (key == "output.dir") continue;
+    const toml::node* w = now.get(k.str());
+    if (!w) {
+      out.push_back(key + ": " + node_text(v) + " in the checkpoint, absent now");
+    } else if (v.is_table() && w->is_table()) {
+      add_changes(*v.as_table(), *w->as_table(), key + ".", out);
+    } else if (node_text(v) != node_text(*w)) {
+      out.push_back(key + ": " + node_text(v) + " in the checkpoint, " + node_text(*w) + " now");
+    }
+  }
+  for (const auto& [k, w] : now)
+    if (!was.contains(k.str()))
+      out.push_back(prefix + std::string(k.str()) + ": absent in the checkpoint, " + node_text(w) +
+                    " now");
+}
+
+}  // namespace
+
+std::string scene_changes(const std::string& checkpointed_scene, const std::string& scene_now) {
+  std::vector<std::string> changes;
+  try {
+    add_changes(toml::parse(checkpointed_scene), toml::parse(scene_now), "", changes);
+  } catch (const toml::parse_error&) {
+    return "the checkpoint's copy of the scene cannot be read";
+  }
+  std::string s;
+  for (const std::string& c : changes) s += (s.empty() ? "" : "; ") + c;
+  return s;
 }
 
 }  // namespace hooke

@@ -21,6 +21,7 @@
 #include "experiments/cli.hpp"
 #include "experiments/divergence.hpp"
 #include "experiments/study_methods.hpp"
+#include "experiments/study_output.hpp"
 #include "experiments/trajectory.hpp"
 #include "hooke/registry.hpp"
 
@@ -49,13 +50,11 @@ int run_crosscheck(const Scene& scene, const CrosscheckOptions& options) {
   if (names.empty())
     for (const auto& m : methods()) names.push_back(m.name);
 
-  namespace fs = std::filesystem;
-  fs::create_directories(options.out_dir);
-  std::ofstream csv(options.out_dir + "/crosscheck.csv");
+  StudyOutput out(options.out_dir, "crosscheck", {"crosscheck.csv", "crosscheck.md"});
+  std::ostringstream csv, md, md_all;  // rows not yet in the files; the table for stdout
   csv << "method,dt,wall_s,rms_err_final,max_err_final,rms_err_traj,max_err_traj,energy_drift,"
          "status\n";
   csv.precision(9);
-  std::ostringstream md;
   md << "Scene `" << scene.file << "`: " << sys.num_particles() << " particles, "
      << scene.edges.size() << " springs, t = 0.." << scene.time.duration << " s, " << samples.size()
      << " samples. Reference: " << ref.how << "\n\n";
@@ -81,9 +80,18 @@ int run_crosscheck(const Scene& scene, const CrosscheckOptions& options) {
     md << "| " << name << " | " << fmt(scene.time.dt) << " | " << fmt(tr.wall) << " | "
        << fmt(e.rms_final) << " | " << fmt(e.max_final) << " | " << fmt(e.rms_traj) << " | "
        << fmt(e.max_traj) << " | " << fmt(drift) << " | " << tr.status << " |\n";
+    out.file("crosscheck.csv").write(csv.str());
+    out.file("crosscheck.md").write(md.str());
+    md_all << md.str();
+    csv.str("");
+    md.str("");
+    if (const int code = out.interrupted(std::to_string(&name - names.data() + 1) + " of " +
+                                         std::to_string(names.size()) + " methods");
+        code != 0)
+      return code;
   }
-  std::ofstream(options.out_dir + "/crosscheck.md") << md.str();
-  std::cout << md.str();
+  const std::string wrote = out.finish(std::to_string(names.size()) + " methods");
+  std::cout << md_all.str() << "wrote " << wrote << "\n";
   return 0;
 }
 

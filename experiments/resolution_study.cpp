@@ -32,6 +32,7 @@
 #include "experiments/cli.hpp"
 #include "experiments/plot_script.hpp"
 #include "experiments/study_methods.hpp"
+#include "experiments/study_output.hpp"
 #include "experiments/trajectory.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
@@ -98,13 +99,12 @@ int run_resolution(const ResolutionOptions& options, const std::string& scenes_d
   const double drag = ref.resolved["forces"]["drag"].value_or(0.0);
   const long long n_ref = ref.resolved["mesh"]["nx"].value_or(16LL);
 
-  fs::create_directories(options.out_dir);
-  const std::string path = options.out_dir + "/resolution.csv";
-  FILE* csv = std::fopen(path.c_str(), "w");
-  if (!csv) throw std::runtime_error("cannot write " + path);
-  std::fprintf(csv,
-               "variant,n,particles,springs,k_structural,drag,period_s,sag_com_m,sag_lowest_m,"
-               "settle_speed,wall_s\n");
+  StudyOutput out(options.out_dir, "resolution", {"resolution.csv"});
+  OutputFile& csv = out.file("resolution.csv");
+  std::size_t done = 0;
+  csv.print(
+      "variant,n,particles,springs,k_structural,drag,period_s,sag_com_m,sag_lowest_m,"
+      "settle_speed,wall_s\n");
   for (const auto& var : resolution_variants()) {
     for (int n : ns) {
       const auto t0 = Clock::now();
@@ -161,19 +161,24 @@ int run_resolution(const ResolutionOptions& options, const std::string& scenes_d
       const double sag_com = failure.empty() ? pin_y - com_height(sys, st.state().x) : NAN;
       const double sag_low = failure.empty() ? pin_y - lowest : NAN;
       const double wall = seconds_since(t0);
-      std::fprintf(csv, "%s,%d,%lld,%zu,%.6g,%.6g,%.6g,%.6g,%.6g,%.3g,%.3g\n", var.name.c_str(), n,
-                   (long long)sys.num_particles(), scene.edges.size(), k_structural * kf, c, period,
-                   sag_com, sag_low, speed, wall);
-      std::fflush(csv);
+      csv.print("%s,%d,%lld,%zu,%.6g,%.6g,%.6g,%.6g,%.6g,%.3g,%.3g\n", var.name.c_str(), n,
+                (long long)sys.num_particles(), scene.edges.size(), k_structural * kf, c, period,
+                sag_com, sag_low, speed, wall);
+      csv.flush();
       std::fprintf(stderr,
                    "resolution: %-9s n = %-4d period %-8.4g s  sag %-8.4g m (lowest %-8.4g m)  "
                    "%6.1f s%s%s\n",
                    var.name.c_str(), n, period, sag_com, sag_low, wall,
                    failure.empty() ? "" : "  failed: ", failure.c_str());
+      if (const int code = out.interrupted(
+              std::to_string(++done) + " of " +
+              std::to_string(resolution_variants().size() * ns.size()) + " (variant, n) rows");
+          code != 0)
+        return code;
     }
   }
-  std::fclose(csv);
-  std::printf("resolution: wrote %s (%.1f s)\n", path.c_str(), seconds_since(start));
+  const std::string wrote = out.finish(std::to_string(done) + " (variant, n) rows");
+  std::printf("resolution: wrote %s (%.1f s)\n", wrote.c_str(), seconds_since(start));
   if (options.plot) run_plot_script("resolution.py", options.out_dir);
   return 0;
 }

@@ -1,11 +1,10 @@
 #include "experiments/run_command.hpp"
 
-#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <chrono>
-#include <csignal>
+#include <cstdarg>
 #include <cstdio>
 #include <filesystem>
 #include <memory>
@@ -14,15 +13,32 @@
 #include "experiments/cli.hpp"
 #include "experiments/divergence.hpp"
 #include "experiments/run_output.hpp"
+#include "experiments/stop_signals.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
+#include "hooke_config.hpp"
 
 namespace hooke {
 
 namespace {
 
 namespace fs = std::filesystem;
+
+/// printf into a std::string (messages that go both to stderr and into status.txt).
+std::string strprintf(const char* format, ...) __attribute__((format(printf, 1, 2)));
+std::string strprintf(const char* format, ...) {
+  std::va_list args;
+  va_start(args, format);
+  std::va_list copy;
+  va_copy(copy, args);
+  const int n = std::vsnprintf(nullptr, 0, format, copy);
+  va_end(copy);
+  std::string s(std::size_t(std::max(n, 0)), '\0');
+  std::vsnprintf(s.data(), s.size() + 1, format, args);
+  va_end(args);
+  return s;
+}
 
 /// A one-line progress display on a terminal, refreshed at most 4 times a second.
 class Progress {
@@ -50,38 +66,6 @@ class Progress {
   Clock::time_point m_start = Clock::now(), m_last = Clock::now() - std::chrono::seconds(1);
 };
 
-/// Set by the SIGINT / SIGTERM handler; the run loops poll it after every step.
-volatile std::sig_atomic_t g_signal = 0;
-extern "C" void on_stop_signal(int sig) { g_signal = sig; }
-
-/// Installs the stop handler for the lifetime of a run and restores the previous one. The
-/// handler is one-shot (SA_RESETHAND): a second Ctrl-C kills the process at once, which is safe
-/// because checkpoints are written to a temporary file and renamed.
-class StopSignals {
- public:
-  StopSignals() {
-    g_signal = 0;
-    struct sigaction sa {};
-    sa.sa_handler = on_stop_signal;
-    sigemptyset(&sa.sa_mask);
-    sa.sa_flags = SA_RESETHAND;
-    sigaction(SIGINT, &sa, &m_old_int);
-    sigaction(SIGTERM, &sa, &m_old_term);
-  }
-  ~StopSignals() {
-    sigaction(SIGINT, &m_old_int, nullptr);
-    sigaction(SIGTERM, &m_old_term, nullptr);
-  }
-  StopSignals(const StopSignals&) = delete;
-  StopSignals& operator=(const StopSignals&) = delete;
-
- private:
-  struct sigaction m_old_int {
-  }, m_old_term{};
-};
-
-const char* signal_name(int sig) { return sig == SIGTERM ? "SIGTERM" : "SIGINT"; }
-
 /// "method implicit, linear solver pcg" / "method cvode (klu)" / "method rk4": what to name in a
 /// failure message so that the numbers in it can be traced to a backend.
 std::string backend_label(const Scene& scene) {
@@ -108,11 +92,14 @@ std::string backend_label(const Scene& scene) {
 /// process exit code.
 class MassSpringRun {
  public:
+  /// locked: the output folder, already locked (a resume, or a run into an existing folder), or
+  /// null: the run creates and locks `dir` once its stepper exists.
   MassSpringRun(const Scene& scene, const std::string& dir, const RunOptions& options,
-                const Checkpoint* resume);
+                const Checkpoint* resume, std::unique_ptr<OutputDir> locked);
   int run();
 
  private:
+  int run_steps();
   static std::unique_ptr<Stepper> make_scene_stepper(const Scene& scene);
   void restore(const Checkpoint& c);
   /// After a successful step: log row, divergence check, frame, progress, stop request and
@@ -151,7 +138,7 @@ std::unique_ptr<Stepper> MassSpringRun::make_scene_stepper(const Scene& scene) {
 }
 
 MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const RunOptions& options,
-                             const Checkpoint* resume)
+                             const Checkpoint* resume, std::unique_ptr<OutputDir> locked)
     : m_scene(scene),
       m_sys(*scene.system),
       m_options(options),
@@ -170,7 +157,8 @@ MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const R
                  s.message.c_str(), 0.5 * h, depth, m_scene.run.max_step_halvings);
   });
   if (resume) restore(*resume);  // checks the checkpoint before any file is touched
-  m_out = std::make_unique<RunOutput>(scene, dir, resume);
+  if (!locked) locked = std::make_unique<OutputDir>(dir, "hooke run " + scene.file);
+  m_out = std::make_unique<RunOutput>(scene, std::move(locked), resume, options.force);
   const State& s0 = scene.initial;
   m_E0 = m_sys.kinetic_energy(s0.v) + m_sys.potential_energy(s0.x);
   m_scale = std::max({divergence_energy_scale(m_sys, s0), std::abs(m_E0), 1e-30});
@@ -180,6 +168,22 @@ MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const R
 void MassSpringRun::restore(const Checkpoint& c) {
   const std::string path = m_dir + "/checkpoint.bin";
   const std::string& method = m_scene.integrator.method;
+  if (c.version != HOOKE_VERSION)
+    throw InputError(
+        path, "checkpoint",
+        "was written by hooke " + c.version +
+            "; this is hooke " HOOKE_VERSION
+            ", whose steps may differ: resume with that version, or run the scene again");
+  if (const std::string changes = scene_changes(c.scene, resolved_scene_text(m_scene));
+      !changes.empty())
+    throw InputError(m_dir + "/scene.toml", "scene",
+                     "differs from the scene of the stopped run (" + changes +
+                         "); a resume continues that run as it was: undo the edit, or start "
+                         "a new run with hooke run");
+  if (c.initial_hash != initial_state_hash(m_scene.initial, m_sys.pinned()))
+    throw InputError(m_dir + "/scene.toml", "mesh",
+                     "builds another initial state than the stopped run had (was a mesh file "
+                     "changed?); run the scene again");
   if (c.method != method)
     throw InputError(path, "checkpoint",
                      "was written by method '" + c.method + "' but " + m_dir +
@@ -210,11 +214,23 @@ void MassSpringRun::restore(const Checkpoint& c) {
 }
 
 int MassSpringRun::run() {
+  try {
+    return run_steps();
+  } catch (const std::exception& e) {
+    m_progress.done();
+    m_out->failed(e.what());
+    throw std::runtime_error(std::string(e.what()) + "\n  the run stopped at step " +
+                             std::to_string(m_step) + " of " + std::to_string(m_steps) + "; " +
+                             m_dir + "/status.txt says failed and there is no final.csv");
+  }
+}
+
+int MassSpringRun::run_steps() {
   if (m_first_step == 1) {
     m_out->log_row(0, m_sim.state(), 0, 0.0, m_wall);
     m_out->frame(0, m_sim.state());
   }
-  StopSignals stop_signals;
+  const StopSignals stop_signals;
   for (long long step = m_first_step; step <= m_steps; ++step) {
     m_step = step;
     const double t_start = m_sim.state().t;
@@ -246,7 +262,8 @@ int MassSpringRun::after_step(long long step, const StepSummary& sum) {
   if ((m_scene.output.every > 0 && step % m_scene.output.every == 0) || last) m_out->frame(step, s);
   m_progress.update(step, s.t);
   if (last) return -1;
-  if (const int sig = g_signal; sig != 0 || step == m_options.stop_after) return stop(step, sig);
+  if (const int sig = stop_signal(); sig != 0 || step == m_options.stop_after)
+    return stop(step, sig);
   if ((m_scene.run.checkpoint_every > 0 && step % m_scene.run.checkpoint_every == 0) ||
       Clock::now() - m_last_checkpoint >=
           std::chrono::duration<double>(m_scene.run.checkpoint_seconds)) {
@@ -258,15 +275,17 @@ int MassSpringRun::after_step(long long step, const StepSummary& sum) {
 
 int MassSpringRun::report_failure(long long step, const StepSummary& sum) {
   m_progress.done();
-  m_out->flush();
+  const std::string what = strprintf(
+      "step %lld failed (t = %.9g, h = %.6g, %s, %d linear iterations, residual %.3g): "
+      "%s: %s",
+      step, m_sim.failed_t(), m_sim.failed_h(), m_label.c_str(), sum.iterations, sum.residual,
+      to_string(sum.status), sum.message.c_str());
+  m_out->failed(what);
   std::fprintf(stderr,
-               "error: %s: step %lld failed (t = %.9g, h = %.6g, %s, %d linear iterations, "
-               "residual %.3g): %s: %s\n"
+               "error: %s: %s\n"
                "  kept: %s/log.csv and the frames written so far; fixes: a smaller time.dt, "
                "run.max_step_halvings > 0%s\n",
-               m_scene.file.c_str(), step, m_sim.failed_t(), m_sim.failed_h(), m_label.c_str(),
-               sum.iterations, sum.residual, to_string(sum.status), sum.message.c_str(),
-               m_dir.c_str(),
+               m_scene.file.c_str(), what.c_str(), m_dir.c_str(),
                sum.status == Status::NotConverged
                    ? ", a looser tolerance, more iterations, or run.allow_not_converged = true"
                    : "");
@@ -276,25 +295,29 @@ int MassSpringRun::report_failure(long long step, const StepSummary& sum) {
 int MassSpringRun::report_divergence(long long step, double E) {
   m_progress.done();
   m_out->frame(step, m_sim.state());
-  m_out->flush();
+  const std::string what = strprintf(
+      "diverged at step %lld (t = %.9g, %s): total energy %.6g J exceeds the initial %.6g J by "
+      "more than %g x the scene's energy scale %.6g J (run.energy_growth_limit)",
+      step, m_sim.state().t, m_label.c_str(), E, m_E0, m_scene.run.energy_growth_limit, m_scale);
+  m_out->failed(what);
   std::fprintf(stderr,
-               "error: %s: diverged at step %lld (t = %.9g, %s): total energy %.6g J "
-               "exceeds the initial %.6g J by more than %g x the scene's energy scale %.6g J "
-               "(run.energy_growth_limit); try a smaller time.dt\n"
-               "  kept: %s/log.csv and the frames written so far\n",
-               m_scene.file.c_str(), step, m_sim.state().t, m_label.c_str(), E, m_E0,
-               m_scene.run.energy_growth_limit, m_scale, m_dir.c_str());
+               "error: %s: %s; try a smaller time.dt\n  kept: %s/log.csv and the frames "
+               "written so far\n",
+               m_scene.file.c_str(), what.c_str(), m_dir.c_str());
   return 3;
 }
 
 int MassSpringRun::stop(long long step, int sig) {
   checkpoint(step);
   m_progress.done();
+  const std::string how =
+      sig ? std::string("interrupted by ") + signal_name(sig) : "stopped (--stop-after)";
+  m_out->stopped(strprintf("%s at step %lld of %lld (t = %.9g); continue with: hooke resume %s",
+                           how.c_str(), step, m_steps, m_sim.state().t, m_dir.c_str()));
   std::fprintf(
       stderr, "%s at step %lld of %lld (t = %.9g): wrote %s; continue with: hooke resume %s\n",
-      sig ? (std::string("interrupted by ") + signal_name(sig)).c_str() : "stopped (--stop-after)",
-      step, m_steps, m_sim.state().t, m_out->checkpoint_path().c_str(), m_dir.c_str());
-  return sig == SIGTERM ? kExitTerminated : kExitInterrupted;
+      how.c_str(), step, m_steps, m_sim.state().t, m_out->checkpoint_path().c_str(), m_dir.c_str());
+  return sig ? exit_code_for_signal(sig) : kExitInterrupted;
 }
 
 void MassSpringRun::checkpoint(long long step) {
@@ -320,72 +343,93 @@ int MassSpringRun::finish() {
   if (m_sim.halved_steps() > 0)
     std::fprintf(stderr, "note: %s: %lld of %lld steps were retried with a smaller h\n",
                  file.c_str(), m_sim.halved_steps(), m_steps);
-  m_out->finish(m_sim.state());
+  const std::string summary = strprintf("%lld steps of %s to t = %.6g in %.3f s", m_steps,
+                                        m_scene.integrator.method.c_str(), m_sim.state().t, m_wall);
+  const std::vector<std::string> written = m_out->finish(m_sim.state(), summary);
   if (const std::string r = m_sim.stepper().report(); !r.empty())
     std::printf("%s: %s\n", m_scene.integrator.method.c_str(), r.c_str());
-  std::printf(
-      "%s: %lld steps of %s to t = %.6g in %.3f s; wrote %s/{scene.toml,log.csv,final.csv%s%s}\n",
-      file.c_str(), m_steps, m_scene.integrator.method.c_str(), m_sim.state().t, m_wall,
-      m_dir.c_str(), m_scene.output.vtk ? ",frames/" : "", m_scene.output.png ? ",final.png" : "");
+  std::string files;
+  for (const std::string& w : written) files += (files.empty() ? "" : ",") + w;
+  std::printf("%s: %s; wrote %s/{%s}\n", file.c_str(), summary.c_str(), m_dir.c_str(),
+              files.c_str());
   return 0;
 }
 
+/// An [ode] scene: no checkpoints (they run in seconds), the same folder lifecycle as a run.
 int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
   OdeSystem& ode = *scene.ode;
   auto method = make_explicit_stepper(scene.integrator.method);
-  StopSignals stop_signals;
+  OutputDir folder(dir, "hooke run " + scene.file);
+  check_no_stopped_run(folder, options.force);
+  folder.remove_files({"final.csv", "status.txt", "log.csv", "final.csv.tmp", "final.png",
+                       "checkpoint.bin", "frames", "frames.pvd"});
+  folder.set_status("running");
+  write_resolved_scene(scene, folder.file("scene.toml"));
+  const StopSignals stop_signals;
   method->resize(ode.dimension());
   const Index d = ode.dimension();
   Vec X = scene.ode_initial, X1(d), exact(d);
   double t = 0.0;
   const long long N = scene.time.steps();
-  CsvFile log(dir + "/log.csv");
-  std::fprintf(log.get(), "step,t");
-  for (Index k = 0; k < d; ++k) std::fprintf(log.get(), ",X%lld", (long long)k);
-  std::fprintf(log.get(), ",exact_error\n");
+  OutputFile log = OutputFile::stream(folder.file("log.csv"));
+  log.print("step,t");
+  for (Index k = 0; k < d; ++k) log.print(",X%lld", (long long)k);
+  log.print(",exact_error\n");
   auto row = [&](long long step) {
     scene.ode_exact(t, exact);
-    std::fprintf(log.get(), "%lld,%.17g", step, t);
-    for (Index k = 0; k < d; ++k) std::fprintf(log.get(), ",%.17g", X[k]);
-    std::fprintf(log.get(), ",%.17g\n", (X - exact).lpNorm<Eigen::Infinity>());
+    log.print("%lld,%.17g", step, t);
+    for (Index k = 0; k < d; ++k) log.print(",%.17g", X[k]);
+    log.print(",%.17g\n", (X - exact).lpNorm<Eigen::Infinity>());
   };
-  row(0);
-  Progress progress(options.progress, N);
-  for (long long step = 1; step <= N; ++step) {
-    const double t_next = t + scene.time.step_size(step, t);
-    method->step(ode, t, t_next - t, X, X1);
-    X.swap(X1);
-    t = t_next;
-    if (step % scene.output.log_every == 0 || step == N) row(step);
-    if (g_signal != 0 && step < N) {
-      progress.done();
-      std::fprintf(stderr,
-                   "interrupted by %s at step %lld (t = %.9g); ODE scenes write no "
-                   "checkpoint (they run in seconds): run them again\n",
-                   signal_name(g_signal), step, t);
-      return g_signal == SIGTERM ? kExitTerminated : kExitInterrupted;
+  try {
+    row(0);
+    Progress progress(options.progress, N);
+    for (long long step = 1; step <= N; ++step) {
+      const double t_next = t + scene.time.step_size(step, t);
+      method->step(ode, t, t_next - t, X, X1);
+      X.swap(X1);
+      t = t_next;
+      if (step % scene.output.log_every == 0 || step == N) row(step);
+      if (const int sig = stop_signal(); sig != 0 && step < N) {
+        progress.done();
+        log.sync();
+        const std::string what = strprintf(
+            "interrupted by %s at step %lld (t = %.9g); ODE scenes write no checkpoint (they run "
+            "in seconds): run them again",
+            signal_name(sig), step, t);
+        folder.mark_failed(what);
+        std::fprintf(stderr, "%s\n", what.c_str());
+        return exit_code_for_signal(sig);
+      }
+      if (!X.allFinite()) {
+        progress.done();
+        log.sync();
+        const std::string what =
+            strprintf("diverged at step %lld (t = %.9g, method %s): state became non-finite", step,
+                      t, scene.integrator.method.c_str());
+        folder.mark_failed(what);
+        std::fprintf(stderr, "error: %s: %s\n", scene.file.c_str(), what.c_str());
+        return 3;
+      }
+      progress.update(step, t);
     }
-    if (!X.allFinite()) {
-      progress.done();
-      std::fprintf(
-          stderr,
-          "error: %s: diverged at step %lld (t = %.9g, method %s): state became non-finite\n",
-          scene.file.c_str(), step, t, scene.integrator.method.c_str());
-      return 3;
-    }
-    progress.update(step, t);
+    progress.done();
+    log.commit();
+    scene.ode_exact(t, exact);
+    OutputFile fin = OutputFile::replace(folder.file("final.csv"));
+    fin.print("index,value,exact\n");
+    for (Index k = 0; k < d; ++k) fin.print("%lld,%.17g,%.17g\n", (long long)k, X[k], exact[k]);
+    fin.commit();
+  } catch (const std::exception& e) {
+    folder.mark_failed(e.what());
+    throw;
   }
-  progress.done();
-  scene.ode_exact(t, exact);
-  CsvFile fin(dir + "/final.csv");
-  std::fprintf(fin.get(), "index,value,exact\n");
-  for (Index k = 0; k < d; ++k)
-    std::fprintf(fin.get(), "%lld,%.17g,%.17g\n", (long long)k, X[k], exact[k]);
-  std::printf(
-      "%s: %lld steps of %s to t = %.6g; max error vs exact %.3g; wrote "
-      "%s/{scene.toml,log.csv,final.csv}\n",
-      scene.file.c_str(), N, scene.integrator.method.c_str(), t,
-      (X - exact).lpNorm<Eigen::Infinity>(), dir.c_str());
+  const std::string summary =
+      strprintf("%lld steps of %s to t = %.6g; max error vs exact %.3g", N,
+                scene.integrator.method.c_str(), t, (X - exact).lpNorm<Eigen::Infinity>());
+  folder.set_status("finished", summary);
+  std::printf("%s: %s; wrote %s/{scene.toml,log.csv,final.csv}\n", scene.file.c_str(),
+              summary.c_str(), dir.c_str());
   return 0;
 }
 
@@ -394,26 +438,34 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
 int run_scene(Scene& scene, const RunOptions& options) {
   const std::string dir = options.out_dir.empty() ? scene.output.dir : options.out_dir;
   if (auto* out = scene.resolved["output"].as_table()) out->insert_or_assign("dir", dir);
+  if (scene.is_ode()) return run_ode(scene, dir, options);
+  // An existing folder is locked and checked at once, so that a second writer or a stopped run
+  // is refused before a long setup; a new one is created only after the setup succeeded, so that
+  // a scene refused there (e.g. a factorization over the memory budget) leaves nothing on disk.
+  std::unique_ptr<OutputDir> locked;
   std::error_code ec;
-  fs::create_directories(dir, ec);
-  if (ec) throw std::runtime_error("cannot create output directory " + dir + ": " + ec.message());
-  write_resolved_scene(scene, dir + "/scene.toml");
-  return scene.is_ode() ? run_ode(scene, dir, options)
-                        : MassSpringRun(scene, dir, options, nullptr).run();
+  if (fs::is_directory(dir, ec)) {
+    locked = std::make_unique<OutputDir>(dir, "hooke run " + scene.file);
+    check_no_stopped_run(*locked, options.force);
+  }
+  return MassSpringRun(scene, dir, options, nullptr, std::move(locked)).run();
 }
 
 int resume_run(const std::string& dir, const RunOptions& options) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec))
     throw InputError(dir, "directory", "is not an output directory of hooke run");
+  // Locked before anything is read: a run still writing this folder is refused at once.
+  auto locked = std::make_unique<OutputDir>(dir, "hooke resume " + dir);
   Scene scene = load_scene(dir + "/scene.toml");
   if (scene.is_ode())
     throw InputError(dir + "/scene.toml", "ode",
                      "ODE scenes write no checkpoints (they run in seconds): run them again");
-  const Checkpoint c = read_checkpoint(dir + "/checkpoint.bin");
+  const Checkpoint c = read_checkpoint(dir + "/checkpoint.bin", scene.system->dofs());
+  MassSpringRun run(scene, dir, options, &c, std::move(locked));  // checks c against the scene
   std::fprintf(stderr, "resuming %s at step %lld of %lld (t = %.9g)\n", dir.c_str(), c.step,
                scene.time.steps(), c.state.t);
-  return MassSpringRun(scene, dir, options, &c).run();
+  return run.run();
 }
 
 }  // namespace hooke
@@ -443,6 +495,9 @@ Command add_run_command(CLI::App& app) {
   add_sets(cmd, a->sets);
   add_out(cmd, a->run.out_dir, "[output] dir, or out/<scene>");
   cmd->add_flag("--no-progress", a->no_progress, "never show the progress line");
+  cmd->add_flag("--force", a->run.force,
+                "start over a folder that holds a stopped run's checkpoint (deleting it) instead "
+                "of refusing; `hooke resume DIR` continues such a run");
   cmd->add_option("--stop-after", a->run.stop_after,
                   "testing aid: checkpoint after step N and stop as if interrupted (exit 130)");
   cmd->footer("Methods: " + method_names() + "\nLinear solvers: " + linear_solver_names());

@@ -1,14 +1,10 @@
 #pragma once
 #include <string>
 
+#include "experiments/stop_signals.hpp"
 #include "problems/scene.hpp"
 
 namespace hooke {
-
-/// Exit codes of a run stopped by a signal (128 + signal number, as shells report them); the run
-/// wrote a checkpoint first (mass-spring scenes) and `hooke resume DIR` continues it.
-constexpr int kExitInterrupted = 130;  ///< SIGINT (Ctrl-C), also --stop-after
-constexpr int kExitTerminated = 143;   ///< SIGTERM
 
 /// Options of `hooke run` that do not belong to the scene.
 struct RunOptions {
@@ -17,6 +13,8 @@ struct RunOptions {
   /// Testing aid: after this step, write a checkpoint and stop as if interrupted (exit 130),
   /// deterministically. -1: never.
   long long stop_after = -1;
+  /// `hooke run --force`: start over a folder that holds a resumable checkpoint (deleting it).
+  bool force = false;
 };
 
 /// Runs a loaded scene and writes scene.toml, log.csv, final.csv, frames/ and final.png into the
@@ -24,7 +22,9 @@ struct RunOptions {
 /// step failed numerically (the message on stderr names the step, time, backend and its numbers;
 /// everything written so far is kept), 130 / 143 when stopped by SIGINT / SIGTERM (after writing
 /// DIR/checkpoint.bin).
-/// Throws std::runtime_error when an output file cannot be written.
+/// The output folder is locked for the run and its status.txt says running / finished / stopped /
+/// failed; a folder holding a resumable checkpoint is refused (InputError) unless options.force.
+/// Throws OutputError when an output file cannot be written.
 int run_scene(Scene& scene, const RunOptions& options);
 
 /// Continues a mass-spring run that stopped with a checkpoint: reads DIR/scene.toml and

@@ -2,89 +2,113 @@
 
 #include <cstdlib>
 #include <filesystem>
-#include <fstream>
+#include <sstream>
 
 #include "experiments/output/png_writer.hpp"
 #include "experiments/output/vtk_writer.hpp"
+#include "hooke_config.hpp"
 
 namespace hooke {
 
 namespace fs = std::filesystem;
 
-CsvFile::CsvFile(const std::string& path, bool append)
-    : m_f(std::fopen(path.c_str(), append ? "a" : "w")) {
-  if (!m_f) throw std::runtime_error("cannot write " + path);
-}
-
-CsvFile::~CsvFile() {
-  if (m_f) std::fclose(m_f);
+std::string resolved_scene_text(const Scene& scene) {
+  std::ostringstream os;
+  os << scene.resolved << "\n";
+  return os.str();
 }
 
 void write_resolved_scene(const Scene& scene, const std::string& path) {
-  std::ofstream out(path);
-  if (!out) throw std::runtime_error("cannot write " + path);
-  out << "# Resolved scene: " << scene.file
-      << " with every default filled in (written by hooke run).\n"
-      << scene.resolved << "\n";
+  write_file(path, "# Resolved scene: " + scene.file +
+                       " with every default filled in (written by hooke run).\n" +
+                       resolved_scene_text(scene));
 }
 
 namespace {
 
-/// DIR/log.csv, cut back to the checkpointed step on a resume (rows after it are written again).
-std::string prepare_log(const std::string& dir, const Checkpoint* resume) {
-  const std::string path = dir + "/log.csv";
-  if (resume) {
-    std::error_code ec;
-    const auto size = fs::file_size(path, ec);
-    if (ec || static_cast<long long>(size) < resume->log_bytes)
-      throw InputError(path, "log",
-                       "is shorter than the checkpoint says (" + std::to_string(resume->log_bytes) +
-                           " bytes): it was "
-                           "changed after the run stopped");
-    fs::resize_file(path, static_cast<std::uintmax_t>(resume->log_bytes));
-  }
-  return path;
+/// DIR/log.csv of a resumed run, cut back to the checkpointed step (rows after it are written
+/// again) and opened for appending.
+std::unique_ptr<OutputFile> reopen_log(const std::string& path, const Checkpoint& resume) {
+  std::error_code ec;
+  const auto size = fs::file_size(path, ec);
+  if (ec || static_cast<long long>(size) < resume.log_bytes)
+    throw InputError(path, "log",
+                     "is shorter than the checkpoint says (" + std::to_string(resume.log_bytes) +
+                         " bytes): it was changed after the run stopped");
+  fs::resize_file(path, static_cast<std::uintmax_t>(resume.log_bytes), ec);
+  if (ec) throw OutputError(path, "shorten", ec.value());
+  return std::make_unique<OutputFile>(OutputFile::stream(path, true));
 }
 
 void write_final_csv(const std::string& path, const State& s) {
-  {
-    CsvFile f(path + ".tmp");
-    std::fprintf(f.get(), "id,x,y,z,vx,vy,vz\n");
-    for (Index i = 0; i < s.num_particles(); ++i)
-      std::fprintf(f.get(), "%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", (long long)i, s.x[3 * i],
-                   s.x[3 * i + 1], s.x[3 * i + 2], s.v[3 * i], s.v[3 * i + 1], s.v[3 * i + 2]);
-  }
-  fs::rename(path + ".tmp", path);
+  OutputFile f = OutputFile::replace(path);
+  f.print("id,x,y,z,vx,vy,vz\n");
+  for (Index i = 0; i < s.num_particles(); ++i)
+    f.print("%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", (long long)i, s.x[3 * i], s.x[3 * i + 1],
+            s.x[3 * i + 2], s.v[3 * i], s.v[3 * i + 1], s.v[3 * i + 2]);
+  f.commit();
 }
 
 }  // namespace
 
-RunOutput::RunOutput(const Scene& scene, std::string dir, const Checkpoint* resume)
+RunOutput::RunOutput(const Scene& scene, std::unique_ptr<OutputDir> dir, const Checkpoint* resume,
+                     bool force)
     : m_scene(scene),
       m_dir(std::move(dir)),
-      m_frames_dir(m_dir + "/frames"),
-      m_log(prepare_log(m_dir, resume), resume != nullptr),
+      m_frames_dir(m_dir->file("frames")),
       m_exact(scene.initial) {
   if (resume) {
+    m_log = reopen_log(m_dir->file("log.csv"), *resume);
     m_frames = resume->frames;
+    m_dir->set_status("running", "resumed at step " + std::to_string(resume->step));
   } else {
-    fs::remove(checkpoint_path());  // a stale checkpoint of an earlier run must not be resumed
-    std::fprintf(m_log.get(),
-                 "step,t,kinetic,potential,total,max_strain,iterations,residual,wall_time%s\n",
-                 scene.exact ? ",error" : "");
+    start_fresh(force);
   }
   prepare_frames(resume);
 }
 
+void check_no_stopped_run(const OutputDir& dir, bool force) {
+  std::error_code ec;
+  const std::string path = dir.file("checkpoint.bin");
+  if (fs::exists(path, ec) && !force)
+    throw InputError(path, "checkpoint",
+                     "this folder holds a stopped run that `hooke resume " + dir.path() +
+                         "` continues; to start this run over it instead (deleting the "
+                         "checkpoint), pass --force, or choose another folder with --out");
+}
+
+void RunOutput::start_fresh(bool force) {
+  check_no_stopped_run(*m_dir, force);
+  // Everything an earlier run left, its mark of completion first: final.csv must exist only for
+  // a run that finished. Removed before status.txt is written, which frees the space it needs.
+  m_dir->remove_files({"final.csv", "status.txt", "final.png", "checkpoint.bin", "frames.pvd",
+                       "log.csv", "final.csv.tmp", "final.png.tmp", "checkpoint.bin.tmp",
+                       "frames.pvd.tmp", "scene.toml.tmp", "status.txt.tmp"});
+  m_dir->set_status("running");
+  write_resolved_scene(m_scene, m_dir->file("scene.toml"));
+  m_log = std::make_unique<OutputFile>(OutputFile::stream(m_dir->file("log.csv")));
+  m_log->print("step,t,kinetic,potential,total,max_strain,iterations,residual,wall_time%s\n",
+               m_scene.exact ? ",error" : "");
+}
+
 void RunOutput::prepare_frames(const Checkpoint* resume) {
-  if (!m_scene.output.vtk) return;
-  fs::create_directories(m_frames_dir);
+  std::error_code ec;
+  if (!fs::is_directory(m_frames_dir, ec)) {
+    if (m_scene.output.vtk) {
+      fs::create_directories(m_frames_dir, ec);
+      if (ec) throw OutputError(m_frames_dir, "create", ec.value());
+    }
+    return;
+  }
   // A fresh run removes every frame; a resumed one those written after its checkpoint.
   for (const auto& e : fs::directory_iterator(m_frames_dir)) {
-    if (e.path().extension() != ".vtk") continue;
-    const std::string stem = e.path().stem().string();
-    const long long frame_step = stem.rfind("frame_", 0) == 0 ? std::atoll(stem.c_str() + 6) : -1;
-    if (!resume || frame_step > resume->step) fs::remove(e.path());
+    const std::string name = e.path().filename().string();
+    if (name.rfind("frame_", 0) != 0) continue;
+    const long long frame_step = std::atoll(name.c_str() + 6);
+    if (!resume || frame_step > resume->step || e.path().extension() != ".vtk") {
+      fs::remove(e.path(), ec);
+      if (ec) throw OutputError(e.path().string(), "remove", ec.value());
+    }
   }
 }
 
@@ -92,14 +116,13 @@ double RunOutput::log_row(long long step, const State& s, int iterations, double
                           double wall) {
   const MassSpringSystem& sys = *m_scene.system;
   const double K = sys.kinetic_energy(s.v), U = sys.potential_energy(s.x);
-  FILE* f = m_log.get();
-  std::fprintf(f, "%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%.6g,%.6g", step, s.t, K, U, K + U,
+  m_log->print("%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%.6g,%.6g", step, s.t, K, U, K + U,
                sys.max_strain(s.x), iterations, residual, wall);
   if (m_scene.exact) {
     m_scene.exact(s.t, m_exact);
-    std::fprintf(f, ",%.17g", (s.x - m_exact.x).lpNorm<Eigen::Infinity>());
+    m_log->print(",%.17g", (s.x - m_exact.x).lpNorm<Eigen::Infinity>());
   }
-  std::fprintf(f, "\n");
+  m_log->print("\n");
   return K + U;
 }
 
@@ -109,25 +132,54 @@ void RunOutput::frame(long long step, const State& s) {
   std::snprintf(name, sizeof name, "frame_%08lld.vtk", step);
   write_vtk_frame(m_frames_dir + "/" + name, s, m_scene.system->pinned(), m_scene.edges);
   m_frames.emplace_back(s.t, std::string("frames/") + name);
-  write_pvd(m_dir + "/frames.pvd", m_frames);
+  write_pvd(m_dir->file("frames.pvd"), m_frames);
 }
 
 void RunOutput::checkpoint(Checkpoint c) {
-  flush();
-  c.log_bytes = std::ftell(m_log.get());
+  m_log->sync();
+  c.log_bytes = m_log->tell();
   c.frames = m_frames;
+  c.version = HOOKE_VERSION;
+  c.scene = resolved_scene_text(m_scene);
+  c.initial_hash = initial_state_hash(m_scene.initial, m_scene.system->pinned());
   write_checkpoint(checkpoint_path(), c);
 }
 
-void RunOutput::flush() { std::fflush(m_log.get()); }
+void RunOutput::flush() { m_log->sync(); }
 
-void RunOutput::finish(const State& s) {
-  flush();
-  write_final_csv(m_dir + "/final.csv", s);
-  fs::remove(checkpoint_path());
-  if (m_scene.output.png)
-    write_png_picture(m_dir + "/final.png", s, m_scene.system->pinned(), m_scene.edges,
+void RunOutput::stopped(const std::string& detail) { m_dir->set_status("stopped", detail); }
+
+void RunOutput::failed(const std::string& why) noexcept {
+  try {
+    m_log->sync();
+  } catch (...) {  // the reason for failing may be this very file; status.txt is what matters
+  }
+  m_dir->mark_failed(why);
+}
+
+std::vector<std::string> RunOutput::finish(const State& s, const std::string& summary) {
+  std::vector<std::string> written = {"scene.toml", "log.csv"};
+  m_log->commit();
+  if (m_scene.output.vtk) written.insert(written.end(), {"frames/", "frames.pvd"});
+  if (m_scene.output.png) {
+    write_png_picture(m_dir->file("final.png"), s, m_scene.system->pinned(), m_scene.edges,
                       m_scene.edge_rest);
+    written.push_back("final.png");
+  }
+  // final.csv last: its presence says the run finished, so nothing may fail after it.
+  write_final_csv(m_dir->file("final.csv"), s);
+  written.push_back("final.csv");
+  try {
+    std::error_code ec;
+    fs::remove(checkpoint_path(), ec);
+    if (ec) throw OutputError(checkpoint_path(), "remove", ec.value());
+    m_dir->set_status("finished", summary);
+  } catch (...) {
+    std::error_code ignored;
+    fs::remove(m_dir->file("final.csv"), ignored);
+    throw;
+  }
+  return written;
 }
 
 }  // namespace hooke

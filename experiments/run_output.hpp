@@ -1,45 +1,45 @@
 #pragma once
-#include <cstdio>
+#include <memory>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "experiments/checkpoint.hpp"
+#include "experiments/output/output_dir.hpp"
+#include "experiments/output/output_file.hpp"
 #include "problems/scene.hpp"
 
 namespace hooke {
 
-/// A file written with stdio that is closed (flushed) on destruction, so an interrupted or
-/// diverged run keeps what it wrote. Throws std::runtime_error if the file cannot be opened.
-class CsvFile {
- public:
-  explicit CsvFile(const std::string& path, bool append = false);
-  ~CsvFile();
-  CsvFile(const CsvFile&) = delete;
-  CsvFile& operator=(const CsvFile&) = delete;
-  FILE* get() { return m_f; }
-
- private:
-  FILE* m_f;
-};
+/// The resolved scene as text (what DIR/scene.toml holds below its comment line).
+std::string resolved_scene_text(const Scene& scene);
 
 /// Writes the scene with every default filled in (DIR/scene.toml): rerunnable as is.
 void write_resolved_scene(const Scene& scene, const std::string& path);
 
-/// The files of one mass-spring run in its output directory, over their whole life: a fresh run
-/// removes a stale checkpoint and old frames and starts log.csv; a resumed one cuts log.csv back to
-/// the checkpointed step and removes the frames written after it. Then one row per logged step,
-/// VTK frames with their frames.pvd, checkpoints, and at the end final.csv and final.png. Every
-/// file of a run is opened, written and named here and nowhere else.
+/// Refuses (InputError) a fresh run into a folder that holds a resumable checkpoint, unless
+/// force: the stopped run would be lost without a word.
+void check_no_stopped_run(const OutputDir& dir, bool force);
+
+/// The files of one mass-spring run in its locked output folder (OutputDir), over their whole
+/// life. A fresh run refuses a folder that holds a resumable checkpoint (unless forced), marks the
+/// folder "running" in status.txt, removes every output of an earlier run (final.csv, final.png,
+/// checkpoint.bin, frames) and writes scene.toml and a new log.csv. A resumed run cuts log.csv
+/// back to the checkpointed step and removes the frames written after it. Then one row per
+/// logged step, VTK frames with their frames.pvd, checkpoints, and at the end final.csv and
+/// final.png, after which status.txt says "finished". Every file of a run is opened, written and
+/// named here and nowhere else, through OutputFile: a failed write throws OutputError.
 class RunOutput {
  public:
-  /// scene must outlive the object. resume: the checkpoint a resumed run continues from, or null.
-  /// Throws InputError for a log.csv shorter than the checkpoint says, std::runtime_error when a
-  /// file cannot be written.
-  RunOutput(const Scene& scene, std::string dir, const Checkpoint* resume);
+  /// scene must outlive the object. resume: the checkpoint a resumed run continues from, or
+  /// null. force: a fresh run may replace a resumable checkpoint. Throws InputError for a folder
+  /// that holds a checkpoint (fresh run, not forced) or a log.csv shorter than the checkpoint says;
+  /// OutputError when a file cannot be written.
+  RunOutput(const Scene& scene, std::unique_ptr<OutputDir> dir, const Checkpoint* resume,
+            bool force);
 
-  const std::string& dir() const { return m_dir; }
-  std::string checkpoint_path() const { return m_dir + "/checkpoint.bin"; }
+  const std::string& dir() const { return m_dir->path(); }
+  std::string checkpoint_path() const { return m_dir->file("checkpoint.bin"); }
   /// Frames written so far: (t, path relative to dir).
   const std::vector<std::pair<double, std::string>>& frames() const { return m_frames; }
 
@@ -47,21 +47,29 @@ class RunOutput {
   double log_row(long long step, const State& s, int iterations, double residual, double wall);
   /// Writes frame `step` (if [output] vtk) and rewrites frames.pvd.
   void frame(long long step, const State& s);
-  /// Writes DIR/checkpoint.bin atomically from c, with the log position and frames filled in.
+  /// Makes log.csv durable and writes DIR/checkpoint.bin from c, with the log position, frames
+  /// and the scene's identity (version, resolved scene, initial-state hash) filled in.
   void checkpoint(Checkpoint c);
-  /// Flushes log.csv, so that it is complete up to the last row when the run stops.
+  /// Flushes log.csv to disk, so that it is complete up to the last row when the run stops.
   void flush();
-  /// The end of a complete run: writes final.csv (and final.png if [output] png) from s and
-  /// removes the checkpoint (nothing is left to resume).
-  void finish(const State& s);
+  /// The run stopped with a checkpoint (signal or --stop-after): status.txt says "stopped".
+  void stopped(const std::string& detail);
+  /// The run failed (exit 3, or an error): status.txt says "failed" with why. Never throws.
+  void failed(const std::string& why) noexcept;
+  /// The end of a complete run: writes final.csv (and final.png if [output] png) from s, removes
+  /// the checkpoint (nothing is left to resume) and marks the folder finished. Returns the
+  /// names of the files the run wrote, for the end-of-run line.
+  std::vector<std::string> finish(const State& s, const std::string& summary);
 
  private:
+  void start_fresh(bool force);
   void prepare_frames(const Checkpoint* resume);
 
   const Scene& m_scene;
-  std::string m_dir, m_frames_dir;
+  std::unique_ptr<OutputDir> m_dir;
+  std::string m_frames_dir;
   std::vector<std::pair<double, std::string>> m_frames;
-  CsvFile m_log;
+  std::unique_ptr<OutputFile> m_log;
   State m_exact;  // scratch for the exact solution's column
 };
 

@@ -35,6 +35,7 @@
 #include "experiments/cli.hpp"
 #include "experiments/plot_script.hpp"
 #include "experiments/study_methods.hpp"
+#include "experiments/study_output.hpp"
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/linear/conjugate_gradient.hpp"
 #include "hooke/registry.hpp"
@@ -181,12 +182,12 @@ int run_scaling(const ScalingOptions& options) {
     if (std::none_of(specs().begin(), specs().end(),
                      [&](const MethodSpec& m) { return m.label == name; }))
       throw InputError("<command line>", "--methods", "unknown method '" + name + "'");
-  std::filesystem::create_directories(options.out_dir);
-  const std::string csv_path = options.out_dir + "/scaling.csv";
-  std::ofstream csv(csv_path);
-  csv << "method,threads,springs,particles,steps,step_s,iterations_per_step,iteration_s,"
-         "assembly_s,factor_s,solve_s,local_s,global_s,setup_s,peak_mib,factor_nnz,status\n";
-  csv << std::setprecision(6);
+  StudyOutput out(options.out_dir, "scaling", {"scaling.csv"});
+  OutputFile& csv = out.file("scaling.csv");
+  csv.print(
+      "method,threads,springs,particles,steps,step_s,iterations_per_step,iteration_s,"
+      "assembly_s,factor_s,solve_s,local_s,global_s,setup_s,peak_mib,factor_nnz,status\n");
+  int rows = 0;
   for (const MethodSpec& m : specs()) {
     if (!options.methods.empty() &&
         std::find(options.methods.begin(), options.methods.end(), m.label) == options.methods.end())
@@ -196,20 +197,24 @@ int run_scaling(const ScalingOptions& options) {
       if (6.0 * double(side) * double(side) > 1.05 * m.max_springs) continue;
       for (const int t : options.threads) {
         const Row r = run_one(m, side, t, options.steps);
-        csv << r.method << ',' << r.threads << ',' << r.springs << ',' << r.particles << ','
-            << r.steps << ',' << r.step_s << ',' << r.iterations_per_step << ',' << r.iteration_s
-            << ',' << r.assembly_s << ',' << r.factor_s << ',' << r.solve_s << ',' << r.local_s
-            << ',' << r.global_s << ',' << r.setup_s << ',' << r.peak_mib << ',' << r.factor_nnz
-            << ",\"" << r.status << "\"\n";
+        std::ostringstream row;
+        row << std::setprecision(6) << r.method << ',' << r.threads << ',' << r.springs << ','
+            << r.particles << ',' << r.steps << ',' << r.step_s << ',' << r.iterations_per_step
+            << ',' << r.iteration_s << ',' << r.assembly_s << ',' << r.factor_s << ',' << r.solve_s
+            << ',' << r.local_s << ',' << r.global_s << ',' << r.setup_s << ',' << r.peak_mib << ','
+            << r.factor_nnz << ",\"" << r.status << "\"\n";
+        csv.write(row.str());
         csv.flush();
         std::cout << std::left << std::setw(22) << r.method << " threads " << r.threads
                   << "  springs " << std::setw(9) << r.springs << " step " << std::setw(10)
                   << r.step_s << " s  iteration " << std::setw(10) << r.iteration_s << " s  peak "
                   << std::setw(8) << r.peak_mib << " MiB  " << r.status << std::endl;
+        if (const int code = out.interrupted(std::to_string(++rows) + " rows"); code != 0)
+          return code;
       }
     }
   }
-  std::cout << "wrote " << csv_path << "\n";
+  std::cout << "wrote " << out.finish(std::to_string(rows) + " rows") << "\n";
   if (options.plot) run_plot_script("scaling.py", options.out_dir);
   return 0;
 }

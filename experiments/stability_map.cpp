@@ -36,6 +36,7 @@
 #include "experiments/divergence.hpp"
 #include "experiments/natural_frequency.hpp"
 #include "experiments/plot_script.hpp"
+#include "experiments/study_output.hpp"
 #include "experiments/trajectory.hpp"
 #include "hooke/integrators/stability.hpp"
 #include "hooke/registry.hpp"
@@ -140,7 +141,6 @@ Boundary find_stability_boundary(const std::function<Verdict(double h)>& classif
 }
 
 int run_stability(const StabilityOptions& options, const std::string& scenes_dir) {
-  namespace fs = std::filesystem;
   const auto start = Clock::now();
   const std::vector<StabilityCase> cases =
       select_cases(stability_cases(options.full, scenes_dir), options.cases);
@@ -150,12 +150,12 @@ int run_stability(const StabilityOptions& options, const std::string& scenes_dir
   if (ks.empty())
     for (int e = 2; e <= 14; e += options.full ? 1 : 2) ks.push_back(std::pow(10.0, 0.5 * e));
 
-  fs::create_directories(options.out_dir);
-  const std::string csv_path = options.out_dir + "/stability.csv";
-  FILE* csv = std::fopen(csv_path.c_str(), "w");
-  if (!csv) throw std::runtime_error("cannot write " + csv_path);
-  std::fprintf(
-      csv, "case,label,method,k,omega_max,h_theory,h_stable,h_unstable,bound,runs,wall_s,reason\n");
+  StudyOutput out(options.out_dir, "stability", {"stability.csv"});
+  OutputFile& csv = out.file("stability.csv");
+  csv.print(
+      "case,label,method,k,omega_max,h_theory,h_stable,h_unstable,bound,runs,wall_s,reason\n");
+  const std::size_t rows = cases.size() * ks.size() * study.size();
+  std::size_t row = 0;
   const StabilitySettings& s = options.settings;
   for (const auto& c : cases) {
     std::set<std::string> skipped;  // methods that cannot run this case at all
@@ -181,19 +181,25 @@ int run_stability(const StabilityOptions& options, const std::string& scenes_dir
         const char* bound = b.h_stable == 0.0          ? "below"
                             : std::isinf(b.h_unstable) ? "above"
                                                        : "bracketed";
-        std::fprintf(csv, "%s,%s,%s,%.6g,%.9g,%.9g,%.9g,%.9g,%s,%d,%.4g,%s\n", c.name.c_str(),
-                     m.label.c_str(), m.method.c_str(), k, omega, h_theory, b.h_stable,
-                     b.h_unstable, bound, b.runs, b.wall, csv_quoted(b.why).c_str());
-        std::fflush(csv);
+        csv.print("%s,%s,%s,%.6g,%.9g,%.9g,%.9g,%.9g,%s,%d,%.4g,%s\n", c.name.c_str(),
+                  m.label.c_str(), m.method.c_str(), k, omega, h_theory, b.h_stable, b.h_unstable,
+                  bound, b.runs, b.wall, csv_quoted(b.why).c_str());
+        csv.flush();
         std::fprintf(stderr,
                      "stability: %-14s k = %-8.3g %-22s h_stable = %-10.4g (theory %-10.4g) %2d "
                      "runs %7.2f s\n",
                      c.name.c_str(), k, m.label.c_str(), b.h_stable, h_theory, b.runs, b.wall);
+        ++row;
+        if (const int code = out.interrupted(std::to_string(row) + " of " + std::to_string(rows) +
+                                             " (case, k, method) rows");
+            code != 0)
+          return code;
       }
     }
   }
-  std::fclose(csv);
-  std::printf("stability: wrote %s (%.1f s)\n", csv_path.c_str(), seconds_since(start));
+  const std::string wrote =
+      out.finish(std::to_string(row) + " rows in " + std::to_string(seconds_since(start)) + " s");
+  std::printf("stability: wrote %s (%.1f s)\n", wrote.c_str(), seconds_since(start));
   if (options.plot) run_plot_script("stability.py", options.out_dir);
   return 0;
 }

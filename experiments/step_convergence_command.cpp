@@ -32,6 +32,7 @@
 
 #include "experiments/cli.hpp"
 #include "experiments/plot_script.hpp"
+#include "experiments/study_output.hpp"
 #include "experiments/trajectory.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
@@ -253,18 +254,29 @@ int run_step_convergence(const std::string& scene_path, const StepConvergenceOpt
   const std::vector<double> hs =
       opt.full ? std::vector<double>{1e-3, 1e-2, 1.0 / 30.0} : std::vector<double>{1e-2};
   const int max_iterations = opt.full ? 3000 : 1000;
-  std::filesystem::create_directories(opt.out_dir);
-  std::ofstream csv(opt.out_dir + "/step_convergence.csv");
-  csv << "k,h,method,iterations,wall_seconds,objective_error,position_error\n";
-  std::ostringstream md;
-  md << table_header(scene_path, opt.target);
+  StudyOutput out(opt.out_dir, "step-convergence", {"step_convergence.csv", "step_convergence.md"});
+  OutputFile& csv = out.file("step_convergence.csv");
+  OutputFile& md = out.file("step_convergence.md");
+  csv.print("k,h,method,iterations,wall_seconds,objective_error,position_error\n");
+  const std::string header = table_header(scene_path, opt.target);
+  md.write(header);
+  std::cout << header;
+  int done = 0;
   for (const double k : ks)
-    for (const double h : hs) study_step(scene_path, k, h, max_iterations, opt.target, csv, md);
-  csv.close();
-  std::ofstream(opt.out_dir + "/step_convergence.md") << md.str();
-  std::cout << md.str();
+    for (const double h : hs) {
+      std::ostringstream csv_rows, md_rows;
+      study_step(scene_path, k, h, max_iterations, opt.target, csv_rows, md_rows);
+      csv.write(csv_rows.str());
+      md.write(md_rows.str());
+      std::cout << md_rows.str() << std::flush;
+      if (const int code = out.interrupted(std::to_string(++done) + " of " +
+                                           std::to_string(ks.size() * hs.size()) + " (k, h) steps");
+          code != 0)
+        return code;
+    }
+  const std::string wrote = out.finish(std::to_string(done) + " (k, h) steps");
   if (run_plot_script("step_convergence.py", opt.out_dir) != 0) return 1;
-  std::cout << "wrote " << opt.out_dir << "/step_convergence.{csv,md,png}\n";
+  std::cout << "wrote " << wrote << " and step_convergence.png\n";
   return 0;
 #endif
 }

@@ -35,6 +35,7 @@
 #include "experiments/cli.hpp"
 #include "experiments/divergence.hpp"
 #include "experiments/plot_script.hpp"
+#include "experiments/study_output.hpp"
 #include "experiments/trajectory.hpp"
 #include "hooke/registry.hpp"
 
@@ -94,7 +95,7 @@ Scene load_case(const WorkPrecisionCase& c, const StudyMethod& m, double h) {
 /// The case's CVODE reference at S samples, its line written to refcsv; none (after saying why)
 /// if CVODE did not complete.
 std::optional<Reference> case_reference(const WorkPrecisionCase& c, double reference_rtol, int S,
-                                        FILE* refcsv) {
+                                        OutputFile& refcsv) {
   // The reference steps straight from sample to sample (dt = T / S).
   const StudyMethod cvode{"cvode", "cvode", {}, Sweep::Tolerance};
   const Scene ref_scene = load_case(c, cvode, c.duration / S);
@@ -107,10 +108,10 @@ std::optional<Reference> case_reference(const WorkPrecisionCase& c, double refer
                  ref.trajectory.status.c_str());
     return std::nullopt;
   }
-  std::fprintf(refcsv, "%s,%.3g,%.4g,%.6g,%.6g,%.6g,%s\n", c.name.c_str(), reference_rtol,
+  refcsv.print("%s,%.3g,%.4g,%.6g,%.6g,%.6g,%s\n", c.name.c_str(), reference_rtol,
                ref.trajectory.wall, ref.own_error.rms_final, ref.own_error.rms_traj,
                ref.own_error.max_traj, csv_quoted(ref.how).c_str());
-  std::fflush(refcsv);
+  refcsv.flush();
   std::fprintf(stderr, "workprecision: %s: %s\n", c.name.c_str(), ref.how.c_str());
   return ref;
 }
@@ -149,7 +150,7 @@ Trajectory run_method(const Scene& scene, const StudyMethod& m, double rtol, int
 /// Every run of method m on the case (method_runs), one CSV row each; stops at the first run that
 /// cannot load or is unsupported, and after one that takes over 60 s.
 void sweep_method(const WorkPrecisionCase& c, const StudyMethod& m,
-                  const std::vector<double>& rtols, int S, const Reference& ref, FILE* csv) {
+                  const std::vector<double>& rtols, int S, const Reference& ref, OutputFile& csv) {
   for (const auto& [h, rtol] : method_runs(c, m, rtols, S)) {
     Scene scene;
     try {
@@ -164,10 +165,10 @@ void sweep_method(const WorkPrecisionCase& c, const StudyMethod& m,
     }
     const Trajectory tr = run_method(scene, m, rtol, S);
     const Errors e = compare(tr, ref.trajectory);
-    std::fprintf(csv, "%s,%s,%s,%.6g,%.3g,%.6g,%lld,%.6g,%.6g,%.6g,%.6g,%s\n", c.name.c_str(),
-                 m.label.c_str(), m.method.c_str(), h, rtol, tr.wall, tr.steps, e.rms_final,
-                 e.max_final, e.rms_traj, e.max_traj, csv_quoted(tr.status).c_str());
-    std::fflush(csv);
+    csv.print("%s,%s,%s,%.6g,%.3g,%.6g,%lld,%.6g,%.6g,%.6g,%.6g,%s\n", c.name.c_str(),
+              m.label.c_str(), m.method.c_str(), h, rtol, tr.wall, tr.steps, e.rms_final,
+              e.max_final, e.rms_traj, e.max_traj, csv_quoted(tr.status).c_str());
+    csv.flush();
     std::fprintf(
         stderr, "workprecision: %-14s %-20s h = %-9.3g rtol = %-7.2g wall %8.3f s  err %-9.3g %s\n",
         c.name.c_str(), m.label.c_str(), h, rtol, tr.wall, e.rms_final, tr.status.c_str());
@@ -182,7 +183,6 @@ void sweep_method(const WorkPrecisionCase& c, const StudyMethod& m,
 }  // namespace
 
 int run_work_precision(const WorkPrecisionOptions& options, const std::string& scenes_dir) {
-  namespace fs = std::filesystem;
   const auto start = Clock::now();
   const std::vector<WorkPrecisionCase> cases =
       select_cases(work_precision_cases(options.full, scenes_dir), options.cases);
@@ -191,23 +191,28 @@ int run_work_precision(const WorkPrecisionOptions& options, const std::string& s
   const std::vector<double> rtols = sweep_rtols(options);
   const int S = std::max(1, options.samples);
 
-  fs::create_directories(options.out_dir);
-  FILE* csv = std::fopen((options.out_dir + "/workprecision.csv").c_str(), "w");
-  FILE* refcsv = std::fopen((options.out_dir + "/reference.csv").c_str(), "w");
-  if (!csv || !refcsv) throw std::runtime_error("cannot write into " + options.out_dir);
-  std::fprintf(csv,
-               "case,label,method,h,rtol,wall_s,steps,rms_err_final,max_err_final,rms_err_traj,max_"
-               "err_traj,status\n");
-  std::fprintf(refcsv, "case,rtol,wall_s,err_rms_final,err_rms_traj,err_max_traj,how\n");
+  StudyOutput out(options.out_dir, "workprecision", {"workprecision.csv", "reference.csv"});
+  OutputFile& csv = out.file("workprecision.csv");
+  OutputFile& refcsv = out.file("reference.csv");
+  csv.print(
+      "case,label,method,h,rtol,wall_s,steps,rms_err_final,max_err_final,rms_err_traj,max_"
+      "err_traj,status\n");
+  refcsv.print("case,rtol,wall_s,err_rms_final,err_rms_traj,err_max_traj,how\n");
+  std::size_t done = 0;
   for (const auto& c : cases) {
     const std::optional<Reference> ref = case_reference(c, options.reference_rtol, S, refcsv);
     if (!ref) return 3;
-    for (const auto& m : study) sweep_method(c, m, rtols, S, *ref, csv);
+    for (const auto& m : study) {
+      sweep_method(c, m, rtols, S, *ref, csv);
+      if (const int code = out.interrupted(std::to_string(++done) + " of " +
+                                           std::to_string(cases.size() * study.size()) +
+                                           " (case, method) sweeps");
+          code != 0)
+        return code;
+    }
   }
-  std::fclose(csv);
-  std::fclose(refcsv);
-  std::printf("workprecision: wrote %s/workprecision.csv and reference.csv (%.1f s)\n",
-              options.out_dir.c_str(), seconds_since(start));
+  const std::string wrote = out.finish(std::to_string(done) + " (case, method) sweeps");
+  std::printf("workprecision: wrote %s (%.1f s)\n", wrote.c_str(), seconds_since(start));
   if (options.plot) run_plot_script("work_precision.py", options.out_dir);
   return 0;
 }

@@ -3,9 +3,12 @@
 #include <png.h>
 
 #include <algorithm>
+#include <cerrno>
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
+
+#include "experiments/output/output_file.hpp"
 
 namespace hooke {
 
@@ -38,6 +41,11 @@ struct Image {
     }
   }
 };
+
+/// libpng's error handler without its message on stderr: the OutputError thrown after the
+/// longjmp names the file and the OS reason.
+extern "C" void on_png_error(png_structp png, png_const_charp) { png_longjmp(png, 1); }
+extern "C" void on_png_warning(png_structp, png_const_charp) {}
 
 }  // namespace
 
@@ -84,20 +92,20 @@ void write_png_picture(const std::string& path, const State& s, const std::vecto
         for (int dx = -3; dx <= 3; ++dx)
           if (dx * dx + dy * dy <= 9) img.blend(int(sx(i)) + dx, int(sy(i)) + dy, black, 1.0f);
 
-  FILE* fp = std::fopen(path.c_str(), "wb");
-  if (!fp) throw std::runtime_error("cannot write " + path);
-  png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, nullptr, nullptr);
+  OutputFile file = OutputFile::replace(path);
+  std::vector<png_byte> row(size_t(3) * width);  // before setjmp: a longjmp skips no destructor
+  png_structp png =
+      png_create_write_struct(PNG_LIBPNG_VER_STRING, nullptr, on_png_error, on_png_warning);
   png_infop info = png ? png_create_info_struct(png) : nullptr;
   if (!png || !info || setjmp(png_jmpbuf(png))) {
+    const int err = errno;  // a failed write (full disk) is the usual cause: name it
     png_destroy_write_struct(&png, &info);
-    std::fclose(fp);
-    throw std::runtime_error("libpng failed writing " + path);
+    throw OutputError(path, "write", err);
   }
-  png_init_io(png, fp);
+  png_init_io(png, file.get());
   png_set_IHDR(png, info, png_uint_32(width), png_uint_32(height), 8, PNG_COLOR_TYPE_RGB,
                PNG_INTERLACE_NONE, PNG_COMPRESSION_TYPE_DEFAULT, PNG_FILTER_TYPE_DEFAULT);
   png_write_info(png, info);
-  std::vector<png_byte> row(size_t(3) * width);
   for (int y = 0; y < height; ++y) {
     for (int k = 0; k < 3 * width; ++k)
       row[size_t(k)] = png_byte(
@@ -106,7 +114,7 @@ void write_png_picture(const std::string& path, const State& s, const std::vecto
   }
   png_write_end(png, nullptr);
   png_destroy_write_struct(&png, &info);
-  std::fclose(fp);
+  file.commit();
 }
 
 }  // namespace hooke

@@ -2,15 +2,16 @@
 
 #include <cstdint>
 #include <cstring>
-#include <fstream>
-#include <stdexcept>
+#include <sstream>
+
+#include "experiments/output/output_file.hpp"
 
 namespace hooke {
 
 namespace {
 // Legacy VTK binary data is big-endian.
 template <typename T>
-void put_be(std::ofstream& out, T value) {
+void put_be(std::ostringstream& out, T value) {
   unsigned char b[sizeof(T)];
   std::memcpy(b, &value, sizeof(T));
   for (size_t k = 0; k < sizeof(T) / 2; ++k) std::swap(b[k], b[sizeof(T) - 1 - k]);
@@ -20,8 +21,7 @@ void put_be(std::ofstream& out, T value) {
 
 void write_vtk_frame(const std::string& path, const State& s, const std::vector<char>& pinned,
                      const std::vector<std::array<int, 2>>& edges) {
-  std::ofstream out(path, std::ios::binary);
-  if (!out) throw std::runtime_error("cannot write " + path);
+  std::ostringstream out(std::ios::binary);
   const Index n = s.num_particles();
   out << "# vtk DataFile Version 3.0\nhooke frame t=" << s.t << "\nBINARY\nDATASET POLYDATA\n";
   out << "FIELD FieldData 1\nTIME 1 1 double\n";
@@ -39,21 +39,17 @@ void write_vtk_frame(const std::string& path, const State& s, const std::vector<
   out << "\nSCALARS pinned int 1\nLOOKUP_TABLE default\n";
   for (Index i = 0; i < n; ++i) put_be<int32_t>(out, pinned[size_t(i)] ? 1 : 0);
   out << "\n";
-  if (!out) throw std::runtime_error("error while writing " + path);
+  write_file(path, out.str());
 }
 
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& frames) {
-  const std::string tmp = path + ".tmp";
-  {
-    std::ofstream out(tmp);
-    if (!out) throw std::runtime_error("cannot write " + tmp);
-    out.precision(17);
-    out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
-    for (const auto& [t, file] : frames)
-      out << "  <DataSet timestep=\"" << t << "\" file=\"" << file << "\"/>\n";
-    out << "</Collection>\n</VTKFile>\n";
-  }
-  std::rename(tmp.c_str(), path.c_str());
+  std::ostringstream out;
+  out.precision(17);
+  out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
+  for (const auto& [t, file] : frames)
+    out << "  <DataSet timestep=\"" << t << "\" file=\"" << file << "\"/>\n";
+  out << "</Collection>\n</VTKFile>\n";
+  write_file(path, out.str());
 }
 
 }  // namespace hooke
