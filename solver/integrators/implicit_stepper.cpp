@@ -214,6 +214,7 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
     if (fs.status != Status::Converged) {
       out.status = fs.status;
       out.message = fs.message;
+      if (fs.not_positive_definite) out.message += not_positive_definite_hint(c);
       out.newton_iterations = k;
       return out;
     }
@@ -225,6 +226,7 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
     if (ss.status == Status::BrokeDown || ss.status == Status::Fatal) {
       out.status = ss.status;
       out.message = ss.message;
+      if (ss.not_positive_definite) out.message += not_positive_definite_hint(c);
       return out;
     }
     if (ss.status == Status::NotConverged) {
@@ -254,6 +256,35 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
   s1.x = m_xe + c.ex * m_v1;
   s1.t = s0.t + h;
   return out;
+}
+
+std::string ImplicitStepper::not_positive_definite_hint(const OneLeg& c) const {
+  // A = M - a D - b K on the free DOFs with a, b >= 0 and M > 0 (MassSpringSystem checks the
+  // masses). The damper's df/dx is left out of K (m_jac_options), so K holds the springs' df/dx
+  // only, and D the dampers' and the air drag's df/dv.
+  const double a = c.hf * c.cv, b = c.hf * c.bx;
+  const SparseMatrix& A = m_A.matrix();
+  std::ostringstream os;
+  os << "; " << name() << ": A = M - a D - b K with a = " << a << " s, b = " << b << " s^2";
+  if (!Eigen::Map<const Vec>(A.valuePtr(), A.nonZeros()).allFinite()) {
+    os << " has non-finite entries: non-finite positions or velocities, or an infinite or NaN "
+          "stiffness, damping or drag coefficient";
+  } else if (!m_options.clamp_compressed) {
+    // HookeSpring: a spring compressed below its rest length (l < L) adds the indefinite
+    // transverse term -k (1 - L/l) (I - u u^T) to K.
+    os << "; with clamp_compressed = false, a compressed spring (shorter than its rest length) "
+          "makes K indefinite: set clamp_compressed = true (the default) to clamp that term";
+  } else {
+    // With the clamp, each spring block of K is -k (u u^T + t (I - u u^T)) with t >= 0, each
+    // damper block of D is -c u u^T and the drag's is -c I: all negative semi-definite for
+    // k, c >= 0, so that A >= M > 0 in exact arithmetic.
+    os << "; with clamp_compressed on, K and D are negative semi-definite when every stiffness, "
+          "damping and drag coefficient is >= 0, so A is positive definite in exact arithmetic: "
+          "look for a negative coefficient (or a force whose K or D is not negative "
+          "semi-definite), or for stiffnesses so large against the masses (b k / m near 1e15 or "
+          "beyond) that round-off loses M";
+  }
+  return os.str();
 }
 
 StepperStats ImplicitStepper::stats() const {

@@ -89,6 +89,9 @@ class ImplicitStepper final : public Stepper {
   void assemble(const OneLeg& c);
   /// The step itself (step() adds the counters).
   StepSummary newton(const State& s0, double h, State& s1);
+  /// Why the current A = M - hf cv D - hf bx K can fail to be positive definite, appended to a
+  /// backend's "A is not positive definite" (the backend does not know how A was built).
+  std::string not_positive_definite_hint(const OneLeg& c) const;
 
   const MassSpringSystem& m_system;
   ImplicitScheme m_scheme;

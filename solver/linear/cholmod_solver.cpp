@@ -30,6 +30,7 @@ struct CholmodSolver::Impl {
   cholmod_dense *Xk = nullptr, *Yk = nullptr, *Ek = nullptr;  // its workspace
   Index n = 0;
   long long factorizations = 0;
+  bool analyzed = false;  // analyze() succeeded (with no factor L when n = 0)
   bool factored = false;
   std::array<std::unique_ptr<SupernodalSolver>, 4> sn;  // per K, made on first use
   Vec column;                                           // simplicial fallback's one column
@@ -98,8 +99,16 @@ LinearSummary CholmodSolver::analyze(const SparseMatrix& A) {
   S.sorted = 1;
   S.packed = 1;
   if (m->L) cholmod_l_free_factor(&m->L, &m->c);
-  m->L = cholmod_l_analyze(&S, &m->c);
   m->factored = false;
+  m->analyzed = false;
+  if (m->n == 0) {
+    // Nothing to order or factor (e.g. every particle pinned): CHOLMOD rejects a 0 x 0 matrix
+    // (CHOLMOD_INVALID), so keep no factor and let factor() and the solves do nothing.
+    m->analyzed = true;
+    s.analyze_seconds = seconds_since(t0);
+    return s;
+  }
+  m->L = cholmod_l_analyze(&S, &m->c);
   s.analyze_seconds = seconds_since(t0);
   if (!m->L || m->c.status < CHOLMOD_OK) {
     s.status = Status::Fatal;
@@ -122,6 +131,7 @@ LinearSummary CholmodSolver::analyze(const SparseMatrix& A) {
       cholmod_l_free_factor(&m->L, &m->c);
     }
   }
+  m->analyzed = s.status == Status::Converged;
   m->B.nrow = size_t(m->n);
   m->B.ncol = 1;
   m->B.nzmax = size_t(m->n);
@@ -134,9 +144,15 @@ LinearSummary CholmodSolver::analyze(const SparseMatrix& A) {
 LinearSummary CholmodSolver::factor(const SparseMatrix& A) {
   const auto t0 = Clock::now();
   LinearSummary s;
-  HOOKE_ASSERT(m->L, "cholmod: factor before analyze");
+  HOOKE_ASSERT(m->analyzed, "cholmod: factor before a successful analyze");
   HOOKE_ASSERT(A.rows() == m->n && size_t(A.nonZeros()) == m->A.nzmax,
                "cholmod: factor on a pattern other than the analysed one");
+  if (m->n == 0) {  // the empty factorization of a 0 x 0 matrix
+    ++m->factorizations;
+    m->factored = true;
+    s.factor_seconds = seconds_since(t0);
+    return s;
+  }
   m->A.x = const_cast<double*>(A.valuePtr());
   cholmod_l_factorize(&m->A, m->L, &m->c);
   ++m->factorizations;
@@ -144,9 +160,10 @@ LinearSummary CholmodSolver::factor(const SparseMatrix& A) {
   m->factored = false;
   if (m->c.status == CHOLMOD_NOT_POSDEF) {
     s.status = Status::BrokeDown;
+    s.not_positive_definite = true;
     s.message = "cholmod: A is not positive definite (leading minor of order " +
                 std::to_string(m->L->minor + 1) + " of " + std::to_string(m->n) +
-                " is not positive; compressed springs? enable clamp_compressed)";
+                " is not positive)";
   } else if (m->c.status < CHOLMOD_OK) {
     s.status = Status::Fatal;
     s.message = "cholmod: factorization failed with CHOLMOD status " + std::to_string(m->c.status);
@@ -165,6 +182,7 @@ LinearSummary CholmodSolver::solve(ConstRef b, VecRef x, const LinearSolveOption
   LinearSummary s;
   HOOKE_ASSERT(m->factored, "cholmod: solve without a successful factor");
   HOOKE_ASSERT(b.size() == m->n && x.size() == m->n, "cholmod: size mismatch");
+  if (m->n == 0) return s;
   if (m->L->is_super) return solve_interleaved(b.data(), x.data(), 1);
   m->B.x = const_cast<double*>(b.data());
   if (!cholmod_l_solve2(CHOLMOD_A, m->L, &m->B, nullptr, &m->X, nullptr, &m->Y, &m->E, &m->c)) {
@@ -185,6 +203,7 @@ LinearSummary CholmodSolver::solve_columns(const Eigen::Ref<const Eigen::MatrixX
   HOOKE_ASSERT(B.rows() == m->n && X.rows() == m->n && X.cols() == B.cols(),
                "cholmod: solve_columns sizes " << B.rows() << "x" << B.cols() << " and " << X.rows()
                                                << "x" << X.cols() << " for n = " << m->n);
+  if (m->n == 0) return s;
   cholmod_dense& H = m->Bk;
   H.nrow = size_t(m->n);
   H.ncol = size_t(B.cols());
@@ -209,6 +228,7 @@ LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K
   LinearSummary s;
   HOOKE_ASSERT(m->factored, "cholmod: solve without a successful factor");
   HOOKE_ASSERT(K >= 1 && K <= 4, "cholmod: solve_interleaved with K = " << K << " (1..4)");
+  if (m->n == 0) return s;
   if (m->L->is_super) {
     auto& sn = m->sn[size_t(K - 1)];
     if (!sn) {
@@ -230,7 +250,7 @@ LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K
 }
 
 SupernodalFactorView CholmodSolver::supernodal_view() const {
-  return m->factored && m->L->is_super ? m->view() : SupernodalFactorView{};
+  return m->factored && m->L && m->L->is_super ? m->view() : SupernodalFactorView{};
 }
 
 double CholmodSolver::factor_cost_in_solves() const {

@@ -41,7 +41,8 @@ struct CholmodOptions {
 /// solve() runs hooke's SupernodalSolver on a supernodal factor (see solve_interleaved; its
 /// packed copy of the factor is made after each factorization) and cholmod_l_solve2 on a
 /// simplicial one, with workspace kept between calls, so it does not allocate.
-/// A not positive definite gives Status::BrokeDown naming the failing column.
+/// A not positive definite gives Status::BrokeDown naming the failing column. A 0 x 0 A is not
+/// passed to CHOLMOD (which rejects it): analyze, factor and the solves then do nothing.
 /// Ignores LinearSolveOptions::tolerance, max_iterations and warm_start (direct method).
 class CholmodSolver final : public LinearSolver {
  public:

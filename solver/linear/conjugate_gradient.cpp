@@ -96,9 +96,10 @@ LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x,
       const double pAp = m_p.dot(m_Ap);
       if (!(pAp > 0.0)) {
         s.status = Status::BrokeDown;
+        s.not_positive_definite = true;
         std::ostringstream os;
         os << name() << ": p^T A p = " << pAp << " <= 0 at iteration " << it
-           << ": A is not positive definite (compressed springs? enable clamp_compressed)";
+           << ": A is not positive definite";
         s.message = os.str();
         break;
       }

@@ -25,6 +25,7 @@ LinearSummary JacobiPreconditioner::setup(const SparseMatrix& A) {
     const double d = A.valuePtr()[m_diag_pos[size_t(i)]];
     if (!(d > 0.0) || !std::isfinite(d)) {
       s.status = Status::BrokeDown;
+      s.not_positive_definite = true;
       s.message = "diagonal entry " + std::to_string(i) + " = " + std::to_string(d) +
                   " is not positive: A is not positive definite";
       return s;
@@ -54,6 +55,7 @@ LinearSummary BlockJacobiPreconditioner::setup(const SparseMatrix& A) {
   const Index bad = linear_detail::invert_diagonal_blocks(A, m_block_pos, true, m_inv_blocks);
   if (bad >= 0) {
     s.status = Status::BrokeDown;
+    s.not_positive_definite = true;
     s.message = "diagonal block " + std::to_string(bad) +
                 " is not positive definite: A is not positive definite";
     return s;

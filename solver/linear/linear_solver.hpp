@@ -26,6 +26,11 @@ struct LinearSummary {
   double factor_seconds = 0;   ///< wall time of the numeric factorization / refresh
   double solve_seconds = 0;    ///< wall time of the solve
   std::string message;         ///< empty on success, else what failed with its numbers
+  /// True when status is BrokeDown because A was found not to be positive definite (a Cholesky
+  /// pivot, a curvature p^T A p, or a diagonal entry or block of A that is not positive). The
+  /// backend knows only that; the caller, which knows how A was built, says why (see
+  /// ImplicitStepper).
+  bool not_positive_definite = false;
 };
 
 /// A backend for A x = b with A square, sparse (compressed-column, both triangles stored) and,
@@ -37,7 +42,9 @@ struct LinearSummary {
 ///  - solve(b, x, options): x is the warm start on entry (if options.warm_start) and the solution
 ///    on exit; no allocation;
 ///  - the returned LinearSummary reports status, iterations, residual and times.
-/// Must implement all three. Options a backend ignores are listed in its class comment.
+/// Must implement all three, for every n including 0: a system with no free DOFs (every particle
+/// pinned) gives a 0 x 0 A, which every verb accepts and solves trivially. Options a backend
+/// ignores are listed in its class comment.
 class LinearSolver {
  public:
   virtual ~LinearSolver() = default;

@@ -8,7 +8,8 @@
 //    pendulum (reference: the same method at a 16x smaller step);
 //  - a Newton-converged step solves the nonlinear backward-Euler equations on every SPD backend;
 //  - failures are reported: an indefinite Newton matrix gives BrokeDown (not a silent wrong step),
-//    a Newton iteration cap gives NotConverged naming Newton; bad options are rejected.
+//    with a hint that points to clamp_compressed only when the clamp is off; a Newton iteration
+//    cap gives NotConverged naming Newton; bad options are rejected.
 //
 // Order measurement (tests/support/order.hpp, as in explicit_stepper_test.cpp): h is halved
 // kHalvings times; the order is the least-squares slope of log(error at the final time) against
@@ -528,8 +529,12 @@ TEST(ImplicitStepper, IndefiniteNewtonMatrixBreaksDownUnlessClamped) {
     State s1(3, -1.0);
     const State sentinel = s1;
     const StepSummary sum = stepper->step(cloth.state, h, s1);
+    std::printf("[ hint     ] %-12s %s\n", info.name, sum.message.c_str());
     EXPECT_EQ(sum.status, Status::BrokeDown) << info.name << ": " << sum.message;
     EXPECT_NE(sum.message.find("positive definite"), std::string::npos)
+        << info.name << ": " << sum.message;
+    // The clamp is off, so the stepper points to it (the backend alone cannot know).
+    EXPECT_NE(sum.message.find("set clamp_compressed = true"), std::string::npos)
         << info.name << ": " << sum.message;
     EXPECT_TRUE(s1 == sentinel) << info.name << ": a broken-down step wrote a state";
 
@@ -544,6 +549,58 @@ TEST(ImplicitStepper, IndefiniteNewtonMatrixBreaksDownUnlessClamped) {
   if (has_backend("cholmod")) {
     EXPECT_GT(checked, 3);
   }
+}
+
+TEST(ImplicitStepper, IndefiniteNewtonMatrixWithClampDoesNotBlameTheClamp) {
+  // With clamp_compressed on (the default), K and D are negative semi-definite for stiffness,
+  // damping and drag >= 0, so only something else can make A = M - h D - h^2 K indefinite: here a
+  // negative stiffness, k = -1e4 on a unit mass at h = 0.1 (A = 1 - 100 in the spring's
+  // direction). Every SPD backend reports BrokeDown, and the hint names the real suspects instead
+  // of telling the user to enable a clamp that is already on.
+  auto system = std::make_unique<hooke::MassSpringSystem>(Vec::Ones(2), std::vector<char>{1, 0});
+  auto spring = std::make_unique<hooke::HookeSpring>();
+  spring->add(0, 1, -1e4, 1.0);
+  system->add_force(std::move(spring));
+  system->finalize();
+  State s0(2);
+  s0.x.segment<3>(3) = Vec3(1.2, 0.0, 0.0);
+  State nan = s0;
+  nan.x[3] = std::numeric_limits<double>::quiet_NaN();
+  int checked = 0, checked_nan = 0;
+  for (const auto& info : hooke::linear_solvers()) {
+    if (!hooke::make_linear_solver(info.name)->requires_spd()) continue;
+    ImplicitOptions opt = options(1.0, false, info.name);
+    opt.clamp_compressed = true;
+    auto stepper = hooke::make_stepper("implicit", *system, opt);
+    State s1;
+    const StepSummary sum = stepper->step(s0, 0.1, s1);
+    std::printf("[ hint     ] %-12s %s\n", info.name, sum.message.c_str());
+    EXPECT_EQ(sum.status, Status::BrokeDown) << info.name << ": " << sum.message;
+    EXPECT_NE(sum.message.find("not positive definite"), std::string::npos)
+        << info.name << ": " << sum.message;
+    EXPECT_NE(sum.message.find("with clamp_compressed on"), std::string::npos)
+        << info.name << ": " << sum.message;
+    EXPECT_NE(sum.message.find("negative coefficient"), std::string::npos)
+        << info.name << ": " << sum.message;
+    EXPECT_EQ(sum.message.find("set clamp_compressed = true"), std::string::npos)
+        << info.name << ": " << sum.message;
+
+    // A NaN position makes A's entries NaN: the backends that test A's diagonal or blocks (pcg,
+    // pcg-block) report it as not positive definite, with the hint for non-finite entries. (Plain
+    // CG meets a NaN residual and says NotConverged; CHOLMOD factors a 3 x 3 NaN matrix without
+    // complaint, and Simulation's finiteness check catches the NaN step.)
+    const StepSummary bad = stepper->step(nan, 0.1, s1);
+    if (bad.status == Status::BrokeDown) {
+      EXPECT_NE(bad.message.find("non-finite entries"), std::string::npos)
+          << info.name << ": " << bad.message;
+      EXPECT_EQ(bad.message.find("clamp_compressed"), std::string::npos)
+          << info.name << ": " << bad.message;
+      ++checked_nan;
+    }
+    ++checked;
+  }
+  EXPECT_GE(checked, 3);      // cg, pcg, pcg-block (+ cholmod, pcg-cholmod, pcg-nodal)
+  EXPECT_GE(checked_nan, 2);  // pcg, pcg-block
 }
 
 // ---- Options ----

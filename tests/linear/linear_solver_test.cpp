@@ -6,7 +6,7 @@
 // in as many iterations as the preconditioned matrix has distinct eigenvalues (one for PCG on a
 // diagonal), block Jacobi on a non-dominant SPD matrix reports divergence, CG and CHOLMOD on
 // indefinite matrices report breakdown, a warm start from the exact solution costs no iteration,
-// b = 0 gives x = 0.
+// b = 0 gives x = 0, and a 0 x 0 system (every particle pinned) is solved trivially.
 //
 // Tolerances. The iterative backends stop at ||b - A x|| <= 1e-12 ||b||, which bounds the relative
 // error by cond(A) * 1e-12; the conformance test estimates cond(A) (power iteration on A and on
@@ -322,6 +322,30 @@ TEST_P(LinearBackend, SolvesDiagonalSystem) {
   EXPECT_LT(relative_distance(x, xstar), 1e-13) << name << ": " << describe(s);
 }
 
+TEST_P(LinearBackend, SolvesEmptySystem) {
+  // A system with every particle pinned has a 0 x 0 Newton matrix: each verb succeeds, twice (a
+  // refactorization on the same empty pattern), and the solve is the empty vector.
+  const std::string name = GetParam();
+  SparseMatrix A(0, 0);
+  A.makeCompressed();
+  auto solver = hooke::make_linear_solver(name);
+  const LinearSummary a = solver->analyze(A);
+  ASSERT_EQ(a.status, Status::Converged) << name << ": analyze: " << describe(a);
+  for (int pass = 0; pass < 2; ++pass) {
+    const LinearSummary f = solver->factor(A);
+    ASSERT_EQ(f.status, Status::Converged) << name << " pass " << pass << ": " << describe(f);
+    for (bool warm : {false, true}) {
+      Vec x(0);
+      LinearSolveOptions o = cold(1e-12, 100);
+      o.warm_start = warm;
+      const LinearSummary s = solver->solve(Vec(0), x, o);
+      EXPECT_EQ(s.status, Status::Converged) << name << " pass " << pass << ": " << describe(s);
+      EXPECT_EQ(s.iterations, 0) << name;
+      EXPECT_EQ(x.size(), 0) << name;
+    }
+  }
+}
+
 TEST_P(LinearBackend, RefactorsOnSamePatternWithNewValues) {
   // factor() after a value change (same pattern) gives the new solution, not the old one.
   const std::string name = GetParam();
@@ -522,12 +546,16 @@ TEST(ConjugateGradient, IndefiniteMatrixBreaksDown) {
     const LinearSummary s = cg->solve(b, x, cold(1e-10, 1000));
     EXPECT_EQ(s.status, Status::BrokeDown) << name << ": " << describe(s);
     EXPECT_NE(s.message.find("not positive definite"), std::string::npos) << s.message;
+    EXPECT_TRUE(s.not_positive_definite) << name;
+    // The backend does not know how A was built, so it guesses no cause (the stepper says why).
+    EXPECT_EQ(s.message.find("clamp"), std::string::npos) << s.message;
   }
   // The block-Jacobi preconditioner sees the indefinite block already in factor().
   auto block = hooke::make_linear_solver("pcg-block");
   const LinearSummary f = setup(*block, A);
   EXPECT_EQ(f.status, Status::BrokeDown) << describe(f);
   EXPECT_NE(f.message.find("not positive definite"), std::string::npos) << f.message;
+  EXPECT_TRUE(f.not_positive_definite);
 }
 
 TEST(ConjugateGradient, CompressedClothWithoutClampNeverReportsConverged) {
@@ -569,6 +597,8 @@ TEST(Cholmod, IndefiniteMatrixBreaksDownInFactor) {
   const LinearSummary f = setup(*chol, A);
   EXPECT_EQ(f.status, Status::BrokeDown) << describe(f);
   EXPECT_NE(f.message.find("not positive definite"), std::string::npos) << f.message;
+  EXPECT_TRUE(f.not_positive_definite);
+  EXPECT_EQ(f.message.find("clamp"), std::string::npos) << f.message;
   // And it recovers on the next factor() of an SPD matrix with the same pattern.
   SparseMatrix C = A;
   for (Index k = 0; k < C.nonZeros(); ++k)
@@ -576,6 +606,7 @@ TEST(Cholmod, IndefiniteMatrixBreaksDownInFactor) {
       C.valuePtr()[k] = 0.5;  // the off-diagonal pairs: eigenvalues 1.5, 0.5, 1
   const LinearSummary g = chol->factor(C);
   EXPECT_EQ(g.status, Status::Converged) << describe(g);
+  EXPECT_FALSE(g.not_positive_definite);
   const Vec xstar = random_vector(30, 12);
   Vec x(30);
   EXPECT_EQ(chol->solve(C * xstar, x, {}).status, Status::Converged);
