@@ -218,10 +218,11 @@ int MassSpringRun::run() {
     return run_steps();
   } catch (const std::exception& e) {
     m_progress.done();
-    m_out->failed(e.what());
-    throw std::runtime_error(std::string(e.what()) + "\n  the run stopped at step " +
-                             std::to_string(m_step) + " of " + std::to_string(m_steps) + "; " +
-                             m_dir + "/status.txt says failed and there is no final.csv");
+    const bool marked = m_out->failed(e.what());
+    throw std::runtime_error(
+        std::string(e.what()) + "\n  the run stopped at step " + std::to_string(m_step) + " of " +
+        std::to_string(m_steps) + "; there is no final.csv, log.csv holds complete rows only, " +
+        m_dir + "/status.txt " + (marked ? "says failed" : "could not be updated (says running)"));
   }
 }
 
@@ -421,6 +422,7 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
     for (Index k = 0; k < d; ++k) fin.print("%lld,%.17g,%.17g\n", (long long)k, X[k], exact[k]);
     fin.commit();
   } catch (const std::exception& e) {
+    log.abandon();  // a no-op once committed; else keeps log.csv's complete rows only
     folder.mark_failed(e.what());
     throw;
   }

@@ -149,12 +149,13 @@ void RunOutput::flush() { m_log->sync(); }
 
 void RunOutput::stopped(const std::string& detail) { m_dir->set_status("stopped", detail); }
 
-void RunOutput::failed(const std::string& why) noexcept {
+bool RunOutput::failed(const std::string& why) noexcept {
   try {
     m_log->sync();
-  } catch (...) {  // the reason for failing may be this very file; status.txt is what matters
+  } catch (...) {  // the reason for failing may be this very file: keep its complete rows only
+    m_log->abandon();
   }
-  m_dir->mark_failed(why);
+  return m_dir->mark_failed(why);
 }
 
 std::vector<std::string> RunOutput::finish(const State& s, const std::string& summary) {

@@ -54,8 +54,9 @@ class RunOutput {
   void flush();
   /// The run stopped with a checkpoint (signal or --stop-after): status.txt says "stopped".
   void stopped(const std::string& detail);
-  /// The run failed (exit 3, or an error): status.txt says "failed" with why. Never throws.
-  void failed(const std::string& why) noexcept;
+  /// The run failed (exit 3, or an error): status.txt says "failed" with why, and log.csv keeps
+  /// its complete rows. Never throws; returns false if status.txt could not be written.
+  bool failed(const std::string& why) noexcept;
   /// The end of a complete run: writes final.csv (and final.png if [output] png) from s, removes
   /// the checkpoint (nothing is left to resume) and marks the folder finished. Returns the
   /// names of the files the run wrote, for the end-of-run line.

@@ -78,10 +78,12 @@ void OutputDir::set_status(const std::string& state, const std::string& detail) 
   write_file(file("status.txt"), text);
 }
 
-void OutputDir::mark_failed(const std::string& why) noexcept {
+bool OutputDir::mark_failed(const std::string& why) noexcept {
   try {
     set_status("failed", why);
+    return true;
   } catch (...) {  // the disk may be full: status.txt then still says "running", not "finished"
+    return false;
   }
 }
 

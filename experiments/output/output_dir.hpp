@@ -29,7 +29,8 @@ class OutputDir {
   /// Throws OutputError when it cannot be written.
   void set_status(const std::string& state, const std::string& detail = "");
   /// set_status("failed", why) that never throws: for the paths where the command already fails.
-  void mark_failed(const std::string& why) noexcept;
+  /// Returns false if status.txt could not be written (it then still says "running").
+  bool mark_failed(const std::string& why) noexcept;
   /// Removes the named files if they exist (outputs of an earlier command in this folder).
   /// Throws OutputError when one cannot be removed.
   void remove_files(const std::vector<std::string>& names) const;

@@ -2,6 +2,7 @@
 
 #include <unistd.h>
 
+#include <algorithm>
 #include <cerrno>
 #include <cstdarg>
 #include <cstring>
@@ -109,6 +110,36 @@ void OutputFile::commit_as(const std::string& path) {
     throw OutputError(path, "rename " + m_open_path + " to", err);
   }
   m_path = path;
+}
+
+void OutputFile::abandon() noexcept {
+  if (FILE* f = std::exchange(m_f, nullptr)) std::fclose(f);
+  if (m_open_path != m_path) {
+    std::remove(m_open_path.c_str());
+    return;
+  }
+  // Cut the stream after its last '\n': read its tail backwards until one is found.
+  FILE* in = std::fopen(m_path.c_str(), "rb");
+  if (!in || std::fseek(in, 0, SEEK_END) != 0) {
+    if (in) std::fclose(in);
+    return;
+  }
+  long end = std::ftell(in), keep = 0;
+  char buf[4096];
+  for (long pos = end; pos > 0 && keep == 0;) {
+    const long n = std::min<long>(pos, long(sizeof buf));
+    pos -= n;
+    if (std::fseek(in, pos, SEEK_SET) != 0 || std::fread(buf, 1, size_t(n), in) != size_t(n)) break;
+    for (long k = n - 1; k >= 0; --k)
+      if (buf[k] == '\n') {
+        keep = pos + k + 1;
+        break;
+      }
+  }
+  std::fclose(in);
+  if (keep < end) {
+    [[maybe_unused]] const int rc = truncate(m_path.c_str(), keep);
+  }
 }
 
 void write_file(const std::string& path, const std::string& text) {

@@ -52,6 +52,11 @@ class OutputFile {
   void commit();
   /// Ends a replace() file under another name (e.g. NAME.partial.csv for an interrupted study).
   void commit_as(const std::string& path);
+  /// Gives up on the file without checks (the command is failing already): a stream is closed
+  /// and then cut back to its last complete line, so that a write that failed half-way leaves no
+  /// partial row; a replace() file's temporary is removed. Also after a failed write closed
+  /// the file. Never throws.
+  void abandon() noexcept;
 
   /// The name the file has (or will have, after commit) on disk.
   const std::string& path() const { return m_path; }
