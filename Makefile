@@ -27,9 +27,10 @@ build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
 # The default scene: a cloth hanging from two corners -> out/demo/{final.png,log.csv,final.csv,frames/}
+# --force: a demo stopped by Ctrl-C leaves a checkpoint, which must not block the next `make demo`.
 demo: configure
 	cmake --build $(BUILD) -j $(JOBS) --target hooke
-	$(BUILD)/bin/hooke run problems/scenes/hanging_cloth.toml --out out/demo
+	$(BUILD)/bin/hooke run problems/scenes/hanging_cloth.toml --out out/demo --force
 	@echo "demo: picture out/demo/final.png, data out/demo/log.csv and out/demo/final.csv, frames out/demo/frames.pvd"
 
 # The paper: runs `hooke stability`, `hooke workprecision` and `hooke resolution` at their default

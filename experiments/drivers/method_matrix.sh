@@ -30,7 +30,7 @@ for m in $methods; do
   for b in $backends; do
     dir="$out/$m-$b"
     start=$(date +%s.%N)
-    "$hooke" run "$scene" --no-progress --out "$dir" --set integrator.method="$m" \
+    "$hooke" run "$scene" --no-progress --force --out "$dir" --set integrator.method="$m" \
       --set integrator.linear_solver="$b" --set run.allow_not_converged=true "$@" > "$dir.stdout" 2> "$dir.stderr"
     code=$?
     wall=$(awk -v a="$(date +%s.%N)" -v b="$start" 'BEGIN {printf "%.3f", a - b}')

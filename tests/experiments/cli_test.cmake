@@ -216,6 +216,10 @@ elseif(CASE STREQUAL "factor_over_budget")
   expect_rc(2)
   expect_contains("${err}" "target_backward_euler_256.toml: integrator.linear_solver: cholmod: the factorization" "stderr")
   expect_contains("${err}" "above the memory budget of 0.5 GiB" "stderr")
+  # Refused at setup: the output folder is never created.
+  if(EXISTS "${OUT}")
+    message(FATAL_ERROR "a run refused at setup created ${OUT}${report}")
+  endif()
 
 elseif(CASE STREQUAL "scaling")
   # Two small grids, every method, 1 and 2 threads: one CSV row each, all "ok", and the plot
