@@ -44,6 +44,8 @@ std::string read_holder(int fd) {
 OutputDir::OutputDir(std::string dir, std::string command)
     : m_dir(std::move(dir)), m_command(std::move(command)) {
   std::error_code ec;
+  if (fs::exists(m_dir, ec) && !fs::is_directory(m_dir, ec))
+    throw InputError(m_dir, "output folder", "exists and is not a folder: choose another --out");
   fs::create_directories(m_dir, ec);
   if (ec) throw OutputError(m_dir, "create the output folder", ec.value());
   const std::string lock = file(".hooke.lock");
