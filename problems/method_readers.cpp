@@ -10,43 +10,128 @@ namespace {
 /// One method's reader: its keys, with the defaults of its Options type, then validate().
 using MethodReader = MethodOptions (*)(TableReader& r, const std::string& method);
 
+// Keys that depend on another setting. A reader reads such a key only when the settings read
+// before it make it take effect; otherwise it calls refuse_ignored(), which refuses the key if the
+// scene (or --set) gives it and records nothing, so that a default never triggers the refusal and
+// the resolved scene holds only keys that take effect (and loads again unchanged).
+
+/// "NAME = 'VALUE'", with " (the default)" when the scene does not give NAME.
+std::string setting(const TableReader& r, const std::string& name, const std::string& value) {
+  return name + " = '" + value + "'" + (r.has(name) ? "" : " (the default)");
+}
+
+/// Refuses key if the scene gives it although `governing` (a setting(), or a text such as
+/// "newton_iterations = 1") makes it have no effect; `why` says why, `fix` what to do instead.
+void refuse_ignored(const TableReader& r, const std::string& key, const std::string& governing,
+                    const std::string& why, const std::string& fix) {
+  if (r.has(key))
+    r.fail(key, "has no effect with " + governing + ": " + why + "; remove it, or " + fix);
+}
+
+/// True for the linear backends that solve directly: they ignore LinearSolveOptions::tolerance
+/// and max_iterations (CholmodSolver's class comment). Every other backend of linear_solvers() is
+/// iterative (pcg-*, cg, the stationary iterations). The test
+/// MethodReaders.IterationKeysAreRefusedExactlyForTheDirectLinearSolvers checks this against a
+/// solve by every backend of the build.
+bool direct_linear_solver(const std::string& name) { return name == "cholmod"; }
+
+/// The iterative backends of this build, comma-separated, for messages.
+std::string iterative_linear_solvers() {
+  std::string s;
+  for (const auto& e : linear_solvers())
+    if (!direct_linear_solver(e.name)) s += (s.empty() ? "" : ", ") + std::string(e.name);
+  return s;
+}
+
 MethodOptions read_implicit(TableReader& r, const std::string& method) {
   ImplicitOptions o;
   if (method == "implicit") o.beta = r.number("beta", o.beta);
   o.linear_solver = r.string("linear_solver", default_linear_solver());
-  o.preconditioner = r.string("preconditioner", o.preconditioner);
   if (const std::string why = linear_solver_unknown(o.linear_solver); !why.empty())
     r.fail("linear_solver", why);
+  // Only the Krylov method "pcg" is half of a (method, preconditioner) pair.
+  if (o.linear_solver == "pcg")
+    o.preconditioner = r.string("preconditioner", o.preconditioner);
+  else
+    refuse_ignored(r, "preconditioner", setting(r, "linear_solver", o.linear_solver),
+                   "only linear_solver = 'pcg' takes a preconditioner ('pcg' + 'nodal' is "
+                   "'pcg-nodal')",
+                   "set linear_solver = 'pcg'");
   if (const std::string why = linear_solver_unknown(o.linear_solver, o.preconditioner);
       !why.empty())
     r.fail("preconditioner", why);
   o.newton_iterations = r.int_field("newton_iterations", o.newton_iterations);
-  o.newton_tolerance = r.number("tolerance", o.newton_tolerance);
-  o.linear_tolerance = r.number("linear_tolerance", o.linear_tolerance);
-  o.max_linear_iterations = r.int_field("max_linear_iterations", o.max_linear_iterations);
+  // One iteration is the linearised step: it ends without a convergence test.
+  if (o.newton_iterations == 1)
+    refuse_ignored(
+        r, "tolerance",
+        std::string("newton_iterations = 1") + (r.has("newton_iterations") ? "" : " (the default)"),
+        "one iteration is the linearised step, with no convergence test",
+        "set newton_iterations > 1 to iterate Newton to this tolerance");
+  else
+    o.newton_tolerance = r.number("tolerance", o.newton_tolerance);
+  const std::string backend = canonical_linear_solver(o.linear_solver, o.preconditioner);
+  if (direct_linear_solver(backend)) {
+    for (const char* key : {"linear_tolerance", "max_linear_iterations"})
+      refuse_ignored(r, key, setting(r, "linear_solver", o.linear_solver),
+                     "a direct solver solves exactly, with no iterations to stop",
+                     "choose an iterative linear_solver (" + iterative_linear_solvers() + ")");
+  } else {
+    o.linear_tolerance = r.number("linear_tolerance", o.linear_tolerance);
+    o.max_linear_iterations = r.int_field("max_linear_iterations", o.max_linear_iterations);
+  }
   o.clamp_compressed = r.boolean("clamp_compressed", o.clamp_compressed);
   r.check(o.validate(), {{"newton_tolerance", "tolerance"}});
   return o;
 }
 
 #if HOOKE_WITH_SUNDIALS
-/// The keys CVODE and IDA share (SundialsOptions).
-void read_sundials(TableReader& r, SundialsOptions& o) {
+/// The keys CVODE and IDA share (SundialsOptions). linear_solves: false when the nonlinear
+/// solver solves no linear systems (CVODE's fixed-point iteration), named by `nonlinear`; then
+/// the linear solver and its preconditioner have no effect.
+void read_sundials(TableReader& r, SundialsOptions& o, bool linear_solves = true,
+                   const std::string& nonlinear = "") {
   o.rtol = r.number("rtol", o.rtol);
   o.atol = r.number("atol", o.atol);
-  o.linear_solver = r.choice("linear_solver", o.linear_solver);
-  o.preconditioner = r.string("preconditioner", o.preconditioner);
-  o.preconditioner_tolerance = r.number("preconditioner_tolerance", o.preconditioner_tolerance);
   o.max_steps = long(r.integer("max_steps", o.max_steps, std::numeric_limits<long>::min(),
                                std::numeric_limits<long>::max()));
+  if (!linear_solves) {
+    for (const char* key : {"linear_solver", "preconditioner", "preconditioner_tolerance"})
+      refuse_ignored(r, key, nonlinear, "functional iteration solves no linear systems",
+                     "set nonlinear_solver = 'newton'");
+    return;
+  }
+  o.linear_solver = r.choice("linear_solver", o.linear_solver);
+  if (o.linear_solver == SundialsLinearSolver::Klu) {
+    for (const char* key : {"preconditioner", "preconditioner_tolerance"})
+      refuse_ignored(r, key, setting(r, "linear_solver", to_string(o.linear_solver)),
+                     "KLU is a direct solver and takes no preconditioner",
+                     "set linear_solver = 'spgmr'");
+    return;
+  }
+  o.preconditioner = r.string("preconditioner", o.preconditioner);
+  // The tolerance is that of each preconditioner solve: only an iterative backend has one.
+  const std::string backend =
+      o.preconditioner.empty() ? default_sundials_preconditioner() : o.preconditioner;
+  if (backend == "none" || direct_linear_solver(backend))
+    refuse_ignored(
+        r, "preconditioner_tolerance",
+        "preconditioner = '" + backend + "'" + (o.preconditioner.empty() ? " (the default)" : ""),
+        backend == "none" ? "SPGMR runs without preconditioner solves"
+                          : "a direct solver makes each preconditioner solve exact",
+        "choose an iterative preconditioner (" + iterative_linear_solvers() + ")");
+  else
+    o.preconditioner_tolerance = r.number("preconditioner_tolerance", o.preconditioner_tolerance);
 }
 
 MethodOptions read_cvode(TableReader& r, const std::string&) {
   CvodeOptions o;
-  read_sundials(r, o);
   o.adams = r.boolean("adams", o.adams);
   o.max_order = r.int_field("max_order", o.adams ? 12 : 5);
   o.nonlinear_solver = r.choice("nonlinear_solver", o.nonlinear_solver);
+  // Fixed-point iteration without Adams is refused by validate() through nonlinear_solver.
+  const bool fixed_point = o.nonlinear_solver == CvodeNonlinearSolver::FixedPoint && o.adams;
+  read_sundials(r, o, !fixed_point, setting(r, "nonlinear_solver", to_string(o.nonlinear_solver)));
   r.check(o.validate());
   return o;
 }
@@ -83,9 +168,20 @@ MethodOptions read_fast_mass_spring(TableReader& r, const std::string&) {
   o.tolerance = r.number("tolerance", o.tolerance);
   o.warm_start = r.choice("warm_start", o.warm_start);
   o.acceleration = r.choice("acceleration", o.acceleration);
-  o.chebyshev_rho = r.number("chebyshev_rho", o.chebyshev_rho);
-  o.chebyshev_delay = r.int_field("chebyshev_delay", o.chebyshev_delay);
-  o.lbfgs_history = r.int_field("lbfgs_history", o.lbfgs_history);
+  const std::string acceleration = setting(r, "acceleration", to_string(o.acceleration));
+  if (o.acceleration == Acceleration::Chebyshev) {
+    o.chebyshev_rho = r.number("chebyshev_rho", o.chebyshev_rho);
+    o.chebyshev_delay = r.int_field("chebyshev_delay", o.chebyshev_delay);
+  } else {
+    for (const char* key : {"chebyshev_rho", "chebyshev_delay"})
+      refuse_ignored(r, key, acceleration, "only Chebyshev acceleration uses it",
+                     "set acceleration = 'chebyshev'");
+  }
+  if (o.acceleration == Acceleration::Lbfgs)
+    o.lbfgs_history = r.int_field("lbfgs_history", o.lbfgs_history);
+  else
+    refuse_ignored(r, "lbfgs_history", acceleration, "only L-BFGS acceleration keeps a history",
+                   "set acceleration = 'lbfgs'");
   o.global_solver = r.choice("global_solver", o.global_solver);
   r.check(o.validate());
   return o;

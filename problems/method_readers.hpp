@@ -8,7 +8,10 @@ namespace hooke {
 
 /// Reads the [integrator] keys of `method` (a name from hooke::methods()) into that method's own
 /// Options type, reporting every rule its validate() breaks through the scene key, and rejects any
-/// key the method does not take. One reader per method (problems/method_readers.cpp); explicit
+/// key the method does not take. A key that the other settings make ineffective (linear_tolerance
+/// with a direct linear_solver, chebyshev_rho without Chebyshev acceleration, ...) is refused when
+/// the scene or --set gives it, naming the setting and the fix; its default is neither refused nor
+/// recorded in the resolved scene. One reader per method (problems/method_readers.cpp); explicit
 /// methods take no keys and return empty options.
 MethodOptions read_method_options(TableReader& integrator, const std::string& method);
 

@@ -129,8 +129,75 @@ void read_ode(TableReader& ode, Scene& scene) {
   }
 }
 
-/// Forces, colliders and strain limiting: each added only when the scene declares it.
-void add_forces_and_constraints(TableReader& root, const MeshBuild& b, Scene& scene) {
+/// A collider the scene declares: its scene key ("collision.sphere"), what it is with its numbers
+/// (for messages), the keys that place it, and the constraint the system owns.
+struct SceneCollider {
+  std::string key, what, placed_by;
+  const Constraint* constraint;
+};
+
+std::string fmt(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
+}
+
+std::string fmt(const Vec3& v) {
+  return "(" + fmt(v[0]) + ", " + fmt(v[1]) + ", " + fmt(v[2]) + ")";
+}
+
+/// Refuses a free particle that starts inside a collider: the collider would push it to its
+/// surface in the first step, a jump the springs turn into a blow-up that reads as a time step too
+/// large. The depth is what the collider's own project() moves the particle (its inward distance
+/// from the surface: radial for the sphere, along the normal for the plane), so every collider is
+/// judged by the rule it applies in the run. Depths up to 1e-5 of the scene size, max(extent of
+/// the initial positions, largest coordinate), count as on the surface: a cloth resting on a
+/// surface, given with positions rounded to 6 significant digits (as OBJ exporters write them),
+/// is fine. Pinned particles are never moved by colliders, so they may start anywhere.
+void check_particles_outside(const std::vector<SceneCollider>& colliders, const Scene& scene) {
+  const Vec& x = scene.initial.x;
+  const Index n = x.size() / 3;
+  if (colliders.empty() || n == 0) return;
+  const Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>> p(x.data(), 3, n);
+  const double size =
+      std::max((p.rowwise().maxCoeff() - p.rowwise().minCoeff()).norm(), p.cwiseAbs().maxCoeff());
+  const double tolerance = 1e-5 * size;
+  const std::vector<char>& pinned = scene.system->pinned();
+  Vec moved(x.size()), v(x.size());
+  for (const auto& c : colliders) {
+    moved = x;
+    v.setZero();
+    // Colliders move positions only: x0 = x1 (no motion within the step), h only scales v.
+    c.constraint->project(x, 1.0, pinned, moved, v);
+    Index deepest = -1, inside = 0;
+    double depth = 0.0;
+    for (Index i = 0; i < n; ++i) {
+      const double d = (moved.segment<3>(3 * i) - x.segment<3>(3 * i)).norm();
+      if (!(d > tolerance)) continue;
+      ++inside;
+      if (d > depth) {
+        depth = d;
+        deepest = i;
+      }
+    }
+    if (inside == 0) continue;
+    std::ostringstream os;
+    os << "free particle " << deepest << " at " << fmt(Vec3(x.segment<3>(3 * deepest)))
+       << " starts " << fmt(depth) << " m inside " << c.what << " (tolerance " << fmt(tolerance)
+       << " m, 1e-5 of the scene size)";
+    if (inside > 1) os << "; " << inside << " free particles start inside, this one deepest";
+    os << ". The first step would snap it to the surface, a jump that can make the run diverge "
+       << "(not a time step problem: a smaller time.dt does not help). Move the collider ("
+       << c.placed_by << ") or the object ([mesh] placement) so that no "
+       << "free particle starts inside; a particle exactly on the surface is fine";
+    throw InputError(scene.file, c.key, os.str());
+  }
+}
+
+/// Forces, colliders and strain limiting: each added only when the scene declares it. The
+/// colliders are listed in `colliders` for check_particles_outside().
+void add_forces_and_constraints(TableReader& root, const MeshBuild& b, Scene& scene,
+                                std::vector<SceneCollider>& colliders) {
   MassSpringSystem& sys = *scene.system;
   const Index n = b.num_particles();
   auto springs = std::make_unique<HookeSpring>();
@@ -161,14 +228,23 @@ void add_forces_and_constraints(TableReader& root, const MeshBuild& b, Scene& sc
       const double height = g->number("height", 0.0);
       const double mu = g->non_negative("friction", 0.0);
       g->finish();
-      sys.add_constraint(std::make_unique<GroundPlane>(normal, height, mu));
+      auto plane = std::make_unique<GroundPlane>(normal, height, mu);
+      colliders.push_back({c->path("ground"),
+                           "the ground plane (normal " + fmt(Vec3(normal.normalized())) +
+                               ", height " + fmt(height) + ")",
+                           g->path("height") + ", " + g->path("normal"), plane.get()});
+      sys.add_constraint(std::move(plane));
     }
     if (auto sp = c->table("sphere")) {
       const Vec3 centre = sp->vec3("center", Vec3::Zero());
       const double radius = sp->positive("radius", 0.5);
       const double mu = sp->non_negative("friction", 0.0);
       sp->finish();
-      sys.add_constraint(std::make_unique<SphereCollider>(centre, radius, mu));
+      auto sphere = std::make_unique<SphereCollider>(centre, radius, mu);
+      colliders.push_back({c->path("sphere"),
+                           "the sphere (center " + fmt(centre) + ", radius " + fmt(radius) + ")",
+                           sp->path("center") + ", " + sp->path("radius"), sphere.get()});
+      sys.add_constraint(std::move(sphere));
     }
     c->finish();
   }
@@ -266,8 +342,10 @@ Scene load_parsed(toml::table tbl, const std::string& file,
       if (b.pinned[size_t(i)]) scene.initial.v.segment<3>(3 * i).setZero();
     scene.initial.t = 0.0;
     scene.exact = b.exact;
-    add_forces_and_constraints(root, b, scene);
+    std::vector<SceneCollider> colliders;
+    add_forces_and_constraints(root, b, scene, colliders);
     scene.system->finalize();
+    check_particles_outside(colliders, scene);
   }
   read_run_settings(root, scene);
   if (scene.system) {

@@ -95,7 +95,9 @@ struct Scene {
 };
 
 /// Loads and validates a scene file, applying "section.key=value" overrides first. Throws
-/// InputError (file, dotted key, reason) for anything invalid.
+/// InputError (file, dotted key, reason) for anything invalid, including a free particle that
+/// starts inside a collider (key collision.sphere or collision.ground; one on its surface is
+/// fine) and an [integrator] key that the other settings make ineffective.
 Scene load_scene(const std::string& path, const std::vector<std::string>& overrides = {});
 /// The same from TOML text (file is used in messages and to resolve relative mesh paths).
 Scene load_scene_from_string(const std::string& text, const std::string& file,

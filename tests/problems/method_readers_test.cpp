@@ -4,8 +4,10 @@
 // their names when unknown, and keys of another method are refused naming the method.
 #include <gtest/gtest.h>
 
+#include <sstream>
 #include <string>
 
+#include "hooke/linear/linear_registry.hpp"
 #include "hooke_config.hpp"
 #include "problems/scene.hpp"
 
@@ -18,15 +20,30 @@ Scene load(const std::string& integrator) {
   return load_scene_from_string(kChain + integrator, "scene.toml");
 }
 
-/// The InputError loading the chain with these [integrator] lines must throw.
-InputError load_error(const std::string& integrator) {
+/// The InputError loading the chain with these [integrator] lines (and --set overrides) must
+/// throw.
+InputError load_error(const std::string& integrator, const std::vector<std::string>& sets = {}) {
   try {
-    load(integrator);
+    load_scene_from_string(kChain + integrator, "scene.toml", sets);
   } catch (const InputError& e) {
     return e;
   }
   ADD_FAILURE() << "expected an InputError for:\n" << integrator;
   return InputError("", "", "");
+}
+
+/// Expects the chain with these [integrator] lines (and --set overrides) to be refused at
+/// integrator.KEY as a key with no effect, naming the setting that makes it so (`governing`, the
+/// start of the text after "has no effect with ") and the way out (`fix`, after "remove it, or ").
+void expect_ignored(const std::string& integrator, const std::string& key,
+                    const std::string& governing, const std::string& fix,
+                    const std::vector<std::string>& sets = {}) {
+  SCOPED_TRACE(integrator);
+  const InputError e = load_error(integrator, sets);
+  EXPECT_EQ(e.file(), "scene.toml");
+  EXPECT_EQ(e.key(), "integrator." + key);
+  EXPECT_NE(e.reason().find("has no effect with " + governing), std::string::npos) << e.reason();
+  EXPECT_NE(e.reason().find("; remove it, or " + fix), std::string::npos) << e.reason();
 }
 
 TEST(MethodReaders, ImplicitKeysFillImplicitOptions) {
@@ -78,8 +95,9 @@ TEST(MethodReaders, KrylovMethodAndPreconditionerAreAPairOfNames) {
 }
 
 TEST(MethodReaders, ValidateRulesAreReportedThroughTheSceneKey) {
-  // newton_tolerance is the scene key "tolerance".
-  const InputError tol = load_error("method = \"implicit\"\ntolerance = -1.0\n");
+  // newton_tolerance is the scene key "tolerance" (read when Newton iterates: 2 iterations).
+  const InputError tol =
+      load_error("method = \"implicit\"\nnewton_iterations = 2\ntolerance = -1.0\n");
   EXPECT_EQ(tol.key(), "integrator.tolerance");
   EXPECT_NE(tol.reason().find("-1"), std::string::npos) << tol.reason();
   const InputError beta = load_error("method = \"implicit\"\nbeta = 1.5\n");
@@ -113,7 +131,157 @@ TEST(MethodReaders, XpbdKeysFillXpbdOptions) {
   EXPECT_EQ(o->iterations, 2);
 }
 
+// ---------------------------------------------------------------------------------------------
+// Keys that the other settings make ineffective are refused when given, never when defaulted.
+
+TEST(MethodReaders, NewtonToleranceIsRefusedForTheLinearisedStep) {
+  expect_ignored("method = \"implicit\"\ntolerance = 1e-9\n", "tolerance",
+                 "newton_iterations = 1 (the default): one iteration is the linearised step",
+                 "set newton_iterations > 1");
+  expect_ignored("method = \"bdf2\"\nnewton_iterations = 1\ntolerance = 1e-9\n", "tolerance",
+                 "newton_iterations = 1: one iteration is the linearised step",
+                 "set newton_iterations > 1");
+  const Scene s = load("method = \"implicit-midpoint\"\nnewton_iterations = 4\ntolerance = 1e-9\n");
+  EXPECT_EQ(s.integrator.options.get<ImplicitOptions>()->newton_tolerance, 1e-9);
+}
+
+TEST(MethodReaders, PreconditionerIsRefusedUnlessTheLinearSolverIsPcg) {
+  expect_ignored(
+      "method = \"implicit\"\nlinear_solver = \"gauss-seidel\"\npreconditioner = \"block\"\n",
+      "preconditioner", "linear_solver = 'gauss-seidel': only linear_solver = 'pcg'",
+      "set linear_solver = 'pcg'");
+  // Even empty (which would mean "the backend's own" for pcg): the default backend takes none.
+  expect_ignored("method = \"bdf2\"\npreconditioner = \"\"\n", "preconditioner",
+                 "linear_solver = '" + default_linear_solver() + "' (the default)",
+                 "set linear_solver = 'pcg'");
+  const Scene s = load("method = \"implicit\"\nlinear_solver = \"pcg\"\npreconditioner = \"\"\n");
+  EXPECT_EQ(s.integrator.options.get<ImplicitOptions>()->preconditioner, "");
+}
+
 #if HOOKE_WITH_CHOLMOD
+TEST(MethodReaders, LinearIterationKeysAreRefusedForADirectLinearSolver) {
+  expect_ignored("method = \"implicit\"\nlinear_tolerance = 1e-6\n", "linear_tolerance",
+                 "linear_solver = 'cholmod' (the default): a direct solver",
+                 "choose an iterative linear_solver (");
+  expect_ignored("method = \"bdf2\"\nlinear_solver = \"cholmod\"\nmax_linear_iterations = 50\n",
+                 "max_linear_iterations", "linear_solver = 'cholmod': a direct solver",
+                 "choose an iterative linear_solver (");
+  // CG preconditioned by a CHOLMOD factorization iterates: both keys apply, whichever way it is
+  // named.
+  for (const char* backend : {"linear_solver = \"pcg-cholmod\"\n",
+                              "linear_solver = \"pcg\"\npreconditioner = \"cholmod\"\n"}) {
+    const Scene s = load(std::string("method = \"implicit\"\n") + backend +
+                         "linear_tolerance = 1e-6\nmax_linear_iterations = 50\n");
+    EXPECT_EQ(s.integrator.options.get<ImplicitOptions>()->linear_tolerance, 1e-6);
+    EXPECT_EQ(s.integrator.options.get<ImplicitOptions>()->max_linear_iterations, 50);
+  }
+}
+#endif
+
+/// A 6 x 6 symmetric positive definite matrix with full 3 x 3 blocks (two particles), both
+/// triangles stored, and a right-hand side that no backend solves without work.
+SparseMatrix spd_matrix() {
+  Eigen::MatrixXd d = Eigen::MatrixXd::Constant(6, 6, 1.0);
+  for (int i = 0; i < 6; ++i) d(i, i) = 7.0 + i;
+  return d.sparseView();
+}
+
+// The readers' list of direct backends (problems/method_readers.cpp) against the backends
+// themselves: a direct backend solves without iterations (LinearSummary::iterations = 0), an
+// iterative one takes at least one from a cold start. linear_tolerance must be refused exactly
+// for the direct ones.
+TEST(MethodReaders, IterationKeysAreRefusedExactlyForTheDirectLinearSolvers) {
+  const SparseMatrix A = spd_matrix();
+  const Vec b = Vec::LinSpaced(6, 1.0, 2.0);
+  LinearSolveOptions cold;
+  cold.tolerance = 1e-12;
+  cold.max_iterations = 1000;
+  cold.warm_start = false;
+  int direct = 0, iterative = 0;
+  for (const auto& info : linear_solvers()) {
+    SCOPED_TRACE(info.name);
+    auto solver = make_linear_solver(info.name);
+    ASSERT_EQ(solver->analyze(A).status, Status::Converged);
+    ASSERT_EQ(solver->factor(A).status, Status::Converged);
+    Vec x = Vec::Zero(6);
+    const LinearSummary sum = solver->solve(b, x, cold);
+    const bool is_direct = sum.iterations == 0;
+    (is_direct ? direct : iterative) += 1;
+    const std::string integrator = std::string("method = \"implicit\"\nlinear_solver = \"") +
+                                   info.name + "\"\nlinear_tolerance = 1e-6\n";
+    if (is_direct) {
+      EXPECT_EQ(load_error(integrator).key(), "integrator.linear_tolerance");
+    } else {
+      EXPECT_EQ(load(integrator).integrator.options.get<ImplicitOptions>()->linear_tolerance, 1e-6);
+    }
+  }
+  EXPECT_GT(iterative, 0);
+  EXPECT_EQ(direct, HOOKE_WITH_CHOLMOD ? 1 : 0) << "cholmod is the one direct backend";
+}
+
+// Every method with every key at its default loads (no default is ever refused as ignored), and
+// the resolved scene, which records every value a reader used, loads again to the same table: it
+// holds no key that the settings make ineffective.
+TEST(MethodReaders, DefaultsAreNeverRefusedAndTheResolvedSceneLoadsAgain) {
+  int loaded = 0;
+  for (const auto& m : methods()) {
+    SCOPED_TRACE(m.name);
+    Scene s;
+    try {
+      s = load(std::string("method = \"") + m.name + "\"\n");
+    } catch (const InputError& e) {
+      // Only a method that cannot run the chain (e.g. its dampers) may refuse it.
+      EXPECT_EQ(e.key(), "integrator.method") << e.what();
+      continue;
+    }
+    std::ostringstream text, again;
+    text << s.resolved;
+    const Scene r = load_scene_from_string(text.str(), "resolved.toml");
+    again << r.resolved;
+    EXPECT_EQ(text.str(), again.str());
+    ++loaded;
+  }
+  EXPECT_GT(loaded, 10);
+  // The implicit method on the default (direct) backend: the linearised step records neither the
+  // Newton tolerance nor the iterative solver's keys.
+  const Scene d = load("method = \"implicit\"\n");
+  const toml::table& integrator = *d.resolved["integrator"].as_table();
+  EXPECT_FALSE(integrator.contains("tolerance"));
+  EXPECT_NE(integrator.contains("linear_tolerance"), default_linear_solver() == "cholmod");
+  EXPECT_FALSE(integrator.contains("preconditioner"));
+}
+
+TEST(MethodReaders, KeysGivenWithSetAreJudgedAsKeysOfTheFile) {
+  expect_ignored("method = \"implicit\"\n", "tolerance", "newton_iterations = 1 (the default)",
+                 "set newton_iterations > 1", {"integrator.tolerance=1e-9"});
+  // A setting changed with --set makes the file's own keys ineffective just the same.
+  expect_ignored("method = \"implicit\"\nnewton_iterations = 3\ntolerance = 1e-9\n", "tolerance",
+                 "newton_iterations = 1: one iteration", "set newton_iterations > 1",
+                 {"integrator.newton_iterations=1"});
+#if HOOKE_WITH_CHOLMOD
+  expect_ignored("method = \"implicit\"\nlinear_solver = \"pcg\"\nlinear_tolerance = 1e-6\n",
+                 "linear_tolerance", "linear_solver = 'cholmod': a direct solver",
+                 "choose an iterative linear_solver (", {"integrator.linear_solver=cholmod"});
+#endif
+}
+
+#if HOOKE_WITH_CHOLMOD
+TEST(MethodReaders, FastMassSpringAccelerationKeysNeedTheirAcceleration) {
+  const std::string fms = "method = \"fast-mass-spring\"\n";
+  expect_ignored(fms + "chebyshev_rho = 0.9\n", "chebyshev_rho",
+                 "acceleration = 'none' (the default): only Chebyshev acceleration uses it;",
+                 "set acceleration = 'chebyshev'");
+  expect_ignored(fms + "acceleration = \"lbfgs\"\nchebyshev_delay = 5\n", "chebyshev_delay",
+                 "acceleration = 'lbfgs': only Chebyshev", "set acceleration = 'chebyshev'");
+  expect_ignored(fms + "acceleration = \"chebyshev\"\nlbfgs_history = 8\n", "lbfgs_history",
+                 "acceleration = 'chebyshev': only L-BFGS acceleration keeps a history;",
+                 "set acceleration = 'lbfgs'");
+  expect_ignored(fms + "lbfgs_history = 8\n", "lbfgs_history",
+                 "acceleration = 'none' (the default)", "set acceleration = 'lbfgs'");
+  const Scene s = load(fms + "acceleration = \"lbfgs\"\nlbfgs_history = 8\n");
+  EXPECT_EQ(s.integrator.options.get<FastMassSpringOptions>()->lbfgs_history, 8);
+}
+
 TEST(MethodReaders, FastMassSpringChoicesAreEnumsAndCrossFieldRulesNameTheKey) {
   const Scene s = load(
       "method = \"fast-mass-spring\"\nacceleration = \"chebyshev\"\nglobal_solver = \"jacobi\"\n"
@@ -132,8 +300,10 @@ TEST(MethodReaders, FastMassSpringChoicesAreEnumsAndCrossFieldRulesNameTheKey) {
       "method = \"fast-mass-spring\"\nacceleration = \"lbfgs\"\nglobal_solver = \"jacobi\"\n");
   EXPECT_EQ(lbfgs.key(), "integrator.global_solver");
   // chebyshev_delay >= 2 only when rho is estimated (chebyshev_rho = 0).
-  EXPECT_EQ(load_error("method = \"fast-mass-spring\"\nchebyshev_delay = 1\n").key(),
-            "integrator.chebyshev_delay");
+  const InputError delay = load_error(
+      "method = \"fast-mass-spring\"\nacceleration = \"chebyshev\"\nchebyshev_delay = 1\n");
+  EXPECT_EQ(delay.key(), "integrator.chebyshev_delay");
+  EXPECT_NE(delay.reason().find(">= 2 when rho is estimated"), std::string::npos) << delay.reason();
 }
 #endif
 
@@ -167,6 +337,42 @@ TEST(MethodReaders, CvodeTakesEveryOptionItHas) {
   EXPECT_EQ(load_error("method = \"ida\"\nmax_order = 6\n").key(), "integrator.max_order");
   EXPECT_EQ(load_error("method = \"ida\"\nadams = true\n").key(), "integrator.adams");
 }
+
+TEST(MethodReaders, SundialsPreconditionerKeysNeedAnIterativeSolve) {
+  // KLU (the default) is direct and takes no preconditioner.
+  expect_ignored(
+      "method = \"cvode\"\npreconditioner_tolerance = 1e-3\n", "preconditioner_tolerance",
+      "linear_solver = 'klu' (the default): KLU is a direct solver", "set linear_solver = 'spgmr'");
+  expect_ignored("method = \"ida\"\nlinear_solver = \"klu\"\npreconditioner = \"pcg-block\"\n",
+                 "preconditioner", "linear_solver = 'klu': KLU is a direct solver",
+                 "set linear_solver = 'spgmr'");
+  // SPGMR: the tolerance of the preconditioner solves needs an iterative preconditioner.
+  const std::string spgmr = "linear_solver = \"spgmr\"\n";
+  expect_ignored("method = \"cvode\"\n" + spgmr +
+                     "preconditioner = \"none\"\npreconditioner_tolerance = 1e-3\n",
+                 "preconditioner_tolerance", "preconditioner = 'none': SPGMR runs without",
+                 "choose an iterative preconditioner (");
+#if HOOKE_WITH_CHOLMOD
+  expect_ignored("method = \"ida\"\n" + spgmr + "preconditioner_tolerance = 1e-3\n",
+                 "preconditioner_tolerance",
+                 "preconditioner = 'cholmod' (the default): a direct solver",
+                 "choose an iterative preconditioner (");
+#endif
+  const Scene s = load("method = \"ida\"\n" + spgmr +
+                       "preconditioner = \"pcg-block\"\npreconditioner_tolerance = 1e-3\n");
+  EXPECT_EQ(s.integrator.options.get<IdaOptions>()->preconditioner_tolerance, 1e-3);
+  // Functional iteration (CVODE, Adams) solves no linear systems at all.
+  const std::string fixed_point =
+      "method = \"cvode\"\nadams = true\nnonlinear_solver = \"fixed-point\"\n";
+  for (const char* key : {"linear_solver = \"klu\"\n", "preconditioner = \"pcg-block\"\n",
+                          "preconditioner_tolerance = 1e-3\n"}) {
+    const std::string line = key;
+    expect_ignored(
+        fixed_point + line, line.substr(0, line.find(' ')),
+        "nonlinear_solver = 'fixed-point': functional iteration solves no linear systems;",
+        "set nonlinear_solver = 'newton'");
+  }
+}
 #endif
 
 #if HOOKE_WITH_CERES
@@ -192,8 +398,18 @@ TEST(MethodReaders, CeresImplicitTakesItsSolverOptions) {
 #endif
 
 TEST(MethodReaders, OptionsForPassesASceneOptionsOnlyToMethodsOfTheSameType) {
-  const Scene s = load("method = \"implicit\"\nnewton_iterations = 4\n");
+  const Scene s = load(
+      "method = \"implicit\"\nnewton_iterations = 4\ntolerance = 1e-9\nlinear_solver = \"pcg\"\n"
+      "linear_tolerance = 1e-6\n");
   EXPECT_EQ(options_for("bdf2", s.integrator.options).get<ImplicitOptions>()->newton_iterations, 4);
+  // What the chosen method read is reused as it is (crosscheck, the studies): the other implicit
+  // methods take the same Newton and linear settings and build.
+  for (const char* other : {"implicit-midpoint", "bdf2"}) {
+    const MethodOptions o = options_for(other, s.integrator.options);
+    EXPECT_EQ(o.get<ImplicitOptions>()->linear_tolerance, 1e-6);
+    EXPECT_EQ(o.get<ImplicitOptions>()->newton_tolerance, 1e-9);
+    EXPECT_NE(make_stepper(other, *s.system, o), nullptr);
+  }
   EXPECT_TRUE(options_for("rk4", s.integrator.options).empty());
   EXPECT_TRUE(options_for("xpbd", s.integrator.options).empty());
 }

@@ -6,13 +6,16 @@
 # after it:
 #   # expect-file: SUFFIX   the message names a file ending in SUFFIX (an OBJ mesh) instead of
 #                           the scene itself
-#   # expect-text: TEXT     the message also contains TEXT (e.g. the memory a mesh would need)
+#   # expect-text: TEXT     the message also contains TEXT (e.g. the memory a mesh would need);
+#                           several such lines: it contains each
 #   # env: NAME=VALUE       run hooke with this environment variable set (e.g. a memory budget)
+#   # set: SECTION.KEY=VALUE  run hooke with --set SECTION.KEY=VALUE (several lines: one each)
 # With -DMAKE_HUGE=ON the scene is first created: a two-line header followed by zero bytes up to
 # 65 MiB (a sparse file), to check the scene-size limit without shipping a huge file.
 # Passes only if hooke exits with exactly 2 (no crash, no signal, no timeout), stderr starts with
 # "error: FILE: KEY: " (for a "line N" key, "error: FILE: line N, column C: " also matches) and the
 # output directory was never created.
+cmake_policy(SET CMP0007 NEW)  # the header's blank lines are list elements: keep them, quietly
 foreach(var HOOKE SCENE OUT)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "run_malformed.cmake: pass -D${var}=...")
@@ -29,31 +32,36 @@ if(MAKE_HUGE)
   endif()
 endif()
 
-file(STRINGS "${SCENE}" header LIMIT_COUNT 6)
+file(STRINGS "${SCENE}" header LIMIT_COUNT 12)
 list(GET header 0 first)
 if(NOT first MATCHES "^# expect: (.+)$")
   message(FATAL_ERROR "${SCENE}: the first line must be '# expect: KEY', got '${first}'")
 endif()
 string(STRIP "${CMAKE_MATCH_1}" key)
 set(expect_file "${SCENE}")
-set(expect_text "")
+set(expect_texts "")
 set(file_is_suffix FALSE)
 set(env_prefix "")
+set(sets "")
 foreach(line IN LISTS header)
   if(line MATCHES "^# expect-file: (.+)$")
     string(STRIP "${CMAKE_MATCH_1}" expect_file)
     set(file_is_suffix TRUE)
   elseif(line MATCHES "^# expect-text: (.+)$")
-    string(STRIP "${CMAKE_MATCH_1}" expect_text)
+    string(STRIP "${CMAKE_MATCH_1}" _text)
+    list(APPEND expect_texts "${_text}")
   elseif(line MATCHES "^# env: ([A-Za-z_0-9]+=.*)$")
     string(STRIP "${CMAKE_MATCH_1}" _assign)
     set(env_prefix "${CMAKE_COMMAND}" -E env "${_assign}")
+  elseif(line MATCHES "^# set: ([A-Za-z_0-9.]+=.*)$")
+    string(STRIP "${CMAKE_MATCH_1}" _assign)
+    list(APPEND sets --set "${_assign}")
   endif()
 endforeach()
 
 file(REMOVE_RECURSE "${OUT}")
 execute_process(
-  COMMAND ${env_prefix} "${HOOKE}" run "${SCENE}" --out "${OUT}" --no-progress
+  COMMAND ${env_prefix} "${HOOKE}" run "${SCENE}" --out "${OUT}" --no-progress ${sets}
   RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err TIMEOUT 60)
 
 set(report "\n--- exit: ${rc}\n--- stderr:\n${err}\n--- stdout:\n${out}")
@@ -90,12 +98,12 @@ if(NOT found)
   message(FATAL_ERROR "expected 'error: ${expect_file}: ${key}: ...' "
                       "on the first line of stderr${report}")
 endif()
-if(expect_text)
+foreach(expect_text IN LISTS expect_texts)
   string(FIND "${message_line}" "${expect_text}" at)
   if(at LESS 0)
     message(FATAL_ERROR "expected the message to contain '${expect_text}'${report}")
   endif()
-endif()
+endforeach()
 if(EXISTS "${OUT}")
   message(FATAL_ERROR "a refused scene must not create its output directory ${OUT}${report}")
 endif()

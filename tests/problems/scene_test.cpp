@@ -301,6 +301,97 @@ springs = [[0, 1, 10.0]]
 }
 
 // ---------------------------------------------------------------------------------------------
+// Colliders: no free particle may start inside one
+
+/// A horizontal 5 x 5 grid (spacing 0.25 m in the plane y = 0, x and z in [0, 1], particles
+/// id = 5 j + i at (0.25 i, 0, 0.25 j), pinned at ids 0 and 4) followed by `rest`.
+std::string flat_grid(const std::string& rest) {
+  return "[mesh]\ntype = \"grid\"\nnx = 5\nny = 5\n\n" + rest;
+}
+
+/// Fails the test unless `text` contains `part`.
+void expect_contains(const std::string& text, const std::string& part) {
+  EXPECT_NE(text.find(part), std::string::npos) << "'" << part << "' not in: " << text;
+}
+
+TEST(SceneColliders, FreeParticleInsideTheSphereIsRefusedNamingIndexPositionAndDepth) {
+  // The centre particle (id 12, at (0.5, 0, 0.5)) is 0.1 m from the centre: 0.2 m deep. Its four
+  // neighbours, 0.25 m away sideways (0.27 m from the centre), are inside too.
+  const InputError e = load_error(
+      flat_grid("[collision.sphere]\ncenter = [0.5, -0.1, 0.5]\nradius = 0.3\n"), "s.toml");
+  EXPECT_EQ(e.file(), "s.toml");
+  EXPECT_EQ(e.key(), "collision.sphere");
+  expect_contains(e.reason(),
+                  "free particle 12 at (0.5, 0, 0.5) starts 0.2 m inside the sphere "
+                  "(center (0.5, -0.1, 0.5), radius 0.3)");
+  expect_contains(e.reason(), "5 free particles start inside, this one deepest");
+  expect_contains(e.reason(), "not a time step problem");
+  expect_contains(e.reason(),
+                  "Move the collider (collision.sphere.center, "
+                  "collision.sphere.radius) or the object");
+}
+
+TEST(SceneColliders, FreeParticleBelowTheGroundIsRefused) {
+  // The plane y = 0.1 (its normal is normalised): every particle is 0.1 m below it; the pinned
+  // corners 0 and 4 are not counted, and the first free one is named.
+  const InputError e = load_error(
+      flat_grid("[collision.ground]\nnormal = [0.0, 2.0, 0.0]\nheight = 0.1\n"), "g.toml");
+  EXPECT_EQ(e.key(), "collision.ground");
+  expect_contains(e.reason(),
+                  "free particle 1 at (0.25, 0, 0) starts 0.1 m inside the ground "
+                  "plane (normal (0, 1, 0), height 0.1)");
+  expect_contains(e.reason(), "23 free particles start inside");
+  expect_contains(e.reason(), "(collision.ground.height, collision.ground.normal)");
+}
+
+TEST(SceneColliders, ParticlesOnTheSurfaceAreAccepted) {
+  // A cloth lying exactly on the ground.
+  const Scene flat =
+      load_scene_from_string(flat_grid("[collision.ground]\nheight = 0.0\n"), "f.toml");
+  EXPECT_EQ(flat.system->constraints().size(), 1u);
+  // Below the surface by rounding only: 1e-6 m under a 1.41 m cloth is within the tolerance
+  // (1e-5 of the scene size), 1e-4 m is not.
+  EXPECT_NO_THROW(
+      load_scene_from_string(flat_grid("[collision.ground]\nheight = 1e-6\n"), "r.toml"));
+  EXPECT_EQ(load_error(flat_grid("[collision.ground]\nheight = 1e-4\n")).key(), "collision.ground");
+  // Particles on a sphere, their positions rounded to 17 digits (|x - c| = r up to round-off), and
+  // on a tilted plane through the origin.
+  std::ostringstream sphere;
+  sphere.precision(17);
+  sphere << "[mesh]\ntype = \"particles\"\npositions = [";
+  const double r = 0.3;
+  const Vec3 c(0.1, 0.7, -0.2);
+  int placed = 0;
+  for (int a = 0; a < 6; ++a)
+    for (int b = 1; b < 6; ++b) {
+      const double theta = 0.5 * b, phi = 1.1 * a;
+      const Vec3 p = c + r * Vec3(std::sin(theta) * std::cos(phi), std::cos(theta),
+                                  std::sin(theta) * std::sin(phi));
+      sphere << (placed++ ? ", " : "") << "[" << p[0] << ", " << p[1] << ", " << p[2] << "]";
+    }
+  sphere << "]\n\n[collision.sphere]\ncenter = [0.1, 0.7, -0.2]\nradius = 0.3\n";
+  const Scene on_sphere = load_scene_from_string(sphere.str(), "on_sphere.toml");
+  EXPECT_EQ(on_sphere.system->num_particles(), 30);
+  EXPECT_NO_THROW(load_scene_from_string(
+      "[mesh]\ntype = \"particles\"\npositions = [[1.0, 1.0, 0.0], [-2.0, -2.0, 5.0]]\n\n"
+      "[collision.ground]\nnormal = [1.0, -1.0, 0.0]\n",
+      "tilted.toml"));
+}
+
+TEST(SceneColliders, PinnedParticlesMayStartInside) {
+  const std::string text =
+      "[mesh]\ntype = \"particles\"\npositions = [[0.0, 0.0, 0.0], [0.0, 1.0, 0.0]]\n"
+      "springs = [[0, 1, 100.0]]\n";
+  const std::string sphere = "\n[collision.sphere]\ncenter = [0.0, 0.1, 0.0]\nradius = 0.5\n";
+  // Particle 0 is inside the sphere: accepted while it is pinned (colliders never move pinned
+  // particles), refused once it is free.
+  EXPECT_NO_THROW(load_scene_from_string(text + "pinned = [0]\n" + sphere, "pinned.toml"));
+  const InputError e = load_error(text + sphere);
+  EXPECT_EQ(e.key(), "collision.sphere");
+  expect_contains(e.reason(), "free particle 0 at (0, 0, 0) starts 0.4 m inside");
+}
+
+// ---------------------------------------------------------------------------------------------
 // Overrides, defaults and errors
 
 TEST(SceneOverrides, ChangeValues) {
