@@ -1,6 +1,7 @@
 #include "experiments/cli.hpp"
 
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 
 #include "experiments/study_methods.hpp"
@@ -71,6 +72,12 @@ std::vector<int> integers(const std::string& text, const std::string& option, in
     out.push_back(int(v));
   }
   return out;
+}
+
+Scene load_scene_argument(const std::string& arg, const std::vector<std::string>& sets) {
+  Scene scene = load_scene(resolve_scene(arg), sets);
+  for (const std::string& w : scene.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
+  return scene;
 }
 
 }  // namespace hooke::cli

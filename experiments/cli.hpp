@@ -10,6 +10,8 @@
 #include <string>
 #include <vector>
 
+#include "problems/scene.hpp"
+
 namespace hooke::cli {
 
 /// What a chosen subcommand runs after parsing; returns the process exit code. Bad input is
@@ -27,6 +29,10 @@ struct Command {
 std::filesystem::path scenes_dir();
 /// A scene argument: a path, or the stem of a shipped scene ("hanging_cloth").
 std::string resolve_scene(const std::string& arg);
+
+/// Loads the scene argument (resolve_scene) with its --set overrides and prints the scene's
+/// warnings (Scene::warnings) on stderr as "warning: FILE: KEY: reason".
+Scene load_scene_argument(const std::string& arg, const std::vector<std::string>& sets);
 
 /// The positional scene argument (a file or the name of a shipped scene).
 void add_scene(CLI::App* cmd, std::string& scene, bool required = true);

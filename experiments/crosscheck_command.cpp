@@ -118,7 +118,7 @@ Command add_crosscheck_command(CLI::App& app) {
   cmd->add_option("--samples", a->cross.samples, "trajectory samples (default 20)");
   add_out(cmd, a->out, "out/crosscheck-<scene>");
   return {cmd, [a] {
-            const Scene scene = load_scene(resolve_scene(a->scene), a->sets);
+            const Scene scene = load_scene_argument(a->scene, a->sets);
             a->cross.methods = split_list(a->methods);
             if (!(a->cross.reference_rtol > 0.0))
               throw InputError("<command line>", "--reference-rtol", "must be > 0");

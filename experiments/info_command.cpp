@@ -73,7 +73,7 @@ Command add_info_command(CLI::App& app) {
   add_scene(cmd, a->scene);
   add_sets(cmd, a->sets);
   return {cmd, [a] {
-            print_scene_info(load_scene(resolve_scene(a->scene), a->sets), std::cout);
+            print_scene_info(load_scene_argument(a->scene, a->sets), std::cout);
             return 0;
           }};
 }

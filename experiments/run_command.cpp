@@ -507,7 +507,7 @@ Command add_run_command(CLI::App& app) {
             check_stop_after(a->run.stop_after);
             if (cmd->count("--out") > 0 && a->run.out_dir.empty())
               throw InputError("<command line>", "--out", "must not be empty");
-            Scene scene = load_scene(resolve_scene(a->scene), a->sets);
+            Scene scene = load_scene_argument(a->scene, a->sets);
             a->run.progress = !a->no_progress;
             return run_scene(scene, a->run);
           }};

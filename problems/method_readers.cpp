@@ -13,19 +13,34 @@ using MethodReader = MethodOptions (*)(TableReader& r, const std::string& method
 // Keys that depend on another setting. A reader reads such a key only when the settings read
 // before it make it take effect; otherwise it calls refuse_ignored(), which refuses the key if the
 // scene (or --set) gives it and records nothing, so that a default never triggers the refusal and
-// the resolved scene holds only keys that take effect (and loads again unchanged).
+// the resolved scene holds only keys that take effect (and loads again unchanged). One exception:
+// a key of the file that a --set of its governing setting made ineffective (the scene tuned for
+// PCG, run with --set integrator.linear_solver=cholmod) is dropped with a warning, since the
+// command line cannot remove a key of the file.
+
+/// The setting that decides whether a key takes effect: its key and how to name it.
+struct Governing {
+  std::string key;   ///< "linear_solver"
+  std::string text;  ///< "linear_solver = 'cholmod' (the default)"
+};
 
 /// "NAME = 'VALUE'", with " (the default)" when the scene does not give NAME.
-std::string setting(const TableReader& r, const std::string& name, const std::string& value) {
-  return name + " = '" + value + "'" + (r.has(name) ? "" : " (the default)");
+Governing setting(const TableReader& r, const std::string& name, const std::string& value) {
+  return {name, name + " = '" + value + "'" + (r.has(name) ? "" : " (the default)")};
 }
 
-/// Refuses key if the scene gives it although `governing` (a setting(), or a text such as
-/// "newton_iterations = 1") makes it have no effect; `why` says why, `fix` what to do instead.
-void refuse_ignored(const TableReader& r, const std::string& key, const std::string& governing,
+/// Refuses key if the scene gives it although `governing` makes it have no effect; `why` says
+/// why, `fix` what to do instead. A key of the file whose governing setting came from --set is
+/// skipped with a warning instead.
+void refuse_ignored(TableReader& r, const std::string& key, const Governing& governing,
                     const std::string& why, const std::string& fix) {
-  if (r.has(key))
-    r.fail(key, "has no effect with " + governing + ": " + why + "; remove it, or " + fix);
+  if (!r.has(key)) return;
+  if (r.overridden(governing.key) && !r.overridden(key)) {
+    r.warn(key, "has no effect with " + governing.text + " (from --set): " + why + "; ignored");
+    r.skip(key);
+    return;
+  }
+  r.fail(key, "has no effect with " + governing.text + ": " + why + "; remove it, or " + fix);
 }
 
 /// True for the linear backends that solve directly: they ignore LinearSolveOptions::tolerance
@@ -63,11 +78,11 @@ MethodOptions read_implicit(TableReader& r, const std::string& method) {
   o.newton_iterations = r.int_field("newton_iterations", o.newton_iterations);
   // One iteration is the linearised step: it ends without a convergence test.
   if (o.newton_iterations == 1)
-    refuse_ignored(
-        r, "tolerance",
-        std::string("newton_iterations = 1") + (r.has("newton_iterations") ? "" : " (the default)"),
-        "one iteration is the linearised step, with no convergence test",
-        "set newton_iterations > 1 to iterate Newton to this tolerance");
+    refuse_ignored(r, "tolerance",
+                   {"newton_iterations", std::string("newton_iterations = 1") +
+                                             (r.has("newton_iterations") ? "" : " (the default)")},
+                   "one iteration is the linearised step, with no convergence test",
+                   "set newton_iterations > 1 to iterate Newton to this tolerance");
   else
     o.newton_tolerance = r.number("tolerance", o.newton_tolerance);
   const std::string backend = canonical_linear_solver(o.linear_solver, o.preconditioner);
@@ -90,7 +105,7 @@ MethodOptions read_implicit(TableReader& r, const std::string& method) {
 /// solver solves no linear systems (CVODE's fixed-point iteration), named by `nonlinear`; then
 /// the linear solver and its preconditioner have no effect.
 void read_sundials(TableReader& r, SundialsOptions& o, bool linear_solves = true,
-                   const std::string& nonlinear = "") {
+                   const Governing& nonlinear = {}) {
   o.rtol = r.number("rtol", o.rtol);
   o.atol = r.number("atol", o.atol);
   o.max_steps = long(r.integer("max_steps", o.max_steps, std::numeric_limits<long>::min(),
@@ -114,12 +129,12 @@ void read_sundials(TableReader& r, SundialsOptions& o, bool linear_solves = true
   const std::string backend =
       o.preconditioner.empty() ? default_sundials_preconditioner() : o.preconditioner;
   if (backend == "none" || direct_linear_solver(backend))
-    refuse_ignored(
-        r, "preconditioner_tolerance",
-        "preconditioner = '" + backend + "'" + (o.preconditioner.empty() ? " (the default)" : ""),
-        backend == "none" ? "SPGMR runs without preconditioner solves"
-                          : "a direct solver makes each preconditioner solve exact",
-        "choose an iterative preconditioner (" + iterative_linear_solvers() + ")");
+    refuse_ignored(r, "preconditioner_tolerance",
+                   {"preconditioner", "preconditioner = '" + backend + "'" +
+                                          (o.preconditioner.empty() ? " (the default)" : "")},
+                   backend == "none" ? "SPGMR runs without preconditioner solves"
+                                     : "a direct solver makes each preconditioner solve exact",
+                   "choose an iterative preconditioner (" + iterative_linear_solvers() + ")");
   else
     o.preconditioner_tolerance = r.number("preconditioner_tolerance", o.preconditioner_tolerance);
 }
@@ -168,7 +183,7 @@ MethodOptions read_fast_mass_spring(TableReader& r, const std::string&) {
   o.tolerance = r.number("tolerance", o.tolerance);
   o.warm_start = r.choice("warm_start", o.warm_start);
   o.acceleration = r.choice("acceleration", o.acceleration);
-  const std::string acceleration = setting(r, "acceleration", to_string(o.acceleration));
+  const Governing acceleration = setting(r, "acceleration", to_string(o.acceleration));
   if (o.acceleration == Acceleration::Chebyshev) {
     o.chebyshev_rho = r.number("chebyshev_rho", o.chebyshev_rho);
     o.chebyshev_delay = r.int_field("chebyshev_delay", o.chebyshev_delay);

@@ -67,7 +67,8 @@ namespace {
 
 /// Applies one "section.key=value" override to the parsed table. The value is parsed as a TOML
 /// value; if that fails it is taken as a string (so --set integrator.method=rk4 works unquoted).
-void apply_override(toml::table& root, const std::string& item) {
+/// Returns the dotted key it set.
+std::string apply_override(toml::table& root, const std::string& item) {
   const std::string where = "--set " + item;
   const auto eq = item.find('=');
   if (eq == std::string::npos || eq == 0)
@@ -99,6 +100,7 @@ void apply_override(toml::table& root, const std::string& item) {
   }
   if (rest.empty()) throw InputError("<command line>", path, "empty key name");
   t->insert_or_assign(rest, std::move(*parsed.get("v")));
+  return path;
 }
 
 MeshBuild build_mesh(TableReader& mesh, TableReader& springs, const std::string& base_dir) {
@@ -310,7 +312,8 @@ void read_run_settings(TableReader& root, Scene& scene) {
 
 Scene load_parsed(toml::table tbl, const std::string& file,
                   const std::vector<std::string>& overrides) {
-  for (const auto& o : overrides) apply_override(tbl, o);
+  auto context = std::make_shared<ReadContext>();
+  for (const auto& o : overrides) context->overridden.insert(apply_override(tbl, o));
   Scene scene;
   scene.file = file;
   scene.name = std::filesystem::path(file).stem().string();
@@ -319,7 +322,7 @@ Scene load_parsed(toml::table tbl, const std::string& file,
   for (const char* sec : {"integrator", "time", "output", "run"})
     if (!tbl.contains(sec)) tbl.insert(sec, toml::table{});
   if (!is_ode && !tbl.contains("springs")) tbl.insert("springs", toml::table{});
-  TableReader root(tbl, scene.resolved, file, "");
+  TableReader root(tbl, scene.resolved, file, "", context);
 
   if (is_ode) {
     for (const char* sec : {"mesh", "springs", "forces", "collision", "strain_limit"})
@@ -363,6 +366,7 @@ Scene load_parsed(toml::table tbl, const std::string& file,
                          explicit_methods);
   }
   root.finish();
+  scene.warnings = context->warnings;
   return scene;
 }
 

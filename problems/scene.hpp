@@ -90,6 +90,9 @@ struct Scene {
   OutputSettings output;
   RunSettings run;
   toml::table resolved;  ///< the scene with every default filled (written as scene.toml)
+  /// "FILE: KEY: reason" for what the scene gives but does not use (a key of the file that a
+  /// --set switch made ineffective); `hooke run` and `hooke info` print them.
+  std::vector<std::string> warnings;
 
   bool is_ode() const { return ode != nullptr; }
 };

@@ -34,8 +34,22 @@ const char* type_name(const toml::node& n) {
 }  // namespace
 
 TableReader::TableReader(const toml::table& tbl, toml::table& resolved, std::string file,
-                         std::string prefix)
-    : m_tbl(tbl), m_out(resolved), m_file(std::move(file)), m_prefix(std::move(prefix)) {}
+                         std::string prefix, std::shared_ptr<ReadContext> context)
+    : m_tbl(tbl),
+      m_out(resolved),
+      m_file(std::move(file)),
+      m_prefix(std::move(prefix)),
+      m_context(context ? std::move(context) : std::make_shared<ReadContext>()) {}
+
+bool TableReader::overridden(const std::string& key) const {
+  return m_context->overridden.count(path(key)) > 0;
+}
+
+void TableReader::warn(const std::string& key, const std::string& reason) const {
+  m_context->warnings.push_back(m_file + ": " + path(key) + ": " + reason);
+}
+
+void TableReader::skip(const std::string& key) { m_used.insert(key); }
 
 bool TableReader::has(const std::string& key) const {
   m_known.insert(key);
@@ -285,7 +299,7 @@ std::optional<TableReader> TableReader::table(const std::string& key) {
   if (!t) fail(key, std::string("must be a table, got ") + type_name(node(key)));
   auto [it, inserted] = m_out.insert_or_assign(key, toml::table{});
   (void)inserted;
-  return TableReader(*t, *it->second.as_table(), m_file, path(key));
+  return TableReader(*t, *it->second.as_table(), m_file, path(key), m_context);
 }
 
 void TableReader::reject_if_present(const std::string& key, const std::string& reason) const {

@@ -1,6 +1,7 @@
 #pragma once
 #include <toml++/toml.h>
 
+#include <memory>
 #include <optional>
 #include <set>
 #include <string>
@@ -12,6 +13,13 @@
 
 namespace hooke {
 
+/// What the readers of one scene's tables share: the dotted keys given with --set, and the
+/// warnings raised while reading (Scene::warnings; the command that runs the scene prints them).
+struct ReadContext {
+  std::set<std::string> overridden;
+  std::vector<std::string> warnings;
+};
+
 /// Strict, typed reading of one TOML table of a scene. Every getter checks type, finiteness and
 /// range, records the value it returns (explicit or default) into the resolved table so the run
 /// can write the scene with every default filled, and marks the key as used; finish() rejects any
@@ -20,7 +28,9 @@ class TableReader {
  public:
   /// tbl: the table to read; resolved: where to record values; file: for messages;
   /// prefix: dotted path of tbl ("" for the root).
-  TableReader(const toml::table& tbl, toml::table& resolved, std::string file, std::string prefix);
+  /// context: shared with the sub-tables' readers (none: no --set keys, warnings dropped).
+  TableReader(const toml::table& tbl, toml::table& resolved, std::string file, std::string prefix,
+              std::shared_ptr<ReadContext> context = nullptr);
 
   /// True if key is present. Also notes key as one this table knows, so finish() lists it among
   /// the known keys even when it was absent (keys read only when present, like forces.gravity).
@@ -29,6 +39,13 @@ class TableReader {
   std::string path(const std::string& key) const;
   const std::string& file() const { return m_file; }
   [[noreturn]] void fail(const std::string& key, const std::string& reason) const;
+  /// True if key was given (or replaced) with --set rather than by the scene file.
+  bool overridden(const std::string& key) const;
+  /// Records the warning "FILE: KEY: reason" (ReadContext::warnings).
+  void warn(const std::string& key, const std::string& reason) const;
+  /// Marks key as read without recording it in the resolved scene: a key that has no effect and
+  /// is dropped (after a warn()), so that finish() does not call it unknown.
+  void skip(const std::string& key);
 
   /// A finite number (integer or float). Without a default the key is required.
   double number(const std::string& key, std::optional<double> def = std::nullopt);
@@ -90,6 +107,7 @@ class TableReader {
   std::string m_file, m_prefix;
   std::set<std::string> m_used;
   mutable std::set<std::string> m_known;  ///< keys asked about with has(), for finish()'s hint
+  std::shared_ptr<ReadContext> m_context;
 };
 
 }  // namespace hooke

@@ -21,7 +21,7 @@
 #   study_stop   `hooke stability` stopped by SIGINT after its first rows: exit 130, the rows so far
 #                in stability.partial.csv (complete rows), no stability.csv, status.txt "stopped".
 #   no_trace     Bad input (a multi-line --set, --stop-after 0, an implicit method on an [ode]
-#                scene, an unknown key): exit 2 with
+#                scene, an option the method ignores, an unknown key): exit 2 with
 #                "error: FILE: KEY: reason" and no output folder created. An all-pinned scene runs
 #                (exit 0) with cholmod, pcg-nodal and bdf2 and its final state is its initial one.
 set -uo pipefail
@@ -274,6 +274,8 @@ time.duration=1'
   refused "--stop-after 0" "error: <command line>: --stop-after: must be a step number >= 1" run "$small" --stop-after 0
   refused "implicit on [ode]" "decay.toml: integrator.method: 'implicit' steps a mass-spring system" \
     run "$SCENES/decay.toml" --set integrator.method=implicit
+  refused "option the method ignores" "two_particle.toml: integrator.linear_tolerance: has no effect" \
+    run "$SCENES/two_particle.toml" --set integrator.method=implicit --set integrator.linear_solver=cholmod --set integrator.linear_tolerance=1e-9
   refused "unknown key" "two_particle.toml: time.dtt: " run "$SCENES/two_particle.toml" --set time.dtt=1
   # Zero free DOFs: a 2 x 2 cloth with every corner pinned is a valid scene and simply runs.
   pins=(--set mesh.nx=2 --set mesh.ny=2 --set 'mesh.pins=[[0,0],[1,0],[0,1],[1,1]]' --set time.duration=0.01)

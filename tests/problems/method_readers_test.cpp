@@ -254,14 +254,38 @@ TEST(MethodReaders, DefaultsAreNeverRefusedAndTheResolvedSceneLoadsAgain) {
 TEST(MethodReaders, KeysGivenWithSetAreJudgedAsKeysOfTheFile) {
   expect_ignored("method = \"implicit\"\n", "tolerance", "newton_iterations = 1 (the default)",
                  "set newton_iterations > 1", {"integrator.tolerance=1e-9"});
-  // A setting changed with --set makes the file's own keys ineffective just the same.
-  expect_ignored("method = \"implicit\"\nnewton_iterations = 3\ntolerance = 1e-9\n", "tolerance",
-                 "newton_iterations = 1: one iteration", "set newton_iterations > 1",
-                 {"integrator.newton_iterations=1"});
+  // Both the key and the setting that makes it ineffective from --set: refused as well.
+  expect_ignored("method = \"implicit\"\n", "tolerance", "newton_iterations = 1: one iteration",
+                 "set newton_iterations > 1",
+                 {"integrator.newton_iterations=1", "integrator.tolerance=1e-9"});
+}
+
+/// A setting switched with --set makes a key of the file ineffective: the command line cannot
+/// remove the key, so it is dropped (not in force, not in the resolved scene) with a warning.
+TEST(MethodReaders, AFileKeyThatASetSwitchMakesIneffectiveIsDroppedWithAWarning) {
+  const Scene s = load_scene_from_string(
+      std::string(kChain) + "method = \"implicit\"\nnewton_iterations = 3\ntolerance = 1e-9\n",
+      "scene.toml", {"integrator.newton_iterations=1"});
+  ASSERT_EQ(s.warnings.size(), 1u);
+  EXPECT_EQ(s.warnings[0],
+            "scene.toml: integrator.tolerance: has no effect with newton_iterations = 1 (from "
+            "--set): one iteration is the linearised step, with no convergence test; ignored");
+  EXPECT_FALSE(s.resolved["integrator"]["tolerance"]);
+  EXPECT_EQ(s.integrator.options.get<ImplicitOptions>()->newton_iterations, 1);
+  // Without --set the same scene has no warning.
+  EXPECT_TRUE(
+      load("method = \"implicit\"\nnewton_iterations = 3\ntolerance = 1e-9\n").warnings.empty());
 #if HOOKE_WITH_CHOLMOD
-  expect_ignored("method = \"implicit\"\nlinear_solver = \"pcg\"\nlinear_tolerance = 1e-6\n",
-                 "linear_tolerance", "linear_solver = 'cholmod': a direct solver",
-                 "choose an iterative linear_solver (", {"integrator.linear_solver=cholmod"});
+  const Scene c = load_scene_from_string(
+      std::string(kChain) +
+          "method = \"implicit\"\nlinear_solver = \"pcg\"\nlinear_tolerance = 1e-6\n",
+      "scene.toml", {"integrator.linear_solver=cholmod"});
+  ASSERT_EQ(c.warnings.size(), 1u);
+  EXPECT_NE(c.warnings[0].find("integrator.linear_tolerance: has no effect with linear_solver = "
+                               "'cholmod' (from --set): a direct solver"),
+            std::string::npos)
+      << c.warnings[0];
+  EXPECT_FALSE(c.resolved["integrator"]["linear_tolerance"]);
 #endif
 }
 
