@@ -1,6 +1,7 @@
 """Shared helpers of the hooke plot scripts: CSV reading and Markdown tables (Debian's matplotlib)."""
 import csv
 import math
+import os
 
 import matplotlib
 
@@ -9,6 +10,32 @@ import matplotlib.pyplot as plt  # noqa: E402
 
 plt.rcParams.update({"figure.dpi": 110, "savefig.dpi": 110, "axes.grid": True, "grid.alpha": 0.3,
                      "legend.fontsize": 7, "font.size": 9})
+
+
+def _replace(path, write):
+    """Writes path through path.tmp, flushed to disk and renamed: complete or absent."""
+    tmp = path + ".tmp"
+    try:
+        with open(tmp, "wb") as f:
+            write(f)
+            f.flush()
+            os.fsync(f.fileno())
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.remove(tmp)
+        raise
+
+
+def save_figure(fig, path, **kwargs):
+    """fig.savefig(path) that leaves no partial PNG (a full disk raises, as it should)."""
+    fmt = os.path.splitext(path)[1].lstrip(".") or "png"
+    _replace(path, lambda f: fig.savefig(f, format=fmt, **kwargs))
+
+
+def write_text(path, text):
+    """A Markdown table or other text file, complete or absent."""
+    _replace(path, lambda f: f.write(text.encode()))
 
 
 def read_csv(path):

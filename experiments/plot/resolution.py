@@ -8,7 +8,7 @@ OUT_DIR/resolution.md (the same numbers as a table).
 import os
 import sys
 
-from common import g3, markdown_table, num, plt, read_csv, style
+from common import g3, markdown_table, num, plt, read_csv, save_figure, style, write_text
 
 
 def main(out_dir):
@@ -42,14 +42,14 @@ def main(out_dir):
         ax.set_title(title + " against resolution")
         ax.legend()
     fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, "resolution.png"))
+    save_figure(fig, os.path.join(out_dir, "resolution.png"))
     plt.close(fig)
     table = [[r["variant"], r["n"], r["particles"], g3(num(r["k_structural"])), g3(num(r["drag"])),
               g3(num(r["sag_com_m"])), g3(num(r["sag_lowest_m"])), g3(num(r["period_s"])), g3(num(r["wall_s"]))]
              for r in rows]
-    with open(os.path.join(out_dir, "resolution.md"), "w") as f:
-        f.write(markdown_table(["variant", "n", "particles", "k structural (N/m)", "drag (kg/s per particle)",
-                                "sag CoM (m)", "sag lowest (m)", "period (s)", "wall (s)"], table))
+    write_text(os.path.join(out_dir, "resolution.md"),
+               markdown_table(["variant", "n", "particles", "k structural (N/m)", "drag (kg/s per particle)",
+                               "sag CoM (m)", "sag lowest (m)", "period (s)", "wall (s)"], table))
     print(f"resolution.py: wrote {out_dir}/resolution.png and resolution.md")
 
 

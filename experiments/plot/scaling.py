@@ -13,7 +13,7 @@ import sys
 
 import numpy as np
 
-from common import g3, markdown_table, num, plt, read_csv, style
+from common import g3, markdown_table, num, plt, read_csv, save_figure, style, write_text
 
 
 def fit_exponent(springs, seconds):
@@ -54,7 +54,7 @@ def main(out_dir):
         ax.set_xlabel("springs")
     axes[1].legend(loc="upper left", ncol=1)
     fig.tight_layout()
-    fig.savefig(os.path.join(out_dir, "scaling.png"))
+    save_figure(fig, os.path.join(out_dir, "scaling.png"))
     md = ["Fitted exponent p of time per iteration ~ springs^p (least squares, log-log):\n",
           markdown_table(["method", "threads", "sizes", "smallest", "largest", "exponent p",
                           "s / iteration at largest", "factor entries: exponent"], fits),
@@ -66,8 +66,7 @@ def main(out_dir):
                            g3(num(r["assembly_s"])), g3(num(r["factor_s"])), g3(num(r["solve_s"])),
                            g3(num(r["local_s"])), g3(num(r["global_s"])), g3(num(r["peak_mib"])))
                           for r in rows])]
-    with open(os.path.join(out_dir, "scaling.md"), "w") as f:
-        f.write("".join(md))
+    write_text(os.path.join(out_dir, "scaling.md"), "".join(md))
 
 
 if __name__ == "__main__":

@@ -9,7 +9,7 @@ import math
 import os
 import sys
 
-from common import g3, markdown_table, num, plt, read_csv, style
+from common import g3, markdown_table, num, plt, read_csv, save_figure, style, write_text
 
 
 def main(out_dir):
@@ -58,7 +58,7 @@ def main(out_dir):
         ax.set_ylim(bottom=min(h_lo / 3, 1e-5), top=h_max * 3)
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
         fig.tight_layout()
-        fig.savefig(os.path.join(out_dir, f"stability_{case}.png"))
+        save_figure(fig, os.path.join(out_dir, f"stability_{case}.png"))
         plt.close(fig)
 
         ks = list(dict.fromkeys(r["k"] for r in sub))
@@ -79,8 +79,8 @@ def main(out_dir):
             table.append([label] + cells)
         omega = [g3(num(next(x for x in sub if x["k"] == kk)["omega_max"])) for kk in ks]
         table.append(["omega_max (rad/s)"] + omega)
-        with open(os.path.join(out_dir, f"stability_{case}.md"), "w") as f:
-            f.write(markdown_table(["method \\ k (N/m)"] + [g3(num(kk)) for kk in ks], table))
+        write_text(os.path.join(out_dir, f"stability_{case}.md"),
+                   markdown_table(["method \\ k (N/m)"] + [g3(num(kk)) for kk in ks], table))
     print(f"stability.py: wrote {out_dir}/stability_*.png and stability_*.md")
 
 

@@ -6,10 +6,7 @@ import csv
 import sys
 from collections import defaultdict
 
-import matplotlib
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
+from common import plt, save_figure
 
 rows = list(csv.DictReader(open(sys.argv[1] + "/step_convergence.csv")))
 hs = sorted({float(r["h"]) for r in rows})
@@ -44,4 +41,4 @@ axes[0][1].legend(fontsize=7, loc="best")
 fig.suptitle(f"One backward-Euler step, h = {h:g} s: error (g(x) - g*) / (g(y) - g*) against the "
              "exact step (Ceres)", fontsize=10)
 fig.tight_layout()
-fig.savefig(sys.argv[1] + "/step_convergence.png", dpi=110)
+save_figure(fig, sys.argv[1] + "/step_convergence.png", dpi=110)

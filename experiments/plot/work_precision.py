@@ -9,7 +9,7 @@ a dotted line) and OUT_DIR/workprecision_<case>.md (every run as a table row).
 import os
 import sys
 
-from common import g3, markdown_table, num, plt, read_csv, style
+from common import g3, markdown_table, num, plt, read_csv, save_figure, style, write_text
 
 
 def main(out_dir):
@@ -39,17 +39,16 @@ def main(out_dir):
         axes[0].set_ylabel("RMS position error vs reference (m)")
         axes[1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
         fig.tight_layout()
-        fig.savefig(os.path.join(out_dir, f"workprecision_{case}.png"))
+        save_figure(fig, os.path.join(out_dir, f"workprecision_{case}.png"))
         plt.close(fig)
 
         table = [[r["label"], g3(num(r["h"])), g3(num(r["rtol"])) if num(r["rtol"]) > 0 else "",
                   g3(num(r["wall_s"])), r["steps"], g3(num(r["rms_err_final"])), g3(num(r["max_err_final"])),
                   g3(num(r["rms_err_traj"])), r["status"]] for r in sub]
-        with open(os.path.join(out_dir, f"workprecision_{case}.md"), "w") as f:
-            if ref is not None:
-                f.write("Reference: " + ref["how"] + "\n\n")
-            f.write(markdown_table(["method", "h (s)", "rtol", "wall (s)", "steps", "RMS err final (m)",
-                                    "max err final (m)", "RMS err traj (m)", "status"], table))
+        text = "Reference: " + ref["how"] + "\n\n" if ref is not None else ""
+        text += markdown_table(["method", "h (s)", "rtol", "wall (s)", "steps", "RMS err final (m)",
+                                "max err final (m)", "RMS err traj (m)", "status"], table)
+        write_text(os.path.join(out_dir, f"workprecision_{case}.md"), text)
     print(f"work_precision.py: wrote {out_dir}/workprecision_*.png and workprecision_*.md")
 
 
