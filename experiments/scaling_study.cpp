@@ -18,6 +18,10 @@
 //                      n x n nodal part of A (NodalPreconditioner): a ninth of pcg-cholmod's
 //                      factor, so it runs at every size; tolerance 1e-6, at most 300 iterations
 //   implicit-cholmod   beta = 1, a CHOLMOD factorization per step; up to 4e5 springs
+//   implicit-petsc-gamg  beta = 1, PETSc CG with smoothed-aggregation AMG (GAMG, rigid-body
+//                      modes, SOR smoothing), its hierarchy reused across steps; tolerance 1e-6
+//   implicit-petsc-boomeramg  the same with hypre's BoomerAMG (-pc_type hypre)
+//                      (the PETSc rows exist in builds with PETSc)
 // Peak memory: VmHWM of this process, reset before each run (/proc/self/clear_refs).
 #include "experiments/scaling_study.hpp"
 
@@ -41,6 +45,7 @@
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
+#include "hooke_config.hpp"
 #include "problems/scene.hpp"
 
 namespace hooke {
@@ -54,24 +59,34 @@ struct MethodSpec {
 
 const std::vector<MethodSpec>& specs() {
   static const std::vector<MethodSpec> s = {
-      {"symplectic-euler", "method = \"symplectic-euler\"\n", 1e99},
-      {"xpbd", "method = \"xpbd\"\nsubsteps = 10\n", 1e99},
-      {"fast-mass-spring", "method = \"fast-mass-spring\"\niterations = 10\n", 1e99},
-      {"fast-mass-spring-jacobi",
-       "method = \"fast-mass-spring\"\nglobal_solver = \"jacobi\"\nacceleration = \"chebyshev\"\n"
-       "iterations = 50\n",
-       1e99},
-      {"implicit-pcg",
-       "method = \"implicit\"\nlinear_solver = \"pcg\"\nlinear_tolerance = 1e-6\n"
-       "max_linear_iterations = 300\n",
-       1e99},
-      {"implicit-pcg-cholmod",
-       "method = \"implicit\"\nlinear_solver = \"pcg-cholmod\"\nlinear_tolerance = 1e-6\n", 1.1e6},
-      {"implicit-pcg-nodal",
-       "method = \"implicit\"\nlinear_solver = \"pcg-nodal\"\nlinear_tolerance = 1e-6\n"
-       "max_linear_iterations = 300\n",
-       1e99},
-      {"implicit-cholmod", "method = \"implicit\"\nlinear_solver = \"cholmod\"\n", 4e5},
+    {"symplectic-euler", "method = \"symplectic-euler\"\n", 1e99},
+    {"xpbd", "method = \"xpbd\"\nsubsteps = 10\n", 1e99},
+    {"fast-mass-spring", "method = \"fast-mass-spring\"\niterations = 10\n", 1e99},
+    {"fast-mass-spring-jacobi",
+     "method = \"fast-mass-spring\"\nglobal_solver = \"jacobi\"\nacceleration = \"chebyshev\"\n"
+     "iterations = 50\n",
+     1e99},
+    {"implicit-pcg",
+     "method = \"implicit\"\nlinear_solver = \"pcg\"\nlinear_tolerance = 1e-6\n"
+     "max_linear_iterations = 300\n",
+     1e99},
+    {"implicit-pcg-cholmod",
+     "method = \"implicit\"\nlinear_solver = \"pcg-cholmod\"\nlinear_tolerance = 1e-6\n", 1.1e6},
+    {"implicit-pcg-nodal",
+     "method = \"implicit\"\nlinear_solver = \"pcg-nodal\"\nlinear_tolerance = 1e-6\n"
+     "max_linear_iterations = 300\n",
+     1e99},
+    {"implicit-cholmod", "method = \"implicit\"\nlinear_solver = \"cholmod\"\n", 4e5},
+#if HOOKE_WITH_PETSC
+    {"implicit-petsc-gamg",
+     "method = \"implicit\"\nlinear_solver = \"petsc\"\nlinear_tolerance = 1e-6\n"
+     "max_linear_iterations = 300\n",
+     1e99},
+    {"implicit-petsc-boomeramg",
+     "method = \"implicit\"\nlinear_solver = \"petsc\"\nlinear_tolerance = 1e-6\n"
+     "max_linear_iterations = 300\npetsc_options = \"-pc_type hypre -pc_hypre_type boomeramg\"\n",
+     1e99},
+#endif
   };
   return s;
 }

@@ -85,6 +85,16 @@ MethodOptions read_implicit(TableReader& r, const std::string& method) {
                    "set newton_iterations > 1 to iterate Newton to this tolerance");
   else
     o.newton_tolerance = r.number("tolerance", o.newton_tolerance);
+  if (o.linear_solver == "petsc") {
+    o.petsc_options = r.string("petsc_options", o.petsc_options);
+    if (const std::string why = linear_backend_settings_problem(o.linear_solver, {o.petsc_options});
+        !why.empty())
+      r.fail("petsc_options", why);
+  } else {
+    refuse_ignored(r, "petsc_options", setting(r, "linear_solver", o.linear_solver),
+                   "only linear_solver = 'petsc' reads PETSc options",
+                   "set linear_solver = 'petsc'");
+  }
   const std::string backend = canonical_linear_solver(o.linear_solver, o.preconditioner);
   if (direct_linear_solver(backend)) {
     for (const char* key : {"linear_tolerance", "max_linear_iterations"})

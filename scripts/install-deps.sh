@@ -13,6 +13,7 @@ packages=(
   libopenblas-dev                   # fast BLAS for CHOLMOD (Ceres pulls ATLAS in otherwise)
   libsundials-dev                   # CVODE, IDA
   libceres-dev                      # exact implicit step as nonlinear least squares
+  petsc-dev openmpi-bin             # PETSc linear backend (GAMG, hypre BoomerAMG), mpirun
   libgtest-dev libgmock-dev         # tests
   libbenchmark-dev                  # bench/
   libcli11-dev                      # the hooke command line

@@ -67,6 +67,7 @@ ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme 
     v->setZero(N);
   m_rhs_free.setZero(nf);
   m_delta.setZero(nf);
+  m_x_free.setZero(nf);
   const LinearSummary a = m_solver->analyze(m_A.matrix());
   if (a.status != Status::Converged) throw SetupError(a.message);
   accumulate(m_totals, a);
@@ -209,6 +210,8 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
       m_vlin = m_va + c.cv * m_v1;
     }
     assemble(c);
+    m_A.gather(m_xlin, m_x_free);
+    m_solver->set_coordinates(m_x_free);
     const LinearSummary fs = m_solver->factor(m_A.matrix());
     accumulate(m_totals, fs);
     if (fs.status != Status::Converged) {

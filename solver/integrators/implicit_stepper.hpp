@@ -35,6 +35,9 @@ struct ImplicitOptions {
   /// method and a preconditioner are a pair of names ("pcg" + "nodal" = "pcg-nodal"); "" = the
   /// backend's own (Jacobi for "pcg"). Must stay "" for every other backend.
   std::string preconditioner;
+  /// With linear_solver = "petsc": PETSc options for its KSP and PC ("-pc_type hypre ..."), over
+  /// the backend's defaults and under the environment's PETSC_OPTIONS (PetscSolverOptions).
+  std::string petsc_options;
   /// beta in [0, 1] (Beta scheme only).
   double beta = 1.0;
   /// Maximum Newton iterations per step; 1 gives the linearised step (no convergence test).
@@ -105,7 +108,7 @@ class ImplicitStepper final : public Stepper {
   long long m_steps = 0, m_newton_iterations = 0;
   // Scratch (3n unless noted).
   Vec m_v0, m_vb, m_xa, m_va, m_xe, m_v1, m_xlin, m_vlin, m_f, m_rhs, m_tmp, m_dx, m_dv;
-  Vec m_rhs_free, m_delta;  // free DOFs
+  Vec m_rhs_free, m_delta, m_x_free;  // free DOFs (m_x_free: positions, for set_coordinates)
   // BDF2 history: the start state of the previous step and that step's h and end time.
   Vec m_prev_x, m_prev_v;
   double m_prev_h = 0.0, m_prev_t1 = 0.0;

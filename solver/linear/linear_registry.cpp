@@ -11,6 +11,9 @@
 #include "hooke/linear/nodal_preconditioner.hpp"
 #include "hooke/linear/reused_factorization.hpp"
 #endif
+#if HOOKE_WITH_PETSC
+#include "hooke/linear/petsc_solver.hpp"
+#endif
 
 namespace hooke {
 
@@ -18,7 +21,7 @@ namespace {
 
 struct Entry {
   LinearSolverInfo info;
-  std::function<std::unique_ptr<LinearSolver>()> make;
+  std::function<std::unique_ptr<LinearSolver>(const LinearBackendSettings&)> make;
 };
 
 struct PreconditionerEntry {
@@ -57,14 +60,22 @@ const std::vector<Entry>& table() {
   static const std::vector<Entry> t = {
 #if HOOKE_WITH_CHOLMOD
     {{"cholmod", "CHOLMOD supernodal Cholesky (SuiteSparse), analysed once, refactored per step"},
-     [] { return std::make_unique<CholmodSolver>(); }},
+     [](const LinearBackendSettings&) { return std::make_unique<CholmodSolver>(); }},
+#endif
+#if HOOKE_WITH_PETSC
+    {{"petsc",
+      "PETSc KSP/PC, by default CG with smoothed-aggregation AMG (GAMG) and rigid-body modes; "
+      "[integrator] petsc_options and PETSC_OPTIONS choose others (e.g. -pc_type hypre)"},
+     [](const LinearBackendSettings& s) {
+       return std::make_unique<PetscSolver>(PetscSolverOptions{s.petsc_options});
+     }},
 #endif
     {{"colored-gauss-seidel", "multicolour 3x3-block Gauss-Seidel, parallel within a colour"},
-     [] { return std::make_unique<ColoredGaussSeidelSolver>(); }},
+     [](const LinearBackendSettings&) { return std::make_unique<ColoredGaussSeidelSolver>(); }},
     {{"gauss-seidel", "scalar Gauss-Seidel, natural order"},
-     [] { return std::make_unique<GaussSeidelSolver>(); }},
+     [](const LinearBackendSettings&) { return std::make_unique<GaussSeidelSolver>(); }},
     {{"jacobi", "3x3 block Jacobi iteration (per particle), parallel"},
-     [] { return std::make_unique<JacobiSolver>(); }},
+     [](const LinearBackendSettings&) { return std::make_unique<JacobiSolver>(); }},
   };
   return t;
 }
@@ -162,18 +173,32 @@ std::string linear_solver_unknown(const std::string& name, const std::string& pr
     return "linear solver '" + name +
            "' is not built: install libsuitesparse-dev and "
            "reconfigure with -DHOOKE_WITH_CHOLMOD=ON";
+  if (name == "petsc")
+    return "linear solver 'petsc' is not built: install petsc-dev and reconfigure with "
+           "-DHOOKE_WITH_PETSC=ON";
   return "unknown linear solver '" + name + "'; available: " + linear_solver_names();
 }
 
+std::string linear_backend_settings_problem(const std::string& name,
+                                            const LinearBackendSettings& settings) {
+#if HOOKE_WITH_PETSC
+  if (name == "petsc") return petsc_options_problem(settings.petsc_options);
+#endif
+  (void)name;
+  (void)settings;
+  return "";
+}
+
 std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name,
-                                                 const std::string& preconditioner) {
+                                                 const std::string& preconditioner,
+                                                 const LinearBackendSettings& settings) {
   if (const std::string why = linear_solver_unknown(name, preconditioner); !why.empty())
     throw UnknownName(why);
   const std::string p = preconditioner.empty() ? krylov_preconditioner(name) : preconditioner;
   if (const PreconditionerEntry* e = p.empty() ? nullptr : find_preconditioner(p))
     return std::make_unique<ConjugateGradientSolver>(e->make());
   for (const auto& e : table())
-    if (name == e.info.name) return e.make();
+    if (name == e.info.name) return e.make(settings);
   throw UnknownName("unknown linear solver '" + name + "'; available: " + linear_solver_names());
 }
 

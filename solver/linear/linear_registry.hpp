@@ -14,6 +14,12 @@ struct LinearSolverInfo {
   const char* description;  ///< one line for --help and messages
 };
 
+/// Settings that only some backends read, given to make_linear_solver.
+struct LinearBackendSettings {
+  /// "petsc": PETSc options for its KSP and PC (PetscSolverOptions::options).
+  std::string petsc_options;
+};
+
 /// One entry of the preconditioner table.
 struct PreconditionerInfo {
   const char* name;         ///< as in scene files: [integrator] preconditioner, or "pcg-<name>"
@@ -35,11 +41,15 @@ std::string preconditioner_names();
 std::string linear_solver_unknown(const std::string& name, const std::string& preconditioner = "");
 /// The registry name of the backend (name, preconditioner) makes: ("pcg", "nodal") -> "pcg-nodal".
 std::string canonical_linear_solver(const std::string& name, const std::string& preconditioner);
+/// "" if the backend `name` accepts `settings`, else why not (e.g. an invalid PETSc option).
+std::string linear_backend_settings_problem(const std::string& name,
+                                            const LinearBackendSettings& settings);
 /// Creates a backend by name, or the Krylov method "pcg" with the named preconditioner (a pair of
 /// registry names: ("pcg", "nodal") is "pcg-nodal"); throws UnknownName (see
 /// linear_solver_unknown).
 std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name,
-                                                 const std::string& preconditioner = "");
+                                                 const std::string& preconditioner = "",
+                                                 const LinearBackendSettings& settings = {});
 /// Creates a preconditioner by name; throws UnknownName.
 std::unique_ptr<Preconditioner> make_preconditioner(const std::string& name);
 

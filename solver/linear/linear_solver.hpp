@@ -55,6 +55,10 @@ class LinearSolver {
   virtual LinearSummary analyze(const SparseMatrix& A) = 0;
   virtual LinearSummary factor(const SparseMatrix& A) = 0;
   virtual LinearSummary solve(ConstRef b, VecRef x, const LinearSolveOptions& options) = 0;
+  /// The positions of the particles whose DOFs are A's unknowns (3 per particle, in A's order),
+  /// before each factor(): backends that build a near-null space from the geometry use them
+  /// (PETSc GAMG's rigid-body modes); the others ignore them.
+  virtual void set_coordinates(ConstRef x) { (void)x; }
   /// False if results depend on state carried from earlier steps that a checkpoint does not hold
   /// (e.g. the age of a reused preconditioner): a resumed run then agrees to tolerance, not bits.
   virtual bool exact_resume() const { return true; }

@@ -224,17 +224,24 @@ elseif(CASE STREQUAL "factor_over_budget")
 elseif(CASE STREQUAL "scaling")
   # Two small grids, every method, 1 and 2 threads: one CSV row each, all "ok", and the plot
   # script's figure and table of fitted exponents. An unknown method is an input error.
+  # 8 methods (10 with the PETSc backend) x 2 sizes x 2 thread counts, and the header.
+  set(methods symplectic-euler xpbd fast-mass-spring fast-mass-spring-jacobi implicit-pcg
+              implicit-pcg-cholmod implicit-pcg-nodal implicit-cholmod)
+  if(WITH_PETSC)
+    list(APPEND methods implicit-petsc-gamg implicit-petsc-boomeramg)
+  endif()
+  list(LENGTH methods n_methods)
+  math(EXPR rows "4 * ${n_methods} + 1")
   hooke_exec(scaling --springs 2000,8000 --steps 1 --out "${OUT}")
   expect_rc(0)
   expect_csv("${OUT}/scaling.csv"
              "method,threads,springs,particles,steps,step_s,iterations_per_step,iteration_s,assembly_s,factor_s,solve_s,local_s,global_s,setup_s,peak_mib,factor_nnz,status"
-             33)
+             ${rows})
   file(READ "${OUT}/scaling.csv" text)
   if(text MATCHES "failed")
     message(FATAL_ERROR "a scaling run failed${report}")
   endif()
-  foreach(m symplectic-euler xpbd fast-mass-spring fast-mass-spring-jacobi implicit-pcg
-            implicit-pcg-cholmod implicit-pcg-nodal implicit-cholmod)
+  foreach(m IN LISTS methods)
     expect_contains("${text}" "${m},2,7846,1369," "scaling.csv")
   endforeach()
   expect_file("${OUT}/scaling.png")

@@ -569,6 +569,11 @@ TEST(ImplicitStepper, IndefiniteNewtonMatrixWithClampDoesNotBlameTheClamp) {
   int checked = 0, checked_nan = 0;
   for (const auto& info : hooke::linear_solvers()) {
     if (!hooke::make_linear_solver(info.name)->requires_spd()) continue;
+    // PETSc's GAMG solves this 3 x 3 system on its coarsest level by LU, an exact inverse of the
+    // indefinite A, with which CG converges in one iteration to the right answer: nothing to
+    // report. Its breakdown on an indefinite A of a real size is checked by
+    // IndefiniteNewtonMatrixBreaksDownUnlessClamped.
+    if (std::string(info.name) == "petsc") continue;
     ImplicitOptions opt = options(1.0, false, info.name);
     opt.clamp_compressed = true;
     auto stepper = hooke::make_stepper("implicit", *system, opt);

@@ -1,0 +1,412 @@
+#include "hooke/linear/petsc_solver.hpp"
+
+#include <petscksp.h>
+
+#include <algorithm>
+#include <cstdlib>
+#include <cstring>
+#include <sstream>
+#include <stdexcept>
+#include <vector>
+
+namespace hooke {
+
+namespace {
+
+/// A PETSc call that failed: what() is PETSc's own first message (e.g. "Unknown type. Check for
+/// miss-spelling or missing package: ... no_such_pc").
+class PetscFailure : public std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// The first message of the error being raised, recorded by the handler below.
+thread_local std::string g_first_message;
+
+extern "C" PetscErrorCode record_error(MPI_Comm, int, const char*, const char*, PetscErrorCode n,
+                                       PetscErrorType p, const char* mess, void*) {
+  if (p == PETSC_ERROR_INITIAL) g_first_message = mess ? mess : "";
+  return n;
+}
+
+/// Clears the recorded message before a sequence of PETSc calls. The handler itself is pushed
+/// once, when PETSc is initialised (pushing per call would allocate in the step loop): every
+/// PETSc error in the process returns its code with its message recorded, never printing or
+/// aborting (PetscReturnErrorHandler semantics).
+class ErrorScope {
+ public:
+  ErrorScope() { g_first_message.clear(); }
+};
+
+void check(PetscErrorCode ierr, const char* call) {
+  if (ierr == 0) return;
+  std::string text = g_first_message;
+  if (text.empty()) {
+    const char* generic = nullptr;
+    PetscErrorMessage(ierr, &generic, nullptr);
+    text = generic ? generic : "error " + std::to_string(int(ierr));
+  }
+  throw PetscFailure(std::string(call) + ": " + text);
+}
+
+/// PETSc is initialised once, on first use, with no arguments (PETSC_OPTIONS is read by each
+/// solver itself, see Impl::options), and finalised at exit.
+void ensure_petsc() {
+  static const bool done = [] {
+    PetscBool already = PETSC_FALSE;
+    PetscInitialized(&already);
+    if (!already) {
+      if (PetscInitializeNoArguments() != 0) throw std::runtime_error("PetscInitialize failed");
+      // PETSc's own handlers for SIGSEGV, SIGTERM, ... would replace the host's (hooke run's
+      // checkpoint on SIGTERM, the sanitizers' reports).
+      PetscPopSignalHandler();
+      std::atexit([] { PetscFinalize(); });
+    }
+    PetscPushErrorHandler(record_error, nullptr);
+    return true;
+  }();
+  (void)done;
+}
+
+/// Starts PETSc's event logging and prints its summary on stdout at exit (before PetscFinalize,
+/// whose own atexit handler was registered first and so runs after this one).
+void log_view_at_exit() {
+  static const bool done = [] {
+    PetscLogDefaultBegin();
+    std::atexit([] { PetscLogView(PETSC_VIEWER_STDOUT_SELF); });
+    return true;
+  }();
+  (void)done;
+}
+
+bool finalized() {
+  PetscBool f = PETSC_FALSE;
+  PetscFinalized(&f);
+  return f == PETSC_TRUE;
+}
+
+/// Makes `options` the database PETSc objects read while this is alive.
+class OptionsScope {
+ public:
+  explicit OptionsScope(PetscOptions options) { check(PetscOptionsPush(options), "options"); }
+  ~OptionsScope() { PetscOptionsPop(); }
+  OptionsScope(const OptionsScope&) = delete;
+  OptionsScope& operator=(const OptionsScope&) = delete;
+};
+
+}  // namespace
+
+struct PetscSolver::Impl {
+  PetscSolverOptions settings;
+  PetscOptions options = nullptr;  // this solver's own database: defaults, scene, environment
+  Mat M = nullptr;
+  KSP ksp = nullptr;
+  ::Vec b = nullptr, x = nullptr, coords = nullptr;  // PETSc vectors (hooke::Vec is Eigen's)
+  const SparseMatrix* A = nullptr;
+  Index n = 0;
+  hooke::Vec coordinates;  // positions of the unknowns (set_coordinates), for the near-null space
+  bool user_rtol = false, user_max_it = false, user_divtol = false;
+  bool view_pending = false;      // -ksp_view was given: KSPView after the first solve
+  bool rigid_body_modes = false;  // -hooke_rigid_body_modes: near-null space from the coordinates
+  // Renewal rule (see the class comment), in Krylov iterations.
+  double cost_since = 0.0;
+  int solves_since = 0, last_iterations = 0;
+  bool rebuild = true;
+  long long builds = 0;
+
+  void destroy() {
+    if (finalized()) return;  // PETSc is gone (exit): the process frees everything
+    if (ksp) KSPDestroy(&ksp);
+    if (M) MatDestroy(&M);
+    for (::Vec* v : {&b, &x, &coords})
+      if (*v) VecDestroy(v);
+    if (options) PetscOptionsDestroy(&options);
+  }
+
+  /// Back to the state before analyze(), keeping the settings and the coordinates.
+  void reset() {
+    destroy();
+    ksp = nullptr;
+    M = nullptr;
+    b = x = coords = nullptr;
+    options = nullptr;
+    A = nullptr;
+    n = 0;
+    cost_since = 0.0;
+    solves_since = last_iterations = 0;
+    rebuild = true;
+    builds = 0;
+    view_pending = false;
+  }
+
+  void make_options() {
+    check(PetscOptionsCreate(&options), "PetscOptionsCreate");
+    check(PetscOptionsInsertString(options, kPetscDefaultOptions), "default options");
+    check(PetscOptionsInsertString(options, settings.options.c_str()), "petsc_options");
+    if (const char* env = std::getenv("PETSC_OPTIONS"))
+      check(PetscOptionsInsertString(options, env), "PETSC_OPTIONS");
+    PetscBool has = PETSC_FALSE;
+    check(PetscOptionsHasName(options, nullptr, "-ksp_rtol", &has), "options");
+    user_rtol = has == PETSC_TRUE;
+    check(PetscOptionsHasName(options, nullptr, "-ksp_max_it", &has), "options");
+    user_max_it = has == PETSC_TRUE;
+    check(PetscOptionsHasName(options, nullptr, "-ksp_divtol", &has), "options");
+    user_divtol = has == PETSC_TRUE;
+    PetscBool rigid = PETSC_FALSE;
+    check(PetscOptionsGetBool(options, nullptr, "-hooke_rigid_body_modes", &rigid, nullptr),
+          "-hooke_rigid_body_modes");
+    rigid_body_modes = rigid == PETSC_TRUE;
+    // -ksp_view would print at every solve (every step): taken out, printed once by solve().
+    check(PetscOptionsHasName(options, nullptr, "-ksp_view", &has), "options");
+    view_pending = has == PETSC_TRUE && settings.view;
+    if (has) check(PetscOptionsClearValue(options, "-ksp_view"), "options");
+    // -log_view: PETSc's performance summary of the whole process, printed once at exit.
+    check(PetscOptionsHasName(options, nullptr, "-log_view", &has), "options");
+    if (has) {
+      check(PetscOptionsClearValue(options, "-log_view"), "options");
+      if (settings.view) log_view_at_exit();
+    }
+  }
+
+  /// The rigid-body modes of the free particles at `coordinates` as A's near-null space.
+  void near_null_space() {
+    if (!rigid_body_modes || coordinates.size() != n || n % 3 != 0) return;
+    if (!coords) check(VecCreateSeq(PETSC_COMM_SELF, PetscInt(n), &coords), "VecCreateSeq");
+    check(VecSetBlockSize(coords, 3), "VecSetBlockSize");
+    PetscScalar* c = nullptr;
+    check(VecGetArray(coords, &c), "VecGetArray");
+    std::memcpy(c, coordinates.data(), sizeof(double) * size_t(n));
+    check(VecRestoreArray(coords, &c), "VecRestoreArray");
+    MatNullSpace nsp = nullptr;
+    check(MatNullSpaceCreateRigidBody(coords, &nsp), "MatNullSpaceCreateRigidBody");
+    check(MatSetNearNullSpace(M, nsp), "MatSetNearNullSpace");
+    MatNullSpaceDestroy(&nsp);
+  }
+};
+
+std::string petsc_options_problem(const std::string& options) {
+  // An 8 x 8 grid of particles joined to their neighbours (M + the graph Laplacian per
+  // coordinate): SPD with 3 x 3 blocks like the real systems, and large enough for GAMG to build
+  // levels, so that options of the level smoothers are read.
+  constexpr int g = 8, np = g * g, n = 3 * np;
+  std::vector<Eigen::Triplet<double>> t;
+  Vec x(n);
+  for (int p = 0; p < np; ++p) {
+    x.segment<3>(3 * p) = Vec3(p % g, p / g, 0.0);
+    const int nbrs[2] = {p % g + 1 < g ? p + 1 : -1, p + g < np ? p + g : -1};
+    for (int c = 0; c < 3; ++c) t.emplace_back(3 * p + c, 3 * p + c, 1e-3);
+    for (int q : nbrs)
+      if (q >= 0)
+        for (int c = 0; c < 3; ++c) {
+          t.emplace_back(3 * p + c, 3 * p + c, 1.0);
+          t.emplace_back(3 * q + c, 3 * q + c, 1.0);
+          t.emplace_back(3 * p + c, 3 * q + c, -1.0);
+          t.emplace_back(3 * q + c, 3 * p + c, -1.0);
+        }
+  }
+  SparseMatrix A(n, n);
+  A.setFromTriplets(t.begin(), t.end());
+  A.makeCompressed();
+  // PETSc skips a leading word without a dash silently ("ksp_type cg" sets nothing).
+  std::istringstream words(options);
+  if (std::string first; words >> first && first[0] != '-')
+    return "petsc: '" + first + "' is not an option: PETSc options start with '-' (-ksp_type cg)";
+  PetscSolverOptions o;
+  o.options = options;
+  o.view = false;
+  try {
+    PetscSolver s(o);
+    s.set_coordinates(x);
+    for (const LinearSummary& r : {s.analyze(A), s.factor(A)})
+      if (r.status == Status::Fatal) return r.message;
+    Vec b = Vec::Ones(n), y = Vec::Zero(n);
+    const LinearSummary r = s.solve(b, y, LinearSolveOptions{});
+    if (r.status == Status::Fatal) return r.message;
+    if (const std::string unused = s.unused_options(); !unused.empty())
+      return "petsc: no PETSc object read " + unused +
+             " (misspelt, or an option of a type not chosen); the options in force come from the "
+             "defaults '" +
+             kPetscDefaultOptions + "', petsc_options and PETSC_OPTIONS";
+  } catch (const std::exception& e) {
+    return e.what();
+  }
+  return "";
+}
+
+PetscSolver::PetscSolver(PetscSolverOptions options) : m(std::make_unique<Impl>()) {
+  ensure_petsc();
+  m->settings = std::move(options);
+}
+
+PetscSolver::~PetscSolver() { m->destroy(); }
+
+long long PetscSolver::factorizations() const { return m->builds; }
+
+std::string PetscSolver::unused_options() const {
+  if (!m->options) return "";
+  PetscInt count = 0;
+  char **names = nullptr, **values = nullptr;
+  if (PetscOptionsLeftGet(m->options, &count, &names, &values) != 0) return "";
+  std::istringstream defaults(kPetscDefaultOptions);
+  std::vector<std::string> ours;
+  for (std::string token; defaults >> token;)
+    if (token.size() > 1 && token[0] == '-') ours.push_back(token.substr(1));
+  std::string s;
+  for (PetscInt k = 0; k < count; ++k)
+    if (std::find(ours.begin(), ours.end(), names[k]) == ours.end())
+      s += (s.empty() ? "-" : " -") + std::string(names[k]);
+  PetscOptionsLeftRestore(m->options, &count, &names, &values);
+  return s;
+}
+
+void PetscSolver::set_coordinates(ConstRef x) { m->coordinates = x; }
+
+LinearSummary PetscSolver::analyze(const SparseMatrix& A) {
+  const auto t0 = Clock::now();
+  LinearSummary s;
+  HOOKE_ASSERT(A.isCompressed() && A.rows() == A.cols(),
+               "petsc: analyze needs a compressed square A");
+  m->reset();
+  m->A = &A;
+  m->n = A.rows();
+  try {
+    const ErrorScope errors;
+    m->make_options();
+    if (m->n > 0) {
+      const OptionsScope scope(m->options);
+      // A is symmetric: its compressed columns are its compressed rows.
+      std::vector<PetscInt> rows(A.outerIndexPtr(), A.outerIndexPtr() + A.rows() + 1);
+      std::vector<PetscInt> cols(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+      check(MatCreate(PETSC_COMM_SELF, &m->M), "MatCreate");
+      check(MatSetSizes(m->M, PetscInt(m->n), PetscInt(m->n), PetscInt(m->n), PetscInt(m->n)),
+            "MatSetSizes");
+      check(MatSetType(m->M, MATSEQAIJ), "MatSetType");
+      if (m->n % 3 == 0) check(MatSetBlockSize(m->M, 3), "MatSetBlockSize");
+      check(MatSeqAIJSetPreallocationCSR(m->M, rows.data(), cols.data(), A.valuePtr()),
+            "MatSeqAIJSetPreallocationCSR");
+      check(MatSetOption(m->M, MAT_SPD, PETSC_TRUE), "MatSetOption");
+      check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, PetscInt(m->n), nullptr, &m->b),
+            "VecCreateSeqWithArray");
+      check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, PetscInt(m->n), nullptr, &m->x),
+            "VecCreateSeqWithArray");
+      check(KSPCreate(PETSC_COMM_SELF, &m->ksp), "KSPCreate");
+      check(KSPSetOperators(m->ksp, m->M, m->M), "KSPSetOperators");
+      check(KSPSetFromOptions(m->ksp), "KSPSetFromOptions");
+    }
+  } catch (const PetscFailure& e) {
+    s.status = Status::Fatal;
+    s.message = std::string("petsc: ") + e.what();
+  }
+  s.analyze_seconds = seconds_since(t0);
+  return s;
+}
+
+LinearSummary PetscSolver::factor(const SparseMatrix& A) {
+  const auto t0 = Clock::now();
+  LinearSummary s;
+  HOOKE_ASSERT(A.rows() == m->n, "petsc: factor on a matrix of another size than analysed");
+  m->A = &A;
+  if (m->n == 0) return s;
+  try {
+    const ErrorScope errors;
+    const OptionsScope scope(m->options);
+    PetscScalar* v = nullptr;
+    check(MatSeqAIJGetArray(m->M, &v), "MatSeqAIJGetArray");
+    std::memcpy(v, A.valuePtr(), sizeof(double) * size_t(A.nonZeros()));
+    check(MatSeqAIJRestoreArray(m->M, &v), "MatSeqAIJRestoreArray");
+    // Assembly tells every cache (SOR's and point-block Jacobi's diagonals) that values changed.
+    check(MatAssemblyBegin(m->M, MAT_FINAL_ASSEMBLY), "MatAssemblyBegin");
+    check(MatAssemblyEnd(m->M, MAT_FINAL_ASSEMBLY), "MatAssemblyEnd");
+    // Renewal rule: keep the hierarchy while the last solve cost no more than the average solve
+    // since the last build, the build included.
+    if (m->solves_since > 0 && double(m->last_iterations) * m->solves_since > m->cost_since)
+      m->rebuild = true;
+    if (m->rebuild) {
+      m->near_null_space();
+      check(KSPSetReusePreconditioner(m->ksp, PETSC_FALSE), "KSPSetReusePreconditioner");
+      check(KSPSetOperators(m->ksp, m->M, m->M), "KSPSetOperators");
+      check(KSPSetUp(m->ksp), "KSPSetUp");
+      check(KSPSetReusePreconditioner(m->ksp, PETSC_TRUE), "KSPSetReusePreconditioner");
+      ++m->builds;
+      m->cost_since = kSetupCostInIterations;
+      m->solves_since = 0;
+      m->rebuild = false;
+    } else {
+      check(KSPSetOperators(m->ksp, m->M, m->M), "KSPSetOperators");
+    }
+  } catch (const PetscFailure& e) {
+    s.status = Status::Fatal;
+    s.message = std::string("petsc: ") + e.what();
+  }
+  s.factor_seconds = seconds_since(t0);
+  return s;
+}
+
+LinearSummary PetscSolver::solve(ConstRef b, VecRef x, const LinearSolveOptions& options) {
+  const auto t0 = Clock::now();
+  LinearSummary s;
+  HOOKE_ASSERT(b.size() == m->n && x.size() == m->n, "petsc: size mismatch");
+  if (m->n == 0) return s;
+  try {
+    if (b.isZero(0.0)) {  // the exact solution, whatever the tolerance or the warm start
+      x.setZero();
+      return s;
+    }
+    const ErrorScope errors;
+    const OptionsScope scope(m->options);
+    if (!options.warm_start) x.setZero();
+    check(KSPSetInitialGuessNonzero(m->ksp, options.warm_start ? PETSC_TRUE : PETSC_FALSE),
+          "KSPSetInitialGuessNonzero");
+    // No divergence test on ||r|| / ||b|| unless asked (-ksp_divtol): a warm start from the
+    // previous Newton correction can start far above a small right-hand side.
+    check(KSPSetTolerances(m->ksp, m->user_rtol ? PETSC_DEFAULT : options.tolerance,
+                           m->user_rtol ? PETSC_DEFAULT : 0.0,
+                           m->user_divtol ? PETSC_DEFAULT : PETSC_MAX_REAL,
+                           m->user_max_it ? PETSC_DEFAULT : PetscInt(options.max_iterations)),
+          "KSPSetTolerances");
+    check(VecPlaceArray(m->b, b.data()), "VecPlaceArray");
+    check(VecPlaceArray(m->x, x.data()), "VecPlaceArray");
+    const PetscErrorCode ierr = KSPSolve(m->ksp, m->b, m->x);
+    VecResetArray(m->b);
+    VecResetArray(m->x);
+    check(ierr, "KSPSolve");
+    if (m->view_pending) {
+      m->view_pending = false;
+      check(KSPView(m->ksp, PETSC_VIEWER_STDOUT_SELF), "KSPView");
+    }
+    PetscInt its = 0;
+    KSPConvergedReason reason;
+    PetscReal rnorm = 0.0;
+    check(KSPGetIterationNumber(m->ksp, &its), "KSPGetIterationNumber");
+    check(KSPGetConvergedReason(m->ksp, &reason), "KSPGetConvergedReason");
+    check(KSPGetResidualNorm(m->ksp, &rnorm), "KSPGetResidualNorm");
+    s.iterations = int(its);
+    const double bnorm = b.norm();
+    s.residual = bnorm > 0 ? double(rnorm) / bnorm : double(rnorm);
+    m->last_iterations = int(its);
+    m->cost_since += double(its);
+    ++m->solves_since;
+    if (reason < 0) {
+      std::ostringstream os;
+      // CG stops on negative curvature (INDEFINITE_MAT / _PC); a preconditioner whose set-up
+      // fails (PC_FAILED: a zero or negative pivot in its factorizations) is also what an A that
+      // is not positive definite does to this SPD-only backend.
+      s.not_positive_definite = reason == KSP_DIVERGED_INDEFINITE_PC ||
+                                reason == KSP_DIVERGED_INDEFINITE_MAT ||
+                                reason == KSP_DIVERGED_PC_FAILED;
+      os << "petsc: KSP " << KSPConvergedReasons[reason] << " after " << its
+         << " iterations (relative residual " << s.residual << ", tolerance " << options.tolerance
+         << ")"
+         << (s.not_positive_definite ? ": A (or its preconditioner) is not positive definite" : "");
+      s.message = os.str();
+      s.status = reason == KSP_DIVERGED_ITS ? Status::NotConverged : Status::BrokeDown;
+      m->rebuild = true;  // a failed solve is not worth reusing its hierarchy for
+    }
+  } catch (const PetscFailure& e) {
+    s.status = Status::Fatal;
+    s.message = std::string("petsc: ") + e.what();
+  }
+  s.solve_seconds = seconds_since(t0);
+  return s;
+}
+
+}  // namespace hooke

@@ -1,0 +1,82 @@
+#pragma once
+#include <memory>
+#include <string>
+
+#include "hooke/linear/linear_solver.hpp"
+
+namespace hooke {
+
+/// Settings of the PETSc backend (ImplicitOptions::petsc_options, scene key
+/// [integrator] petsc_options).
+struct PetscSolverOptions {
+  /// PETSc options for this solver's KSP and PC, as on a PETSc command line:
+  /// "-ksp_type cg -pc_type hypre -pc_hypre_type boomeramg". They override the defaults
+  /// (kPetscDefaultOptions); the environment variable PETSC_OPTIONS overrides them in turn.
+  std::string options;
+  /// -ksp_view prints the solver once, after its first solve (false: never, for probes).
+  bool view = true;
+};
+
+/// The defaults: CG on the true residual, preconditioned by PETSc's smoothed-aggregation AMG
+/// (GAMG) on the matrix marked SPD (CG eigenvalue estimates), smoothed by Chebyshev with
+/// point-block Jacobi (the 3 x 3 particle blocks): GAMG's default point-Jacobi smoother cannot
+/// handle the nearly rank-deficient particle blocks of a cloth (1384 iterations at 256 x 256
+/// against 40), and SOR or Jacobi-Chebyshev failed on hooke's own tests (PC_FAILED on coarse
+/// levels, INDEFINITE_PC at tolerance 1e-12). -hooke_rigid_body_modes adds the rigid-body
+/// near-null space of the particles' positions (off by default: with point-block Jacobi on every
+/// level its coarse 6 x 6 blocks are singular).
+inline constexpr const char* kPetscDefaultOptions =
+    "-ksp_type cg -ksp_norm_type unpreconditioned -pc_type gamg -mg_levels_ksp_type chebyshev "
+    "-mg_levels_pc_type pbjacobi";
+
+/// "" if `options` is a valid PETSc option string for this backend, else why not, naming the
+/// option (an unknown type such as -pc_type no_such_pc, a malformed value, or an option no
+/// PETSc object read, e.g. a misspelt name). Checked by setting up a solver on a small system.
+std::string petsc_options_problem(const std::string& options);
+
+/// Linear backend on PETSc's KSP/PC (serial, one rank), for A symmetric positive definite with
+/// 3 x 3 blocks (one per free particle):
+///  - analyze() copies A's pattern once into a PETSc AIJ matrix of block size 3 (for a symmetric
+///    A, Eigen's compressed columns are the compressed rows PETSc stores), factor() copies the
+///    values in place (no MatSetValues, no triplets), solve() wraps b and x without copies;
+///  - set_coordinates() gives the positions from which the rigid-body near-null space of GAMG is
+///    built (MatNullSpaceCreateRigidBody) when the options include -hooke_rigid_body_modes;
+///  - the preconditioner (the multigrid hierarchy) is reused across factor() calls and rebuilt by
+///    the renewal rule of ReusedFactorization, counted in Krylov iterations: rebuild once the last
+///    solve cost more than the average per solve since the last build, the build included (which
+///    counts kSetupCostInIterations);
+///  - LinearSolveOptions::tolerance and max_iterations map onto -ksp_rtol and -ksp_max_it unless
+///    the options give those explicitly; warm_start onto a nonzero initial guess.
+/// A PETSc error (including an invalid option) is Status::Fatal with PETSc's message; a KSP that
+/// diverges (e.g. indefinite A: DIVERGED_INDEFINITE_PC / _MAT) is BrokeDown with the reason.
+/// The age of the hierarchy is not in a checkpoint: exact_resume() is false.
+class PetscSolver final : public LinearSolver {
+ public:
+  /// What one hierarchy build counts for in the renewal rule, in Krylov iterations. Measured on
+  /// the 256 x 256 target (PLATFORM.md figures: set-up 0.2-0.5 s, about 0.04 s per iteration).
+  static constexpr double kSetupCostInIterations = 10.0;
+
+  explicit PetscSolver(PetscSolverOptions options = {});
+  ~PetscSolver() override;
+  PetscSolver(const PetscSolver&) = delete;
+  PetscSolver& operator=(const PetscSolver&) = delete;
+
+  const char* name() const override { return "petsc"; }
+  bool requires_spd() const override { return true; }
+  LinearSummary analyze(const SparseMatrix& A) override;
+  LinearSummary factor(const SparseMatrix& A) override;
+  LinearSummary solve(ConstRef b, VecRef x, const LinearSolveOptions& options) override;
+  void set_coordinates(ConstRef x) override;
+  bool exact_resume() const override { return false; }
+  long long factorizations() const override;
+  /// The options of this solver's database that no PETSc object has read so far (a misspelt
+  /// name, or an option of another type than the one chosen), space-separated; "" if none. The
+  /// defaults are not counted (a user's -pc_type hypre leaves the GAMG smoother's unread).
+  std::string unused_options() const;
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> m;
+};
+
+}  // namespace hooke

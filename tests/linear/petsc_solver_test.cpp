@@ -1,0 +1,181 @@
+// The PETSc linear backend (solver/linear/petsc_solver.*): it takes the same implicit steps as
+// hooke's own pcg-nodal to within 1e-8 m, and every way of giving it options works as documented:
+// the scene's string, the environment (PETSC_OPTIONS), explicit -ksp_rtol / -ksp_max_it over
+// linear_tolerance / max_linear_iterations, and invalid or misspelt options refused by name.
+// The registry sweeps of tests/linear and tests/integrators cover it as one backend among all.
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <string>
+
+#include "hooke/integrators/implicit_stepper.hpp"
+#include "hooke/linear/linear_registry.hpp"
+#include "hooke/simulation.hpp"
+#include "hooke_config.hpp"
+#include "support/backend_scenes.hpp"
+#include "support/registry.hpp"
+
+#if HOOKE_WITH_PETSC
+#include "hooke/linear/petsc_solver.hpp"
+
+namespace {
+
+using hooke::ImplicitOptions;
+using hooke::State;
+using hooke::Status;
+
+/// Sets an environment variable for the life of the object (restoring the old value).
+class ScopedEnv {
+ public:
+  ScopedEnv(const char* name, const char* value) : m_name(name) {
+    if (const char* old = std::getenv(name)) m_old = old, m_had = true;
+    setenv(name, value, 1);
+  }
+  ~ScopedEnv() {
+    if (m_had)
+      setenv(m_name, m_old.c_str(), 1);
+    else
+      unsetenv(m_name);
+  }
+
+ private:
+  const char* m_name;
+  std::string m_old;
+  bool m_had = false;
+};
+
+/// Ten backward-Euler steps of h = 0.05 s (h^2 k / m = 6400 for the structural springs) of a
+/// 12 x 12 cloth on one backend, at linear_tolerance 1e-12.
+State ten_steps(const std::string& backend, const std::string& petsc_options = "") {
+  const hooke::test::Scene scene = hooke::test::hanging_cloth(12, 0.1);
+  ImplicitOptions o;
+  o.linear_solver = backend;
+  o.linear_tolerance = 1e-12;
+  o.petsc_options = petsc_options;
+  hooke::Simulation sim(*scene.system, hooke::make_stepper("implicit", *scene.system, o),
+                        scene.state);
+  for (int k = 0; k < 10; ++k) {
+    const hooke::StepSummary s = sim.advance(0.05);
+    EXPECT_EQ(s.status, Status::Converged) << backend << " " << petsc_options << ": " << s.message;
+  }
+  return sim.state();
+}
+
+TEST(PetscSolver, TenLargeStepsAgreeWithPcgNodalWithin1e8) {
+  if (!hooke::test::has_backend("pcg-nodal")) GTEST_SKIP() << "pcg-nodal needs CHOLMOD";
+  const State ref = ten_steps("pcg-nodal");
+  for (const char* options :
+       {"", "-pc_type hypre",
+        "-hooke_rigid_body_modes -mg_levels_ksp_type richardson -mg_levels_pc_type sor"}) {
+    const State s = ten_steps("petsc", options);
+    const double dx = (s.x - ref.x).lpNorm<Eigen::Infinity>();
+    std::printf("[ petsc    ] %-40s max |x - x_pcg-nodal| = %.3g m after 10 steps\n",
+                options[0] ? options : "(defaults: CG + GAMG)", dx);
+    EXPECT_LT(dx, 1e-8) << options;
+    // The cloth really moved: the comparison is not between two resting states.
+    EXPECT_GT((s.x - hooke::test::hanging_cloth(12, 0.1).state.x).norm(), 1e-2);
+  }
+}
+
+/// One solve of the cloth's backward-Euler matrix by the backend with these options.
+hooke::LinearSummary one_solve(const std::string& petsc_options,
+                               const hooke::LinearSolveOptions& lin) {
+  const hooke::test::Scene scene = hooke::test::hanging_cloth(12, 0.1);
+  ImplicitOptions o;
+  o.linear_solver = "petsc";
+  o.linear_tolerance = lin.tolerance;
+  o.max_linear_iterations = lin.max_iterations;
+  o.petsc_options = petsc_options;
+  auto stepper = hooke::make_stepper("implicit", *scene.system, o);
+  State s1;
+  const hooke::StepSummary s = stepper->step(scene.state, 0.05, s1);
+  hooke::LinearSummary out;
+  out.status = s.status;
+  out.iterations = s.iterations;
+  out.residual = s.residual;
+  out.message = s.message;
+  return out;
+}
+
+TEST(PetscSolver, SceneOptionsOverrideTheLinearTolerance) {
+  hooke::LinearSolveOptions tight;
+  tight.tolerance = 1e-12;
+  const hooke::LinearSummary base = one_solve("", tight);
+  ASSERT_EQ(base.status, Status::Converged) << base.message;
+  EXPECT_LT(base.residual, 1e-12);
+  // An explicit -ksp_rtol wins over linear_tolerance: a looser solve, fewer iterations.
+  const hooke::LinearSummary loose = one_solve("-ksp_rtol 1e-3", tight);
+  ASSERT_EQ(loose.status, Status::Converged) << loose.message;
+  EXPECT_GT(loose.residual, 1e-12);
+  EXPECT_LT(loose.residual, 1e-3);
+  EXPECT_LT(loose.iterations, base.iterations);
+  // -ksp_max_it 1 wins over max_linear_iterations: not converged after one iteration.
+  const hooke::LinearSummary capped = one_solve("-ksp_max_it 1", tight);
+  EXPECT_EQ(capped.status, Status::NotConverged) << capped.message;
+  EXPECT_EQ(capped.iterations, 1);
+  EXPECT_NE(capped.message.find("DIVERGED_ITS"), std::string::npos) << capped.message;
+  // And without either, linear_tolerance and max_linear_iterations are what counts.
+  hooke::LinearSolveOptions two;
+  two.tolerance = 1e-12;
+  two.max_iterations = 2;
+  const hooke::LinearSummary two_its = one_solve("", two);
+  EXPECT_EQ(two_its.status, Status::NotConverged);
+  EXPECT_EQ(two_its.iterations, 2);
+}
+
+TEST(PetscSolver, EnvironmentOptionsApplyAndOverrideTheScene) {
+  hooke::LinearSolveOptions tight;
+  tight.tolerance = 1e-12;
+  {
+    const ScopedEnv env("PETSC_OPTIONS", "-ksp_max_it 1");
+    const hooke::LinearSummary s = one_solve("", tight);
+    EXPECT_EQ(s.status, Status::NotConverged) << s.message;
+    EXPECT_EQ(s.iterations, 1);
+  }
+  {
+    // The scene asks for 1 iteration, the environment for 3: the environment wins.
+    const ScopedEnv env("PETSC_OPTIONS", "-ksp_max_it 3");
+    const hooke::LinearSummary s = one_solve("-ksp_max_it 1", tight);
+    EXPECT_EQ(s.iterations, 3) << s.message;
+  }
+  const hooke::LinearSummary s = one_solve("", tight);  // the variable is gone again
+  EXPECT_EQ(s.status, Status::Converged) << s.message;
+}
+
+TEST(PetscSolver, InvalidOrUnusedOptionsAreNamed) {
+  EXPECT_EQ(hooke::petsc_options_problem(""), "");
+  EXPECT_EQ(hooke::petsc_options_problem("-pc_type hypre -pc_hypre_type boomeramg"), "");
+  EXPECT_EQ(hooke::petsc_options_problem("-mg_levels_ksp_type richardson -pc_gamg_threshold 0.02"),
+            "");
+  const std::string unknown_type = hooke::petsc_options_problem("-pc_type no_such_pc");
+  EXPECT_NE(unknown_type.find("no_such_pc"), std::string::npos) << unknown_type;
+  const std::string misspelt = hooke::petsc_options_problem("-ksp_rtoll 1e-3");
+  EXPECT_NE(misspelt.find("-ksp_rtoll"), std::string::npos) << misspelt;
+  const std::string no_dash = hooke::petsc_options_problem("ksp_type cg");
+  EXPECT_NE(no_dash.find("'ksp_type' is not an option"), std::string::npos) << no_dash;
+  const std::string bad_value = hooke::petsc_options_problem("-ksp_rtol abc");
+  EXPECT_NE(bad_value.find("abc"), std::string::npos) << bad_value;
+  {
+    const ScopedEnv env("PETSC_OPTIONS", "-ksp_typo 1");
+    const std::string from_env = hooke::petsc_options_problem("");
+    EXPECT_NE(from_env.find("-ksp_typo"), std::string::npos) << from_env;
+  }
+}
+
+TEST(PetscSolver, HierarchyIsReusedAcrossSteps) {
+  const hooke::test::Scene scene = hooke::test::hanging_cloth(16, 0.1);
+  ImplicitOptions o;
+  o.linear_solver = "petsc";
+  hooke::Simulation sim(*scene.system, hooke::make_stepper("implicit", *scene.system, o),
+                        scene.state);
+  for (int k = 0; k < 20; ++k) ASSERT_EQ(sim.advance(0.01).status, Status::Converged);
+  const long long builds = sim.stepper().stats().factorizations;
+  std::printf("[ petsc    ] 20 steps, %lld hierarchy builds, %lld iterations\n", builds,
+              sim.stepper().stats().linear_iterations);
+  EXPECT_GE(builds, 1);
+  EXPECT_LT(builds, 20);
+}
+
+}  // namespace
+
+#endif  // HOOKE_WITH_PETSC
