@@ -373,9 +373,6 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
   double t = 0.0;
   const long long N = scene.time.steps();
   OutputFile log = OutputFile::stream(folder.file("log.csv"));
-  log.print("step,t");
-  for (Index k = 0; k < d; ++k) log.print(",X%lld", (long long)k);
-  log.print(",exact_error\n");
   auto row = [&](long long step) {
     scene.ode_exact(t, exact);
     log.print("%lld,%.17g", step, t);
@@ -383,6 +380,9 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
     log.print(",%.17g\n", (X - exact).lpNorm<Eigen::Infinity>());
   };
   try {
+    log.print("step,t");
+    for (Index k = 0; k < d; ++k) log.print(",X%lld", (long long)k);
+    log.print(",exact_error\n");
     row(0);
     Progress progress(options.progress, N);
     for (long long step = 1; step <= N; ++step) {
