@@ -38,7 +38,11 @@ class Force {
   virtual void declare_blocks(BlockPattern& /*pattern*/) const {}
   /// Caches slot indices of the finalized pattern.
   virtual void bind(const BlockPattern& /*pattern*/) {}
-  /// Adds df/dx into K and df/dv into D (both 3n x 3n with the bound pattern).
+  /// False if df/dv is identically zero, so add_jacobians never writes D: a system whose forces all
+  /// say so stores no D at all (then D is passed empty). The default claims a df/dv.
+  virtual bool has_velocity_jacobian() const { return true; }
+  /// Adds df/dx into K and df/dv into D (both 3n x 3n with the bound pattern; D is empty when no
+  /// force of the system has_velocity_jacobian()).
   virtual void add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options,
                              SparseMatrix& K, SparseMatrix& D) const = 0;
   /// Matrix-free: y += cv (df/dv) p + cx (df/dx) p at (x, v) with the same options, without

@@ -13,6 +13,7 @@ class Gravity final : public Force {
   const char* name() const override { return "gravity"; }
   void add_forces(ConstRef x, ConstRef v, VecRef f) const override;
   double potential_energy(ConstRef x) const override;
+  bool has_velocity_jacobian() const override { return false; }
   void add_jacobians(ConstRef, ConstRef, const JacobianOptions&, SparseMatrix&,
                      SparseMatrix&) const override {}
   /// Constant force: no Jacobian, nothing to add.

@@ -48,6 +48,7 @@ class HookeSpring final : public Force {
   double potential_energy(ConstRef x) const override;
   void declare_blocks(BlockPattern& p) const override { m_springs.declare(p); }
   void bind(const BlockPattern& p) override { m_springs.bind(p); }
+  bool has_velocity_jacobian() const override { return false; }
   void add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options, SparseMatrix& K,
                      SparseMatrix& D) const override;
   bool add_jacobian_product(ConstRef x, ConstRef v, const JacobianOptions& options, ConstRef p,

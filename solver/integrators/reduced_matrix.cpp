@@ -47,8 +47,11 @@ void ReducedMatrix::assemble(const Jacobians& J, double a, double b) {
   const Index nnz = Index(m_src.size());
   // parallel_for branches instead of using an OpenMP if() clause: a region that runs on one
   // thread still makes libgomp allocate (and free) a team, which the step loop must not do.
-  parallel_for(nnz, 65536,
-               [&](long long k) { A[k] = -a * D[m_src[size_t(k)]] - b * K[m_src[size_t(k)]]; });
+  if (J.D.nonZeros() == 0)  // no velocity-dependent force: D is not stored
+    parallel_for(nnz, 65536, [&](long long k) { A[k] = -b * K[m_src[size_t(k)]]; });
+  else
+    parallel_for(nnz, 65536,
+                 [&](long long k) { A[k] = -a * D[m_src[size_t(k)]] - b * K[m_src[size_t(k)]]; });
   for (size_t i = 0; i < m_diag.size(); ++i) A[m_diag[i]] += m_mass[Index(i)];
 }
 

@@ -7,6 +7,7 @@
 #include <cstring>
 #include <sstream>
 #include <stdexcept>
+#include <type_traits>
 #include <vector>
 
 namespace hooke {
@@ -102,6 +103,9 @@ struct PetscSolver::Impl {
   KSP ksp = nullptr;
   ::Vec b = nullptr, x = nullptr, coords = nullptr;  // PETSc vectors (hooke::Vec is Eigen's)
   const SparseMatrix* A = nullptr;
+  // The arrays M stores (wrap()): A's own, so values assembled into A are M's values.
+  const void* wrapped[3] = {nullptr, nullptr, nullptr};
+  std::vector<PetscInt> rows, cols;  // only if PetscInt is not Eigen's index type (64-bit PETSc)
   Index n = 0;
   hooke::Vec coordinates;  // positions of the unknowns (set_coordinates), for the near-null space
   bool user_rtol = false, user_max_it = false, user_divtol = false;
@@ -130,6 +134,7 @@ struct PetscSolver::Impl {
     b = x = coords = nullptr;
     options = nullptr;
     A = nullptr;
+    std::fill(std::begin(wrapped), std::end(wrapped), nullptr);
     n = 0;
     cost_since = 0.0;
     solves_since = last_iterations = 0;
@@ -165,6 +170,39 @@ struct PetscSolver::Impl {
       check(PetscOptionsClearValue(options, "-log_view"), "options");
       if (settings.view) log_view_at_exit();
     }
+  }
+
+  /// Makes M a PETSc AIJ matrix on A's own arrays (no copy: for a symmetric A, Eigen's compressed
+  /// columns are the compressed rows PETSc stores), of block size 3, marked SPD. A must outlive M
+  /// or the next wrap(); the LinearSolver contract keeps it alive until the next factor().
+  void wrap(const SparseMatrix& A) {
+    static_assert(std::is_same_v<PetscScalar, double>, "PETSc must be built with real doubles");
+    PetscInt *r = nullptr, *c = nullptr;
+    if constexpr (std::is_same_v<PetscInt, SparseMatrix::StorageIndex>) {
+      r = const_cast<PetscInt*>(A.outerIndexPtr());
+      c = const_cast<PetscInt*>(A.innerIndexPtr());
+    } else {
+      rows.assign(A.outerIndexPtr(), A.outerIndexPtr() + A.rows() + 1);
+      cols.assign(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
+      r = rows.data();
+      c = cols.data();
+    }
+    Mat old = M;
+    M = nullptr;
+    if (old) MatDestroy(&old);
+    check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, PetscInt(n), PetscInt(n), r, c,
+                                    const_cast<double*>(A.valuePtr()), &M),
+          "MatCreateSeqAIJWithArrays");
+    if (n % 3 == 0) check(MatSetBlockSize(M, 3), "MatSetBlockSize");
+    check(MatSetOption(M, MAT_SPD, PETSC_TRUE), "MatSetOption");
+    wrapped[0] = A.outerIndexPtr();
+    wrapped[1] = A.innerIndexPtr();
+    wrapped[2] = A.valuePtr();
+  }
+
+  bool wraps(const SparseMatrix& A) const {
+    return wrapped[0] == A.outerIndexPtr() && wrapped[1] == A.innerIndexPtr() &&
+           wrapped[2] == A.valuePtr();
   }
 
   /// The rigid-body modes of the free particles at `coordinates` as A's near-null space.
@@ -273,17 +311,7 @@ LinearSummary PetscSolver::analyze(const SparseMatrix& A) {
     m->make_options();
     if (m->n > 0) {
       const OptionsScope scope(m->options);
-      // A is symmetric: its compressed columns are its compressed rows.
-      std::vector<PetscInt> rows(A.outerIndexPtr(), A.outerIndexPtr() + A.rows() + 1);
-      std::vector<PetscInt> cols(A.innerIndexPtr(), A.innerIndexPtr() + A.nonZeros());
-      check(MatCreate(PETSC_COMM_SELF, &m->M), "MatCreate");
-      check(MatSetSizes(m->M, PetscInt(m->n), PetscInt(m->n), PetscInt(m->n), PetscInt(m->n)),
-            "MatSetSizes");
-      check(MatSetType(m->M, MATSEQAIJ), "MatSetType");
-      if (m->n % 3 == 0) check(MatSetBlockSize(m->M, 3), "MatSetBlockSize");
-      check(MatSeqAIJSetPreallocationCSR(m->M, rows.data(), cols.data(), A.valuePtr()),
-            "MatSeqAIJSetPreallocationCSR");
-      check(MatSetOption(m->M, MAT_SPD, PETSC_TRUE), "MatSetOption");
+      m->wrap(A);
       check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, PetscInt(m->n), nullptr, &m->b),
             "VecCreateSeqWithArray");
       check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, PetscInt(m->n), nullptr, &m->x),
@@ -309,11 +337,12 @@ LinearSummary PetscSolver::factor(const SparseMatrix& A) {
   try {
     const ErrorScope errors;
     const OptionsScope scope(m->options);
-    PetscScalar* v = nullptr;
-    check(MatSeqAIJGetArray(m->M, &v), "MatSeqAIJGetArray");
-    std::memcpy(v, A.valuePtr(), sizeof(double) * size_t(A.nonZeros()));
-    check(MatSeqAIJRestoreArray(m->M, &v), "MatSeqAIJRestoreArray");
-    // Assembly tells every cache (SOR's and point-block Jacobi's diagonals) that values changed.
+    if (!m->wraps(A)) {  // another matrix than the last one (same pattern): wrap it instead
+      m->wrap(A);
+      m->rebuild = true;
+    }
+    // A's new values are M's. Assembly tells every cache (SOR's and point-block Jacobi's
+    // diagonals) that they changed.
     check(MatAssemblyBegin(m->M, MAT_FINAL_ASSEMBLY), "MatAssemblyBegin");
     check(MatAssemblyEnd(m->M, MAT_FINAL_ASSEMBLY), "MatAssemblyEnd");
     // Renewal rule: keep the hierarchy while the last solve cost no more than the average solve

@@ -36,9 +36,10 @@ std::string petsc_options_problem(const std::string& options);
 
 /// Linear backend on PETSc's KSP/PC (serial, one rank), for A symmetric positive definite with
 /// 3 x 3 blocks (one per free particle):
-///  - analyze() copies A's pattern once into a PETSc AIJ matrix of block size 3 (for a symmetric
-///    A, Eigen's compressed columns are the compressed rows PETSc stores), factor() copies the
-///    values in place (no MatSetValues, no triplets), solve() wraps b and x without copies;
+///  - analyze() makes a PETSc AIJ matrix of block size 3 on A's own arrays (for a symmetric A,
+///    Eigen's compressed columns are the compressed rows PETSc stores): no copy of the matrix, no
+///    MatSetValues, no triplets; the values the caller assembles into A are PETSc's, and
+///    factor() only tells PETSc that they changed; solve() wraps b and x without copies;
 ///  - set_coordinates() gives the positions from which the rigid-body near-null space of GAMG is
 ///    built (MatNullSpaceCreateRigidBody) when the options include -hooke_rigid_body_modes;
 ///  - the preconditioner (the multigrid hierarchy) is reused across factor() calls and rebuilt by

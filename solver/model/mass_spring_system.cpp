@@ -34,6 +34,8 @@ void MassSpringSystem::finalize() {
   for (const auto& f : m_forces) f->declare_blocks(m_pattern);
   m_pattern.finalize();
   for (auto& f : m_forces) f->bind(m_pattern);
+  m_velocity_jacobian = std::any_of(m_forces.begin(), m_forces.end(),
+                                    [](const auto& f) { return f->has_velocity_jacobian(); });
   m_finalized = true;
 }
 
@@ -74,15 +76,18 @@ double MassSpringSystem::energy_scale() const {
 
 Jacobians MassSpringSystem::make_jacobians() const {
   HOOKE_ASSERT(m_finalized, "make_jacobians before finalize");
-  return Jacobians{m_pattern.make_matrix(), m_pattern.make_matrix()};
+  if (m_velocity_jacobian) return Jacobians{m_pattern.make_matrix(), m_pattern.make_matrix()};
+  SparseMatrix D(dofs(), dofs());
+  D.makeCompressed();
+  return Jacobians{m_pattern.make_matrix(), std::move(D)};
 }
 
 void MassSpringSystem::assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
                                           const JacobianOptions& options) const {
   HOOKE_ASSERT(m_finalized, "assemble_jacobians before finalize");
-  HOOKE_ASSERT(
-      J.K.nonZeros() == 9 * m_pattern.num_blocks() && J.D.nonZeros() == 9 * m_pattern.num_blocks(),
-      "Jacobians were not made from this system's pattern");
+  HOOKE_ASSERT(J.K.nonZeros() == 9 * m_pattern.num_blocks() &&
+                   J.D.nonZeros() == (m_velocity_jacobian ? J.K.nonZeros() : 0),
+               "Jacobians were not made from this system's pattern");
   std::fill(J.K.valuePtr(), J.K.valuePtr() + J.K.nonZeros(), 0.0);
   std::fill(J.D.valuePtr(), J.D.valuePtr() + J.D.nonZeros(), 0.0);
   for (const auto& force : m_forces) force->add_jacobians(x, v, options, J.K, J.D);

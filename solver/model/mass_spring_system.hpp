@@ -13,6 +13,9 @@ namespace hooke {
 /// Created once (make_jacobians) and refilled by assemble_jacobians at every step.
 struct Jacobians {
   SparseMatrix K;
+  /// df/dv with K's pattern; empty (no stored entries) when no force of the system depends on
+  /// velocity (MassSpringSystem::has_velocity_jacobian() false): a scene without damping does not
+  /// pay for a second matrix.
   SparseMatrix D;
 };
 
@@ -69,7 +72,11 @@ class MassSpringSystem {
   /// Sum of the forces' energy scales (see Force::energy_scale).
   double energy_scale() const;
 
-  /// Zeroed K and D with this system's pattern (allocates: once per stepper).
+  /// True if some force has a nonzero df/dv (Force::has_velocity_jacobian); false makes
+  /// make_jacobians() leave D empty.
+  bool has_velocity_jacobian() const { return m_velocity_jacobian; }
+  /// Zeroed K and D with this system's pattern, D empty without a velocity-dependent force
+  /// (allocates: once per stepper).
   Jacobians make_jacobians() const;
   /// Overwrites the values of J.K and J.D with df/dx and df/dv at (x, v). No allocation.
   void assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
@@ -84,6 +91,7 @@ class MassSpringSystem {
   std::vector<std::unique_ptr<Constraint>> m_constraints;
   BlockPattern m_pattern;
   bool m_finalized = false;
+  bool m_velocity_jacobian = true;
   unsigned long long m_revision = 0;
 };
 

@@ -138,14 +138,14 @@ void FirstOrderMatrix::linearize(ConstRef x, ConstRef v) {
 
 void FirstOrderMatrix::fill(double cj, double* values) const {
   const double* K = m_J.K.valuePtr();
-  const double* D = m_J.D.valuePtr();
+  const double* D = m_J.D.nonZeros() > 0 ? m_J.D.valuePtr() : nullptr;  // null: no damping
   const size_t nnz = m_entries.size();
   for (size_t k = 0; k < nnz; ++k) {
     const Entry& e = m_entries[k];
     double a = e.constant + e.cj_coef * cj;
     if (e.from == Source::K)
       a += e.scale * K[e.src];
-    else if (e.from == Source::D)
+    else if (e.from == Source::D && D != nullptr)  // D is not stored without damping
       a += e.scale * D[e.src];
     values[k] = a;
   }

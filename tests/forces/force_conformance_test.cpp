@@ -342,6 +342,10 @@ TEST_P(ForceConformance, AssembledJacobiansMatchCentralDifferences) {
           [&](const Vec& y) { return force_at(*s.force, s.c.x, y); }, s.c.v, kStepRel);
       ASSERT_TRUE(near_entrywise(J.K, fd_x, kRelTol, kFloorRel)) << "K = df/dx";
       ASSERT_TRUE(near_entrywise(J.D, fd_v, kRelTol, kFloorRel)) << "D = df/dv";
+      // A force that says it has no df/dv lets the system drop D: f must not depend on v at all.
+      if (!s.force->has_velocity_jacobian()) {
+        ASSERT_EQ(max_abs(fd_v), 0.0) << "claims no df/dv";
+      }
       // add_jacobians adds into K and D (a system sums its forces there), never overwrites.
       const Assembled J1 = assemble(s, 1.0);
       EXPECT_LE(max_abs(J1.K - J.K), kRoundoff * (1.0 + max_abs(J.K)));

@@ -172,6 +172,32 @@ TEST(MassSpringSystem, AssembledJacobiansMatchCentralDifferences) {
   EXPECT_EQ(compared, samples);
 }
 
+// "Model only what a scene needs": springs and gravity have no df/dv, so their system stores no D
+// (the implicit step's A = M - h^2 K then needs K alone); any velocity-dependent force brings D
+// back with K's pattern. The assembled D is checked against differences above.
+TEST(MassSpringSystem, StoresDOnlyWithAVelocityDependentForce) {
+  const Vec m = Vec::Constant(3, 1.0);
+  for (const bool drag : {false, true}) {
+    SCOPED_TRACE(drag ? "springs, gravity and air drag" : "springs and gravity");
+    hooke::MassSpringSystem sys(m, std::vector<char>(3, 0));
+    auto springs = std::make_unique<hooke::HookeSpring>();
+    springs->add(0, 1, 10.0, 1.0);
+    springs->add(1, 2, 10.0, 1.0);
+    sys.add_force(std::move(springs));
+    sys.add_force(std::make_unique<hooke::Gravity>(m, Vec3(0.0, -9.81, 0.0)));
+    if (drag) sys.add_force(std::make_unique<hooke::AirDrag>(3, 0.5));
+    sys.finalize();
+    EXPECT_EQ(sys.has_velocity_jacobian(), drag);
+    hooke::Jacobians J = sys.make_jacobians();
+    EXPECT_EQ(J.D.nonZeros(), drag ? J.K.nonZeros() : 0);
+    EXPECT_EQ(J.D.rows(), sys.dofs());
+    const Vec x = Vec::LinSpaced(9, 0.0, 2.0), v = Vec::LinSpaced(9, -1.0, 1.0);
+    sys.assemble_jacobians(x, v, J);
+    EXPECT_GT(Dense(J.K).cwiseAbs().maxCoeff(), 0.0);
+    EXPECT_EQ(Dense(J.D).cwiseAbs().maxCoeff(), drag ? 0.5 : 0.0);
+  }
+}
+
 TEST(MassSpringSystem, EnergiesAndStrainSumOverForces) {
   std::mt19937 rng(64);
   auto sys = make_cloth(rng);
