@@ -58,6 +58,21 @@ std::string iterative_linear_solvers() {
   return s;
 }
 
+/// petsc_options, read (and checked on a small system) only when `backend` is "petsc": the
+/// linear solver of an implicit step, or the preconditioner of CVODE's and IDA's SPGMR.
+void read_petsc_options(TableReader& r, const std::string& backend, std::string& options,
+                        const char* backend_key = "preconditioner") {
+  if (backend == "petsc") {
+    options = r.string("petsc_options", options);
+    if (const std::string why = linear_backend_settings_problem(backend, {options}); !why.empty())
+      r.fail("petsc_options", why);
+  } else {
+    refuse_ignored(r, "petsc_options", setting(r, backend_key, backend),
+                   std::string("only ") + backend_key + " = 'petsc' reads PETSc options",
+                   std::string("set ") + backend_key + " = 'petsc'");
+  }
+}
+
 MethodOptions read_implicit(TableReader& r, const std::string& method) {
   ImplicitOptions o;
   if (method == "implicit") o.beta = r.number("beta", o.beta);
@@ -85,16 +100,7 @@ MethodOptions read_implicit(TableReader& r, const std::string& method) {
                    "set newton_iterations > 1 to iterate Newton to this tolerance");
   else
     o.newton_tolerance = r.number("tolerance", o.newton_tolerance);
-  if (o.linear_solver == "petsc") {
-    o.petsc_options = r.string("petsc_options", o.petsc_options);
-    if (const std::string why = linear_backend_settings_problem(o.linear_solver, {o.petsc_options});
-        !why.empty())
-      r.fail("petsc_options", why);
-  } else {
-    refuse_ignored(r, "petsc_options", setting(r, "linear_solver", o.linear_solver),
-                   "only linear_solver = 'petsc' reads PETSc options",
-                   "set linear_solver = 'petsc'");
-  }
+  read_petsc_options(r, o.linear_solver, o.petsc_options, "linear_solver");
   const std::string backend = canonical_linear_solver(o.linear_solver, o.preconditioner);
   if (direct_linear_solver(backend)) {
     for (const char* key : {"linear_tolerance", "max_linear_iterations"})
@@ -121,14 +127,15 @@ void read_sundials(TableReader& r, SundialsOptions& o, bool linear_solves = true
   o.max_steps = long(r.integer("max_steps", o.max_steps, std::numeric_limits<long>::min(),
                                std::numeric_limits<long>::max()));
   if (!linear_solves) {
-    for (const char* key : {"linear_solver", "preconditioner", "preconditioner_tolerance"})
+    for (const char* key :
+         {"linear_solver", "preconditioner", "preconditioner_tolerance", "petsc_options"})
       refuse_ignored(r, key, nonlinear, "functional iteration solves no linear systems",
                      "set nonlinear_solver = 'newton'");
     return;
   }
   o.linear_solver = r.choice("linear_solver", o.linear_solver);
   if (o.linear_solver == SundialsLinearSolver::Klu) {
-    for (const char* key : {"preconditioner", "preconditioner_tolerance"})
+    for (const char* key : {"preconditioner", "preconditioner_tolerance", "petsc_options"})
       refuse_ignored(r, key, setting(r, "linear_solver", to_string(o.linear_solver)),
                      "KLU is a direct solver and takes no preconditioner",
                      "set linear_solver = 'spgmr'");
@@ -147,6 +154,7 @@ void read_sundials(TableReader& r, SundialsOptions& o, bool linear_solves = true
                    "choose an iterative preconditioner (" + iterative_linear_solvers() + ")");
   else
     o.preconditioner_tolerance = r.number("preconditioner_tolerance", o.preconditioner_tolerance);
+  read_petsc_options(r, backend, o.petsc_options);
 }
 
 MethodOptions read_cvode(TableReader& r, const std::string&) {

@@ -94,12 +94,36 @@ class OptionsScope {
   OptionsScope& operator=(const OptionsScope&) = delete;
 };
 
+/// y = A x for the MATSHELL operator of the Krylov method: hooke's own product on A's arrays,
+/// row-parallel over the threads hooke runs on (PETSc's AIJ product is serial within a rank).
+/// A is symmetric, so its compressed columns are read as compressed rows.
+extern "C" PetscErrorCode shell_mult(Mat shell, ::Vec in, ::Vec out) {
+  const SparseMatrix* A = nullptr;
+  PetscCall(MatShellGetContext(shell, &A));
+  const PetscScalar* x = nullptr;
+  PetscScalar* y = nullptr;
+  PetscCall(VecGetArrayRead(in, &x));
+  PetscCall(VecGetArray(out, &y));
+  const int* start = A->outerIndexPtr();
+  const int* col = A->innerIndexPtr();
+  const double* a = A->valuePtr();
+  parallel_for(A->rows(), 4096, [&](long long i) {
+    double s = 0.0;
+    for (int k = start[i]; k < start[i + 1]; ++k) s += a[k] * x[col[k]];
+    y[i] = s;
+  });
+  PetscCall(VecRestoreArray(out, &y));
+  PetscCall(VecRestoreArrayRead(in, &x));
+  return 0;
+}
+
 }  // namespace
 
 struct PetscSolver::Impl {
   PetscSolverOptions settings;
   PetscOptions options = nullptr;  // this solver's own database: defaults, scene, environment
-  Mat M = nullptr;
+  Mat M = nullptr;                 // A for the preconditioner (AIJ on A's arrays)
+  Mat shell = nullptr;             // A for the Krylov method (MATSHELL: hooke's threaded product)
   KSP ksp = nullptr;
   ::Vec b = nullptr, x = nullptr, coords = nullptr;  // PETSc vectors (hooke::Vec is Eigen's)
   const SparseMatrix* A = nullptr;
@@ -111,6 +135,7 @@ struct PetscSolver::Impl {
   bool user_rtol = false, user_max_it = false, user_divtol = false;
   bool view_pending = false;      // -ksp_view was given: KSPView after the first solve
   bool rigid_body_modes = false;  // -hooke_rigid_body_modes: near-null space from the coordinates
+  double setup_cost = kSetupCostInIterations;  // -hooke_setup_cost
   // Renewal rule (see the class comment), in Krylov iterations.
   double cost_since = 0.0;
   int solves_since = 0, last_iterations = 0;
@@ -121,6 +146,7 @@ struct PetscSolver::Impl {
     if (finalized()) return;  // PETSc is gone (exit): the process frees everything
     if (ksp) KSPDestroy(&ksp);
     if (M) MatDestroy(&M);
+    if (shell) MatDestroy(&shell);
     for (::Vec* v : {&b, &x, &coords})
       if (*v) VecDestroy(v);
     if (options) PetscOptionsDestroy(&options);
@@ -131,6 +157,7 @@ struct PetscSolver::Impl {
     destroy();
     ksp = nullptr;
     M = nullptr;
+    shell = nullptr;
     b = x = coords = nullptr;
     options = nullptr;
     A = nullptr;
@@ -160,6 +187,13 @@ struct PetscSolver::Impl {
     check(PetscOptionsGetBool(options, nullptr, "-hooke_rigid_body_modes", &rigid, nullptr),
           "-hooke_rigid_body_modes");
     rigid_body_modes = rigid == PETSC_TRUE;
+    PetscReal cost = kSetupCostInIterations;
+    check(PetscOptionsGetReal(options, nullptr, "-hooke_setup_cost", &cost, nullptr),
+          "-hooke_setup_cost");
+    if (!(cost >= 0.0))
+      throw PetscFailure("-hooke_setup_cost " + std::to_string(cost) +
+                         ": the cost of a preconditioner set-up in Krylov iterations must be >= 0");
+    setup_cost = double(cost);
     // -ksp_view would print at every solve (every step): taken out, printed once by solve().
     check(PetscOptionsHasName(options, nullptr, "-ksp_view", &has), "options");
     view_pending = has == PETSC_TRUE && settings.view;
@@ -187,14 +221,20 @@ struct PetscSolver::Impl {
       r = rows.data();
       c = cols.data();
     }
-    Mat old = M;
-    M = nullptr;
-    if (old) MatDestroy(&old);
+    for (Mat* old : {&M, &shell})
+      if (*old) MatDestroy(old);
     check(MatCreateSeqAIJWithArrays(PETSC_COMM_SELF, PetscInt(n), PetscInt(n), r, c,
                                     const_cast<double*>(A.valuePtr()), &M),
           "MatCreateSeqAIJWithArrays");
     if (n % 3 == 0) check(MatSetBlockSize(M, 3), "MatSetBlockSize");
     check(MatSetOption(M, MAT_SPD, PETSC_TRUE), "MatSetOption");
+    check(MatCreateShell(PETSC_COMM_SELF, PetscInt(n), PetscInt(n), PetscInt(n), PetscInt(n),
+                         const_cast<SparseMatrix*>(&A), &shell),
+          "MatCreateShell");
+    check(MatShellSetOperation(shell, MATOP_MULT, reinterpret_cast<void (*)(void)>(shell_mult)),
+          "MatShellSetOperation");
+    if (n % 3 == 0) check(MatSetBlockSize(shell, 3), "MatSetBlockSize");
+    check(MatSetOption(shell, MAT_SPD, PETSC_TRUE), "MatSetOption");
     wrapped[0] = A.outerIndexPtr();
     wrapped[1] = A.innerIndexPtr();
     wrapped[2] = A.valuePtr();
@@ -254,8 +294,8 @@ std::string petsc_options_problem(const std::string& options) {
   try {
     PetscSolver s(o);
     s.set_coordinates(x);
-    for (const LinearSummary& r : {s.analyze(A), s.factor(A)})
-      if (r.status == Status::Fatal) return r.message;
+    if (const LinearSummary r = s.analyze(A); r.status == Status::Fatal) return r.message;
+    if (const LinearSummary r = s.factor(A); r.status == Status::Fatal) return r.message;
     Vec b = Vec::Ones(n), y = Vec::Zero(n);
     const LinearSummary r = s.solve(b, y, LinearSolveOptions{});
     if (r.status == Status::Fatal) return r.message;
@@ -317,7 +357,7 @@ LinearSummary PetscSolver::analyze(const SparseMatrix& A) {
       check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, PetscInt(m->n), nullptr, &m->x),
             "VecCreateSeqWithArray");
       check(KSPCreate(PETSC_COMM_SELF, &m->ksp), "KSPCreate");
-      check(KSPSetOperators(m->ksp, m->M, m->M), "KSPSetOperators");
+      check(KSPSetOperators(m->ksp, m->shell, m->M), "KSPSetOperators");
       check(KSPSetFromOptions(m->ksp), "KSPSetFromOptions");
     }
   } catch (const PetscFailure& e) {
@@ -334,6 +374,11 @@ LinearSummary PetscSolver::factor(const SparseMatrix& A) {
   HOOKE_ASSERT(A.rows() == m->n, "petsc: factor on a matrix of another size than analysed");
   m->A = &A;
   if (m->n == 0) return s;
+  if (!m->ksp) {  // analyze() failed (its summary said why)
+    s.status = Status::Fatal;
+    s.message = "petsc: factor() without a successful analyze()";
+    return s;
+  }
   try {
     const ErrorScope errors;
     const OptionsScope scope(m->options);
@@ -352,15 +397,15 @@ LinearSummary PetscSolver::factor(const SparseMatrix& A) {
     if (m->rebuild) {
       m->near_null_space();
       check(KSPSetReusePreconditioner(m->ksp, PETSC_FALSE), "KSPSetReusePreconditioner");
-      check(KSPSetOperators(m->ksp, m->M, m->M), "KSPSetOperators");
+      check(KSPSetOperators(m->ksp, m->shell, m->M), "KSPSetOperators");
       check(KSPSetUp(m->ksp), "KSPSetUp");
       check(KSPSetReusePreconditioner(m->ksp, PETSC_TRUE), "KSPSetReusePreconditioner");
       ++m->builds;
-      m->cost_since = kSetupCostInIterations;
+      m->cost_since = m->setup_cost;
       m->solves_since = 0;
       m->rebuild = false;
     } else {
-      check(KSPSetOperators(m->ksp, m->M, m->M), "KSPSetOperators");
+      check(KSPSetOperators(m->ksp, m->shell, m->M), "KSPSetOperators");
     }
   } catch (const PetscFailure& e) {
     s.status = Status::Fatal;
@@ -375,6 +420,11 @@ LinearSummary PetscSolver::solve(ConstRef b, VecRef x, const LinearSolveOptions&
   LinearSummary s;
   HOOKE_ASSERT(b.size() == m->n && x.size() == m->n, "petsc: size mismatch");
   if (m->n == 0) return s;
+  if (!m->ksp) {
+    s.status = Status::Fatal;
+    s.message = "petsc: solve() without a successful analyze()";
+    return s;
+  }
   try {
     if (b.isZero(0.0)) {  // the exact solution, whatever the tolerance or the warm start
       x.setZero();
@@ -422,6 +472,12 @@ LinearSummary PetscSolver::solve(ConstRef b, VecRef x, const LinearSolveOptions&
       s.not_positive_definite = reason == KSP_DIVERGED_INDEFINITE_PC ||
                                 reason == KSP_DIVERGED_INDEFINITE_MAT ||
                                 reason == KSP_DIVERGED_PC_FAILED;
+      // BoomerAMG does not report a failed set-up: on an indefinite A its smoothers divide by
+      // zero or negative diagonals and CG sees NaN or infinity. With finite A and b that is what
+      // NANORINF means here.
+      if (reason == KSP_DIVERGED_NANORINF && b.allFinite() && m->A != nullptr &&
+          Eigen::Map<const hooke::Vec>(m->A->valuePtr(), m->A->nonZeros()).allFinite())
+        s.not_positive_definite = true;
       os << "petsc: KSP " << KSPConvergedReasons[reason] << " after " << its
          << " iterations (relative residual " << s.residual << ", tolerance " << options.tolerance
          << ")"

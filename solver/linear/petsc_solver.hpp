@@ -17,17 +17,25 @@ struct PetscSolverOptions {
   bool view = true;
 };
 
-/// The defaults: CG on the true residual, preconditioned by PETSc's smoothed-aggregation AMG
-/// (GAMG) on the matrix marked SPD (CG eigenvalue estimates), smoothed by Chebyshev with
-/// point-block Jacobi (the 3 x 3 particle blocks): GAMG's default point-Jacobi smoother cannot
-/// handle the nearly rank-deficient particle blocks of a cloth (1384 iterations at 256 x 256
-/// against 40), and SOR or Jacobi-Chebyshev failed on hooke's own tests (PC_FAILED on coarse
-/// levels, INDEFINITE_PC at tolerance 1e-12). -hooke_rigid_body_modes adds the rigid-body
-/// near-null space of the particles' positions (off by default: with point-block Jacobi on every
-/// level its coarse 6 x 6 blocks are singular).
+/// The defaults: CG on the true residual, preconditioned by one algebraic multigrid V-cycle per
+/// coordinate (PCFIELDSPLIT, additive, over the x, y and z unknowns of the particles, each split
+/// a hypre BoomerAMG on its scalar matrix A_xx, A_yy or A_zz). Measured on the backward-Euler
+/// target (hooke run target_backward_euler_256 with --set integrator.linear_solver=petsc, 3
+/// steps, one rank): 11 iterations and 0.47 s per step at 256 x 256, 12 at 512 x 512, 12 to 14 at
+/// 1000 x 1000, where smoothed aggregation on the coupled matrix (-pc_type gamg, with the
+/// Chebyshev and point-block Jacobi smoothing below) needs 35 to 45 iterations at 2.3 s per step
+/// at 256 x 256, and BoomerAMG on the coupled matrix 9 iterations at about 1.5 s.
+/// For -pc_type gamg the defaults smooth with Chebyshev and point-block Jacobi (the 3 x 3
+/// particle blocks): GAMG's default point-Jacobi smoother cannot handle the nearly rank-deficient
+/// particle blocks of a cloth (1384 iterations at 256 x 256 against 40).
+/// -hooke_rigid_body_modes adds the rigid-body near-null space of the particles' positions to
+/// GAMG (off by default: with point-block Jacobi on every level its coarse 6 x 6 blocks are
+/// singular). -hooke_setup_cost N sets what one preconditioner set-up counts for in the renewal
+/// rule, in Krylov iterations (default kSetupCostInIterations; about 10 for GAMG).
 inline constexpr const char* kPetscDefaultOptions =
-    "-ksp_type cg -ksp_norm_type unpreconditioned -pc_type gamg -mg_levels_ksp_type chebyshev "
-    "-mg_levels_pc_type pbjacobi";
+    "-ksp_type cg -ksp_norm_type unpreconditioned -pc_type fieldsplit -pc_fieldsplit_block_size 3 "
+    "-pc_fieldsplit_type additive -fieldsplit_0_pc_type hypre -fieldsplit_1_pc_type hypre "
+    "-fieldsplit_2_pc_type hypre -mg_levels_ksp_type chebyshev -mg_levels_pc_type pbjacobi";
 
 /// "" if `options` is a valid PETSc option string for this backend, else why not, naming the
 /// option (an unknown type such as -pc_type no_such_pc, a malformed value, or an option no
@@ -36,6 +44,8 @@ std::string petsc_options_problem(const std::string& options);
 
 /// Linear backend on PETSc's KSP/PC (serial, one rank), for A symmetric positive definite with
 /// 3 x 3 blocks (one per free particle):
+///  - the Krylov method multiplies by A with hooke's row-parallel product (a MATSHELL: PETSc's
+///    AIJ product is serial within a rank); the preconditioner is built from the AIJ matrix;
 ///  - analyze() makes a PETSc AIJ matrix of block size 3 on A's own arrays (for a symmetric A,
 ///    Eigen's compressed columns are the compressed rows PETSc stores): no copy of the matrix, no
 ///    MatSetValues, no triplets; the values the caller assembles into A are PETSc's, and
@@ -53,12 +63,14 @@ std::string petsc_options_problem(const std::string& options);
 /// The age of the hierarchy is not in a checkpoint: exact_resume() is false.
 class PetscSolver final : public LinearSolver {
  public:
-  /// What one hierarchy build counts for in the renewal rule, in Krylov iterations. Measured on
-  /// the 256 x 256 target with the defaults (hooke run target_backward_euler_256 --set
-  /// integrator.linear_solver=petsc --set integrator.petsc_options=-log_view --set
-  /// time.duration=0.02): PCSetUp 0.83 s over 3 set-ups, PCApply 57 ms per CG iteration, so a
-  /// set-up costs about 5 to 15 iterations.
-  static constexpr double kSetupCostInIterations = 10.0;
+  /// What one preconditioner set-up counts for in the renewal rule, in Krylov iterations, with
+  /// the defaults (-hooke_setup_cost overrides it). Measured with hooke run
+  /// target_backward_euler_256 --set integrator.linear_solver=petsc --set
+  /// integrator.petsc_options=-log_view --set time.duration=0.05: PCSetUp 0.135 s for the three
+  /// BoomerAMG hierarchies against 37 ms per CG iteration (about 3.6); at 1000 x 1000 the first
+  /// step costs about 2.4 iterations more than the next. (GAMG: 0.83 s over 3 set-ups against
+  /// 57 ms per iteration, about 10.)
+  static constexpr double kSetupCostInIterations = 3.0;
 
   explicit PetscSolver(PetscSolverOptions options = {});
   ~PetscSolver() override;

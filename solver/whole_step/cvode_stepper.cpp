@@ -181,8 +181,7 @@ CvodeStepper::Impl::Impl(const MassSpringSystem& sys, CvodeOptions opt)
     check(CVodeSetNonlinearSolver(cv, nls.get()), "CVodeSetNonlinearSolver");
   } else {
     if (options.linear_solver != SundialsLinearSolver::Klu)
-      prec = make_schur_preconditioner(system, options.preconditioner,
-                                       options.preconditioner_tolerance);
+      prec = make_schur_preconditioner(system, options);
     auto lin = sundials_detail::make_linear_system("cvode", options.linear_solver, y.get(),
                                                    jac.nonzeros(), prec != nullptr, ctx.get());
     A = std::move(lin.A);

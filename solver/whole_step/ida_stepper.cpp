@@ -174,8 +174,7 @@ IdaStepper::Impl::Impl(const MassSpringSystem& sys, IdaOptions opt)
   check(IDASetMaxOrd(ida, options.max_order), "IDASetMaxOrd");
   check(IDASetMaxNumSteps(ida, options.max_steps), "IDASetMaxNumSteps");
   if (options.linear_solver != SundialsLinearSolver::Klu)
-    prec =
-        make_schur_preconditioner(system, options.preconditioner, options.preconditioner_tolerance);
+    prec = make_schur_preconditioner(system, options);
   auto lin = sundials_detail::make_linear_system("ida", options.linear_solver, y.get(),
                                                  jac.nonzeros(), prec != nullptr, ctx.get());
   A = std::move(lin.A);

@@ -203,6 +203,7 @@ SchurPreconditioner::SchurPreconditioner(const MassSpringSystem& system,
   m_rv_pinned = Vec::Zero(n3);
   m_rhs = Vec::Zero(m_A.free_dofs());
   m_z = Vec::Zero(m_A.free_dofs());
+  m_x_free = Vec::Zero(m_A.free_dofs());
   m_A.assemble(m_J, 0.0, 0.0);  // A = M: the pattern is all the analysis needs
   const LinearSummary s = m_backend->analyze(m_A.matrix());
   if (s.status != Status::Converged)
@@ -221,6 +222,8 @@ LinearSummary SchurPreconditioner::setup(ConstRef x, ConstRef v, double gamma,
   }
   m_gamma = gamma;
   m_A.assemble(m_J, gamma, gamma * gamma);
+  m_A.gather(x, m_x_free);  // the geometry of a near-null space (PETSc GAMG's rigid-body modes)
+  m_backend->set_coordinates(m_x_free);
   return m_backend->factor(m_A.matrix());
 }
 
@@ -277,6 +280,11 @@ OptionError SundialsOptions::validate_shared(const char* who) const {
   } else if (!(preconditioner_tolerance > 0.0 && preconditioner_tolerance < 1.0)) {
     field = "preconditioner_tolerance";
     os << "preconditioner_tolerance = " << preconditioner_tolerance << " must be in (0, 1)";
+  } else if (!petsc_options.empty() && (klu || preconditioner != "petsc")) {
+    field = "petsc_options";
+    os << "petsc_options = '" << petsc_options
+       << "' is only read with linear_solver = 'spgmr' and preconditioner = 'petsc'; leave it "
+          "empty";
   } else if (max_steps < 1) {
     field = "max_steps";
     os << "max_steps = " << max_steps << " must be at least 1";
@@ -285,12 +293,14 @@ OptionError SundialsOptions::validate_shared(const char* who) const {
 }
 
 std::unique_ptr<SchurPreconditioner> make_schur_preconditioner(const MassSpringSystem& system,
-                                                               const std::string& name,
-                                                               double tolerance) {
+                                                               const SundialsOptions& options) {
+  const std::string& name = options.preconditioner;
   if (name == "none") return nullptr;
   return std::make_unique<SchurPreconditioner>(
-      system, make_linear_solver(name.empty() ? default_sundials_preconditioner() : name),
-      tolerance, 10000);
+      system,
+      make_linear_solver(name.empty() ? default_sundials_preconditioner() : name, "",
+                         LinearBackendSettings{options.petsc_options}),
+      options.preconditioner_tolerance, 10000);
 }
 
 }  // namespace hooke

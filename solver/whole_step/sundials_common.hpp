@@ -186,7 +186,7 @@ class SchurPreconditioner {
   double m_gamma = 0.0;
   long m_linearizations = 0;
   Vec m_w, m_full, m_rv_pinned;  // 3n scratch
-  Vec m_rhs, m_z;                // free-DOF scratch
+  Vec m_rhs, m_z, m_x_free;      // free-DOF scratch
 };
 
 /// Default of SundialsOptions::preconditioner_tolerance (only "spgmr" uses the field).
@@ -223,6 +223,9 @@ struct SundialsOptions {
   /// Relative residual tolerance of each preconditioner solve, when its backend is iterative; in
   /// (0, 1). A loose tolerance makes the preconditioner vary between GMRES iterations.
   double preconditioner_tolerance = kDefaultPreconditionerTolerance;
+  /// PETSc options of the preconditioner's KSP and PC when preconditioner = "petsc" (as the
+  /// implicit step's petsc_options: "-pc_type gamg"); must stay "" otherwise.
+  std::string petsc_options;
   /// Most internal steps per step() call (CVodeSetMaxNumSteps / IDASetMaxNumSteps); >= 1.
   /// Exceeding it returns Status::NotConverged with CV_TOO_MUCH_WORK / IDA_TOO_MUCH_WORK.
   long max_steps = 100000;
@@ -237,7 +240,6 @@ std::string default_sundials_preconditioner();
 /// Makes the preconditioner named by an options struct ("" = default_sundials_preconditioner());
 /// nullptr for "none".
 std::unique_ptr<SchurPreconditioner> make_schur_preconditioner(const MassSpringSystem& system,
-                                                               const std::string& name,
-                                                               double tolerance);
+                                                               const SundialsOptions& options);
 
 }  // namespace hooke

@@ -65,12 +65,13 @@ TEST(PetscSolver, TenLargeStepsAgreeWithPcgNodalWithin1e8) {
   if (!hooke::test::has_backend("pcg-nodal")) GTEST_SKIP() << "pcg-nodal needs CHOLMOD";
   const State ref = ten_steps("pcg-nodal");
   for (const char* options :
-       {"", "-pc_type hypre",
-        "-hooke_rigid_body_modes -mg_levels_ksp_type richardson -mg_levels_pc_type sor"}) {
+       {"", "-pc_type hypre", "-pc_type gamg",
+        "-pc_type gamg -hooke_rigid_body_modes -mg_levels_ksp_type richardson "
+        "-mg_levels_pc_type sor"}) {
     const State s = ten_steps("petsc", options);
     const double dx = (s.x - ref.x).lpNorm<Eigen::Infinity>();
     std::printf("[ petsc    ] %-40s max |x - x_pcg-nodal| = %.3g m after 10 steps\n",
-                options[0] ? options : "(defaults: CG + GAMG)", dx);
+                options[0] ? options : "(defaults: CG + BoomerAMG per coordinate)", dx);
     EXPECT_LT(dx, 1e-8) << options;
     // The cloth really moved: the comparison is not between two resting states.
     EXPECT_GT((s.x - hooke::test::hanging_cloth(12, 0.1).state.x).norm(), 1e-2);
@@ -145,8 +146,16 @@ TEST(PetscSolver, EnvironmentOptionsApplyAndOverrideTheScene) {
 TEST(PetscSolver, InvalidOrUnusedOptionsAreNamed) {
   EXPECT_EQ(hooke::petsc_options_problem(""), "");
   EXPECT_EQ(hooke::petsc_options_problem("-pc_type hypre -pc_hypre_type boomeramg"), "");
-  EXPECT_EQ(hooke::petsc_options_problem("-mg_levels_ksp_type richardson -pc_gamg_threshold 0.02"),
+  EXPECT_EQ(hooke::petsc_options_problem(
+                "-pc_type gamg -mg_levels_ksp_type richardson -pc_gamg_threshold 0.02"),
             "");
+  EXPECT_EQ(hooke::petsc_options_problem("-pc_type gamg -hooke_rigid_body_modes"), "");
+  EXPECT_EQ(hooke::petsc_options_problem("-fieldsplit_0_pc_hypre_boomeramg_agg_nl 1"), "");
+  // A GAMG option with the default preconditioner (fieldsplit + BoomerAMG) is read by nothing.
+  const std::string not_chosen = hooke::petsc_options_problem("-pc_gamg_threshold 0.02");
+  EXPECT_NE(not_chosen.find("-pc_gamg_threshold"), std::string::npos) << not_chosen;
+  const std::string bad_cost = hooke::petsc_options_problem("-hooke_setup_cost -1");
+  EXPECT_NE(bad_cost.find("-hooke_setup_cost"), std::string::npos) << bad_cost;
   const std::string unknown_type = hooke::petsc_options_problem("-pc_type no_such_pc");
   EXPECT_NE(unknown_type.find("no_such_pc"), std::string::npos) << unknown_type;
   const std::string misspelt = hooke::petsc_options_problem("-ksp_rtoll 1e-3");

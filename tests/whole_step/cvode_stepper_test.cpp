@@ -234,7 +234,8 @@ TEST(CvodeStepper, AgreesWithRk4OnDampedCloth) {
 }
 
 TEST(CvodeStepper, SpgmrAgreesWithKluOnDampedCloth) {
-  // Matrix-free GMRES with the Schur-complement preconditioner (default backend and "pcg-block")
+  // Matrix-free GMRES with the Schur-complement preconditioner (default backend, "pcg-block" and,
+  // when built, "petsc": PETSc's CG and AMG behind the same interface)
   // against KLU over 0.1 s at rtol 1e-10: both solve the same Newton systems to within the
   // Krylov tolerance, and the preconditioner is nearly exact (about one Krylov iteration per
   // Newton iteration), so the runs take nearly the same steps: measured ~1e-12, asserted 1e-10.
@@ -245,7 +246,8 @@ TEST(CvodeStepper, SpgmrAgreesWithKluOnDampedCloth) {
   opt.atol = 1e-12;
   CvodeStepper klu(*cloth.system, opt);
   const State sk = integrate(klu, cloth.state, T, 10);
-  for (const char* prec : {"", "pcg-block"}) {
+  for (const char* prec : {"", "pcg-block", "petsc"}) {
+    if (std::string(prec) == "petsc" && !HOOKE_WITH_PETSC) continue;
     CvodeOptions o = opt;
     o.linear_solver = hooke::SundialsLinearSolver::Spgmr;
     o.preconditioner = prec;
@@ -338,6 +340,13 @@ TEST(CvodeStepper, OptionsValidateRejectsBadValues) {
               o.preconditioner = "none";
             }),
             "");
+  // PETSc options belong to the PETSc preconditioner only.
+  EXPECT_NE(message([](CvodeOptions& o) {
+              o.linear_solver = hooke::SundialsLinearSolver::Spgmr;
+              o.preconditioner = "pcg-block";
+              o.petsc_options = "-pc_type gamg";
+            }).find("petsc_options = '-pc_type gamg' is only read with"),
+            std::string::npos);
   EXPECT_NE(message([](CvodeOptions& o) {
               o.nonlinear_solver = hooke::CvodeNonlinearSolver::FixedPoint;
             }).find("adams"),
