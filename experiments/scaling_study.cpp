@@ -24,9 +24,11 @@
 //                      (-pc_type gamg, Chebyshev / point-block Jacobi smoothing)
 //   implicit-petsc-boomeramg  the same with hypre's BoomerAMG on the coupled matrix
 //                      (-pc_type hypre) (the PETSc rows exist in builds with PETSc)
-// Peak memory: VmHWM of this process, reset before each run (/proc/self/clear_refs).
+// Peak memory: VmHWM of this process, reset before each run (/proc/self/clear_refs) after the
+// freed heap is returned to the system (malloc_trim).
 #include "experiments/scaling_study.hpp"
 
+#include <malloc.h>
 #include <omp.h>
 
 #include <algorithm>
@@ -97,8 +99,11 @@ const std::vector<MethodSpec>& specs() {
   return s;
 }
 
-/// Resets the peak resident set size (Linux >= 4.0); false where unsupported.
+/// Resets the peak resident set size (Linux >= 4.0); false where unsupported. The heap that
+/// earlier runs freed is given back to the system first (malloc_trim): otherwise it stays
+/// resident and a run's peak would include the largest run before it.
 bool reset_peak_memory() {
+  malloc_trim(0);
   std::ofstream f("/proc/self/clear_refs");
   f << "5";
   return bool(f);
