@@ -42,12 +42,12 @@ ReducedMatrix::ReducedMatrix(const MassSpringSystem& system) {
 
 void ReducedMatrix::assemble(const Jacobians& J, double a, double b) {
   const double* K = J.K.valuePtr();
-  const double* D = J.D.valuePtr();
+  const double* D = J.velocity_values();
   double* A = m_A.valuePtr();
   const Index nnz = Index(m_src.size());
   // parallel_for branches instead of using an OpenMP if() clause: a region that runs on one
   // thread still makes libgomp allocate (and free) a team, which the step loop must not do.
-  if (J.D.nonZeros() == 0)  // no velocity-dependent force: D is not stored
+  if (D == nullptr)  // no velocity-dependent force: D is not stored
     parallel_for(nnz, 65536, [&](long long k) { A[k] = -b * K[m_src[size_t(k)]]; });
   else
     parallel_for(nnz, 65536,

@@ -20,18 +20,18 @@ struct PetscSolverOptions {
 /// The defaults: CG on the true residual, preconditioned by one algebraic multigrid V-cycle per
 /// coordinate (PCFIELDSPLIT, additive, over the x, y and z unknowns of the particles, each split
 /// a hypre BoomerAMG on its scalar matrix A_xx, A_yy or A_zz). Measured on the backward-Euler
-/// target (hooke run target_backward_euler_256 with --set integrator.linear_solver=petsc, 3
-/// steps, one rank): 11 iterations and 0.47 s per step at 256 x 256, 12 at 512 x 512, 12 to 14 at
-/// 1000 x 1000, where smoothed aggregation on the coupled matrix (-pc_type gamg, with the
-/// Chebyshev and point-block Jacobi smoothing below) needs 35 to 45 iterations at 2.3 s per step
-/// at 256 x 256, and BoomerAMG on the coupled matrix 9 iterations at about 1.5 s.
-/// For -pc_type gamg the defaults smooth with Chebyshev and point-block Jacobi (the 3 x 3
-/// particle blocks): GAMG's default point-Jacobi smoother cannot handle the nearly rank-deficient
-/// particle blocks of a cloth (1384 iterations at 256 x 256 against 40).
-/// -hooke_rigid_body_modes adds the rigid-body near-null space of the particles' positions to
-/// GAMG (off by default: with point-block Jacobi on every level its coarse 6 x 6 blocks are
-/// singular). -hooke_setup_cost N sets what one preconditioner set-up counts for in the renewal
-/// rule, in Krylov iterations (default kSetupCostInIterations; about 10 for GAMG).
+/// target (hooke run target_backward_euler_256 --set integrator.linear_solver=petsc --set
+/// time.duration=0.03, and --set mesh.nx=N --set mesh.ny=N for the other sizes; one rank): 11
+/// iterations and 0.47 s per step at 256 x 256, 12 at 512 x 512, 12 to 14 at 1000 x 1000, where
+/// smoothed aggregation on the coupled matrix (-pc_type gamg, with the Chebyshev and point-block
+/// Jacobi smoothing below) needs 35 to 45 iterations at 2.3 s per step at 256 x 256, and BoomerAMG
+/// on the coupled matrix 9 iterations at about 1.5 s. For -pc_type gamg the defaults smooth with
+/// Chebyshev and point-block Jacobi (the 3 x 3 particle blocks): GAMG's default point-Jacobi
+/// smoother cannot handle the nearly rank-deficient particle blocks of a cloth (1384 iterations at
+/// 256 x 256 against 40). -hooke_rigid_body_modes adds the rigid-body near-null space of the
+/// particles' positions to GAMG (off by default: with point-block Jacobi on every level its coarse
+/// 6 x 6 blocks are singular). -hooke_setup_cost N sets what one preconditioner set-up counts for
+/// in the renewal rule, in Krylov iterations (default kSetupCostInIterations; about 10 for GAMG).
 inline constexpr const char* kPetscDefaultOptions =
     "-ksp_type cg -ksp_norm_type unpreconditioned -pc_type fieldsplit -pc_fieldsplit_block_size 3 "
     "-pc_fieldsplit_type additive -fieldsplit_0_pc_type hypre -fieldsplit_1_pc_type hypre "

@@ -17,6 +17,8 @@ struct Jacobians {
   /// velocity (MassSpringSystem::has_velocity_jacobian() false): a scene without damping does not
   /// pay for a second matrix.
   SparseMatrix D;
+  /// D's values, or nullptr when D is not stored (no velocity-dependent force).
+  const double* velocity_values() const { return D.nonZeros() > 0 ? D.valuePtr() : nullptr; }
 };
 
 /// A mass-spring system: n particles with masses and pins, a list of forces and a list of post-step

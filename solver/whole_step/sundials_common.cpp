@@ -138,7 +138,7 @@ void FirstOrderMatrix::linearize(ConstRef x, ConstRef v) {
 
 void FirstOrderMatrix::fill(double cj, double* values) const {
   const double* K = m_J.K.valuePtr();
-  const double* D = m_J.D.nonZeros() > 0 ? m_J.D.valuePtr() : nullptr;  // null: no damping
+  const double* D = m_J.velocity_values();  // null: no damping
   const size_t nnz = m_entries.size();
   for (size_t k = 0; k < nnz; ++k) {
     const Entry& e = m_entries[k];
