@@ -46,7 +46,6 @@ ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme 
       m_scheme(scheme),
       m_solver(std::move(solver)),
       m_options(options),
-      m_J(system.make_jacobians()),
       m_A(system) {
   const OptionError err = m_options.validate();
   HOOKE_ASSERT(err.ok(), "ImplicitOptions: " << err.message);
@@ -61,13 +60,10 @@ ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme 
   // (and SPD with the clamp), which CG and Cholesky need and under which Jacobi and Gauss-Seidel
   // are guaranteed to converge (measured: with it, block Jacobi diverged on a damped cloth).
   m_jac_options.damping_position_terms = false;
-  const Index N = system.dofs(), nf = m_A.free_dofs();
+  const Index N = system.dofs();
   for (Vec* v : {&m_v0, &m_vb, &m_xa, &m_va, &m_xe, &m_v1, &m_xlin, &m_vlin, &m_f, &m_rhs, &m_tmp,
-                 &m_dx, &m_dv, &m_prev_x, &m_prev_v})
+                 &m_dx, &m_dv, &m_prev_x, &m_prev_v, &m_delta})
     v->setZero(N);
-  m_rhs_free.setZero(nf);
-  m_delta.setZero(nf);
-  m_x_free.setZero(nf);
   const LinearSummary a = m_solver->analyze(m_A.matrix());
   if (a.status != Status::Converged) throw SetupError(a.message);
   accumulate(m_totals, a);
@@ -82,6 +78,7 @@ std::string ImplicitStepper::report() const {
 }
 
 std::vector<double> ImplicitStepper::history() const {
+  const std::vector<char>& pinned = m_system.pinned();
   std::vector<double> h;
   h.reserve(size_t(3 + m_prev_x.size() + m_prev_v.size() + m_delta.size()));
   h.push_back(m_has_prev ? 1.0 : 0.0);
@@ -89,12 +86,15 @@ std::vector<double> ImplicitStepper::history() const {
   h.push_back(m_prev_t1);
   h.insert(h.end(), m_prev_x.data(), m_prev_x.data() + m_prev_x.size());
   h.insert(h.end(), m_prev_v.data(), m_prev_v.data() + m_prev_v.size());
-  h.insert(h.end(), m_delta.data(), m_delta.data() + m_delta.size());
+  // The correction on the free DOFs only, as checkpoints have always held it.
+  for (Index i = 0; i < m_delta.size(); ++i)
+    if (!pinned[size_t(i / 3)]) h.push_back(m_delta[i]);
   return h;
 }
 
 void ImplicitStepper::restore_history(const std::vector<double>& h) {
-  const size_t N = size_t(m_prev_x.size()), nf = size_t(m_delta.size());
+  const std::vector<char>& pinned = m_system.pinned();
+  const size_t N = size_t(m_prev_x.size()), nf = N - 3 * size_t(m_system.num_pinned());
   HOOKE_ASSERT(h.size() == 3 + 2 * N + nf, name() << ": history of " << h.size()
                                                   << " numbers, expected " << 3 + 2 * N + nf
                                                   << " for " << N << " dofs");
@@ -103,7 +103,8 @@ void ImplicitStepper::restore_history(const std::vector<double>& h) {
   m_prev_t1 = h[2];
   m_prev_x = Eigen::Map<const Vec>(h.data() + 3, Index(N));
   m_prev_v = Eigen::Map<const Vec>(h.data() + 3 + N, Index(N));
-  m_delta = Eigen::Map<const Vec>(h.data() + 3 + 2 * N, Index(nf));
+  size_t k = 3 + 2 * N;
+  for (Index i = 0; i < m_delta.size(); ++i) m_delta[i] = pinned[size_t(i / 3)] ? 0.0 : h[k++];
 }
 
 const char* ImplicitStepper::name() const {
@@ -158,20 +159,23 @@ ImplicitStepper::OneLeg ImplicitStepper::set_up(const State& s0, double h) {
 void ImplicitStepper::assemble(const OneLeg& c) {
   const auto ta = Clock::now();
   m_system.compute_forces(m_xlin, m_vlin, m_f);
-  m_system.assemble_jacobians(m_xlin, m_vlin, m_J, m_jac_options);
+  m_A.assemble_jacobians(m_xlin, m_vlin, m_jac_options);
+  const Jacobians& J = m_A.jacobians();
   // rhs = hf (f_lin + K dx + D dv) - M (v1 - vb), with dx, dv the gap between the current
   // iterate's arguments and the linearisation point (nonzero only in the first iteration).
   m_dx = m_xa + c.bx * m_v1 - m_xlin;
   m_dv = m_va + c.cv * m_v1 - m_vlin;
   m_rhs = m_f;
-  m_tmp.noalias() = m_J.K * m_dx;
+  m_tmp.noalias() = J.K * m_dx;
   m_rhs += m_tmp;
-  m_tmp.noalias() = m_J.D * m_dv;
-  m_rhs += m_tmp;
+  if (J.velocity_values() != nullptr) {
+    m_tmp.noalias() = J.D * m_dv;
+    m_rhs += m_tmp;
+  }
   m_rhs *= c.hf;
   m_rhs -= m_system.mass_diagonal().cwiseProduct(m_v1 - m_vb);
-  m_A.assemble(m_J, c.hf * c.cv, c.hf * c.bx);
-  m_A.gather(m_rhs, m_rhs_free);
+  m_A.zero_pinned(m_rhs);
+  m_A.form(c.hf * c.cv, c.hf * c.bx);  // K's values become A's: K is read above, before this
   m_assembly_seconds += seconds_since(ta);
 }
 
@@ -210,8 +214,7 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
       m_vlin = m_va + c.cv * m_v1;
     }
     assemble(c);
-    m_A.gather(m_xlin, m_x_free);
-    m_solver->set_coordinates(m_x_free);
+    m_solver->set_coordinates(m_xlin);
     const LinearSummary fs = m_solver->factor(m_A.matrix());
     accumulate(m_totals, fs);
     if (fs.status != Status::Converged) {
@@ -221,7 +224,7 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
       out.newton_iterations = k;
       return out;
     }
-    const LinearSummary ss = m_solver->solve(m_rhs_free, m_delta, lin);
+    const LinearSummary ss = m_solver->solve(m_rhs, m_delta, lin);
     accumulate(m_totals, ss);
     out.iterations += ss.iterations;
     out.residual = ss.residual;
@@ -236,7 +239,10 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
       out.status = Status::NotConverged;
       out.message = ss.message;
     }
-    m_A.scatter_add(m_delta, m_v1);
+    // Pinned DOFs are decoupled with a zero right-hand side; zeroing them here keeps a pinned
+    // particle exactly still whatever round-off a backend leaves there.
+    m_A.zero_pinned(m_delta);
+    m_v1 += m_delta;
     if (m_options.newton_iterations > 1) {
       delta_norm = m_delta.lpNorm<Eigen::Infinity>();
       const double scale =
@@ -262,9 +268,9 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
 }
 
 std::string ImplicitStepper::not_positive_definite_hint(const OneLeg& c) const {
-  // A = M - a D - b K on the free DOFs with a, b >= 0 and M > 0 (MassSpringSystem checks the
-  // masses). The damper's df/dx is left out of K (m_jac_options), so K holds the springs' df/dx
-  // only, and D the dampers' and the air drag's df/dv.
+  // A = M - a D - b K with a, b >= 0 and M > 0 (MassSpringSystem checks the masses), pinned
+  // rows and columns replaced by their masses. The damper's df/dx is left out of K (m_jac_options),
+  // so K holds the springs' df/dx only, and D the dampers' and the air drag's df/dv.
   const double a = c.hf * c.cv, b = c.hf * c.bx;
   const SparseMatrix& A = m_A.matrix();
   std::ostringstream os;

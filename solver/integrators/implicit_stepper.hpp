@@ -2,7 +2,7 @@
 #include <memory>
 #include <string>
 
-#include "hooke/integrators/reduced_matrix.hpp"
+#include "hooke/integrators/step_matrix.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/linear/linear_solver.hpp"
 #include "hooke/options.hpp"
@@ -59,12 +59,13 @@ struct ImplicitOptions {
 
 /// Implicit time steps on a pluggable linear backend. All three schemes are one-leg Newton
 /// iterations of the form M (v1 - vb) = hf f(xa + bx v1, va + cv v1), x1 = xe + ex v1, whose
-/// Newton matrix is A = M - hf cv D - hf bx K on the free DOFs. The first iteration linearises at
-/// the step's start (x0, v0), so newton_iterations = 1 reproduces the classical linearised
-/// formulas exactly. The linear backend analyses A's pattern once (construction) and refactors
-/// per Newton iteration; iterative backends are warm-started from the previous correction.
-/// The damper's non-symmetric df/dx is left out of A (Baraff and Witkin 1998 do the same), so A is
-/// symmetric for every backend; Newton on the exact residual still converges to the same step.
+/// Newton matrix is A = M - hf cv D - hf bx K (StepMatrix: pinned DOFs as Dirichlet rows). The
+/// first iteration linearises at the step's start (x0, v0), so newton_iterations = 1 reproduces the
+/// classical linearised formulas exactly. The linear backend analyses A's pattern once
+/// (construction) and refactors per Newton iteration; iterative backends are warm-started from the
+/// previous correction. The damper's non-symmetric df/dx is left out of A (Baraff and Witkin 1998
+/// do the same), so A is symmetric for every backend; Newton on the exact residual still converges
+/// to the same step.
 class ImplicitStepper final : public Stepper {
  public:
   ImplicitStepper(const MassSpringSystem& system, ImplicitScheme scheme,
@@ -88,7 +89,8 @@ class ImplicitStepper final : public Stepper {
   };
   /// Sets xa, va, vb, xe for a step of size h from s0 (and BDF2's history); returns the scalars.
   OneLeg set_up(const State& s0, double h);
-  /// Forces, Jacobians, the Newton matrix A and the free-DOF right-hand side at (xlin, vlin).
+  /// Forces, Jacobians, the Newton matrix A and the right-hand side (zero on pinned DOFs) at
+  /// (xlin, vlin).
   void assemble(const OneLeg& c);
   /// The step itself (step() adds the counters).
   StepSummary newton(const State& s0, double h, State& s1);
@@ -101,14 +103,13 @@ class ImplicitStepper final : public Stepper {
   std::unique_ptr<LinearSolver> m_solver;
   ImplicitOptions m_options;
   JacobianOptions m_jac_options;
-  Jacobians m_J;
-  ReducedMatrix m_A;
+  StepMatrix m_A;          // holds K and D, then A over K's values
   LinearSummary m_totals;  // summed over all steps: iterations and times
   double m_assembly_seconds = 0.0, m_total_seconds = 0.0, m_last_residual = 0.0;
   long long m_steps = 0, m_newton_iterations = 0;
-  // Scratch (3n unless noted).
+  // Scratch, 3n each.
   Vec m_v0, m_vb, m_xa, m_va, m_xe, m_v1, m_xlin, m_vlin, m_f, m_rhs, m_tmp, m_dx, m_dv;
-  Vec m_rhs_free, m_delta, m_x_free;  // free DOFs (m_x_free: positions, for set_coordinates)
+  Vec m_delta;  // the last linear correction, zero on pinned DOFs
   // BDF2 history: the start state of the previous step and that step's h and end time.
   Vec m_prev_x, m_prev_v;
   double m_prev_h = 0.0, m_prev_t1 = 0.0;
