@@ -1,4 +1,4 @@
-// Claims of solver/integrators/implicit_stepper.* and reduced_matrix.*:
+// Claims of solver/integrators/implicit_stepper.*:
 //  - every linear backend takes the same backward-Euler step of a 32x32 cloth (acceptance item);
 //  - beta = 0 with one Newton step is symplectic Euler;
 //  - backward Euler is unconditionally stable and dissipates the energy of an undamped spring
