@@ -51,8 +51,29 @@ void check(PetscErrorCode ierr, const char* call) {
 
 /// PETSc is initialised once, on first use, with no arguments (PETSC_OPTIONS is read by each
 /// solver itself, see Impl::options), and finalised at exit.
+/// True if MPI allows calls from several threads at once (MPI_THREAD_MULTIPLE): the concurrent
+/// split (ConcurrentSplit) calls hypre, which may call MPI, from two threads.
+bool g_mpi_thread_multiple = false;
+
 void ensure_petsc() {
   static const bool done = [] {
+    int mpi_up = 0;
+    MPI_Initialized(&mpi_up);
+    int provided = MPI_THREAD_SINGLE;
+    if (!mpi_up) {
+      // Started here rather than by PetscInitialize (which asks for a single thread), and
+      // finalised after PETSc (atexit handlers run in reverse order of registration).
+      if (MPI_Init_thread(nullptr, nullptr, MPI_THREAD_MULTIPLE, &provided) != MPI_SUCCESS)
+        throw std::runtime_error("MPI_Init_thread failed");
+      std::atexit([] {
+        int finalized = 0;
+        MPI_Finalized(&finalized);
+        if (!finalized) MPI_Finalize();
+      });
+    } else {
+      MPI_Query_thread(&provided);
+    }
+    g_mpi_thread_multiple = provided >= MPI_THREAD_MULTIPLE;
     PetscBool already = PETSC_FALSE;
     PetscInitialized(&already);
     if (!already) {
@@ -117,6 +138,128 @@ extern "C" PetscErrorCode shell_mult(Mat shell, ::Vec in, ::Vec out) {
   return 0;
 }
 
+/// The default preconditioner's three splits (x, y and z: an additive PCFIELDSPLIT with block size
+/// 3 and one preconditioner application per split) applied concurrently on hooke's threads: the
+/// splits are independent, and hypre's V-cycle is serial (Debian's hypre has no OpenMP), so
+/// PCFIELDSPLIT, which applies them one after another, leaves the second core idle for most of a
+/// Krylov iteration. The PCFIELDSPLIT object still owns the splits (their options, set-up and
+/// reuse); this PCSHELL only replaces its apply. Each split's result is the same whichever thread
+/// computes it, so results do not depend on the thread count.
+struct ConcurrentSplit {
+  PC split = nullptr;  // the PCFIELDSPLIT (a reference held here)
+  PC sub[3] = {nullptr, nullptr, nullptr};
+  ::Vec in[3] = {nullptr, nullptr, nullptr}, out[3] = {nullptr, nullptr, nullptr};
+
+  void destroy() {
+    for (int i = 0; i < 3; ++i) {
+      if (in[i]) VecDestroy(&in[i]);
+      if (out[i]) VecDestroy(&out[i]);
+      sub[i] = nullptr;
+    }
+    if (split) PCDestroy(&split);
+  }
+};
+
+extern "C" PetscErrorCode split_setup(PC pc) {
+  ConcurrentSplit* c = nullptr;
+  PetscCall(PCShellGetContext(pc, &c));
+  Mat A = nullptr, P = nullptr;
+  PetscCall(PCGetOperators(pc, &A, &P));
+  PetscCall(PCSetOperators(c->split, A, P));
+  PetscCall(PCSetUp(c->split));
+  return 0;
+}
+
+extern "C" PetscErrorCode split_apply(PC pc, ::Vec x, ::Vec y) {
+  ConcurrentSplit* c = nullptr;
+  PetscCall(PCShellGetContext(pc, &c));
+  PetscInt m = 0;
+  PetscCall(VecGetLocalSize(c->in[0], &m));
+  const PetscScalar* xa = nullptr;
+  PetscCall(VecGetArrayRead(x, &xa));
+  for (int i = 0; i < 3; ++i) {
+    PetscScalar* v = nullptr;
+    PetscCall(VecGetArray(c->in[i], &v));
+    for (PetscInt k = 0; k < m; ++k) v[k] = xa[3 * k + i];
+    PetscCall(VecRestoreArray(c->in[i], &v));
+  }
+  PetscCall(VecRestoreArrayRead(x, &xa));
+  PetscErrorCode err[3] = {0, 0, 0};
+  std::string message[3];  // an error's message is recorded on the thread that raised it
+  auto run = [&](int i) {
+    err[i] = PCApply(c->sub[i], c->in[i], c->out[i]);
+    if (err[i] != 0) message[i] = g_first_message;
+  };
+  // PETSc's event log is not thread-safe: with -log_view the splits run one after another.
+  PetscBool logging = PETSC_FALSE;
+  PetscCall(PetscLogIsActive(&logging));
+  if (run_parallel(3, 2) && !logging) {
+    // Dynamic: whichever thread finishes its split first takes the third, so the two costly
+    // splits of a cloth (the two in-plane coordinates) overlap whatever its orientation.
+#pragma omp parallel for num_threads(2) schedule(dynamic, 1)
+    for (int i = 0; i < 3; ++i) run(i);
+  } else {
+    for (int i = 0; i < 3; ++i) run(i);
+  }
+  for (int i = 0; i < 3; ++i)
+    if (err[i] != 0) {
+      g_first_message = message[i];
+      return err[i];
+    }
+  PetscScalar* ya = nullptr;
+  PetscCall(VecGetArray(y, &ya));
+  for (int i = 0; i < 3; ++i) {
+    const PetscScalar* v = nullptr;
+    PetscCall(VecGetArrayRead(c->out[i], &v));
+    for (PetscInt k = 0; k < m; ++k) ya[3 * k + i] = v[k];
+    PetscCall(VecRestoreArrayRead(c->out[i], &v));
+  }
+  PetscCall(VecRestoreArray(y, &ya));
+  return 0;
+}
+
+extern "C" PetscErrorCode split_view(PC pc, PetscViewer viewer) {
+  ConcurrentSplit* c = nullptr;
+  PetscCall(PCShellGetContext(pc, &c));
+  PetscCall(PetscViewerASCIIPrintf(
+      viewer, "hooke: the additive fieldsplit below, its 3 splits applied concurrently\n"));
+  PetscCall(PetscViewerASCIIPushTab(viewer));
+  PetscCall(PCView(c->split, viewer));
+  PetscCall(PetscViewerASCIIPopTab(viewer));
+  return 0;
+}
+
+/// True if pc is an additive PCFIELDSPLIT of a block-size-3 matrix into the strides x, y and z,
+/// each split one preconditioner application (KSPPREONLY): the case ConcurrentSplit applies.
+bool is_coordinate_split(PC pc) {
+  PetscBool is = PETSC_FALSE;
+  check(PetscObjectTypeCompare(reinterpret_cast<PetscObject>(pc), PCFIELDSPLIT, &is),
+        "PetscObjectTypeCompare");
+  if (!is) return false;
+  PCCompositeType type;
+  check(PCFieldSplitGetType(pc, &type), "PCFieldSplitGetType");
+  if (type != PC_COMPOSITE_ADDITIVE) return false;
+  PetscInt count = 0;
+  KSP* subs = nullptr;
+  check(PCFieldSplitGetSubKSP(pc, &count, &subs), "PCFieldSplitGetSubKSP");
+  bool ok = count == 3;
+  for (PetscInt i = 0; ok && i < count; ++i) {
+    PetscBool preonly = PETSC_FALSE;
+    check(PetscObjectTypeCompare(reinterpret_cast<PetscObject>(subs[i]), KSPPREONLY, &preonly),
+          "PetscObjectTypeCompare");
+    IS is_i = nullptr;
+    check(PCFieldSplitGetISByIndex(pc, i, &is_i), "PCFieldSplitGetISByIndex");
+    PetscBool stride = PETSC_FALSE;
+    check(PetscObjectTypeCompare(reinterpret_cast<PetscObject>(is_i), ISSTRIDE, &stride),
+          "PetscObjectTypeCompare");
+    PetscInt first = -1, step = 0;
+    if (stride) check(ISStrideGetInfo(is_i, &first, &step), "ISStrideGetInfo");
+    ok = preonly && stride && first == i && step == 3;
+  }
+  PetscFree(subs);
+  return ok;
+}
+
 }  // namespace
 
 struct PetscSolver::Impl {
@@ -126,6 +269,7 @@ struct PetscSolver::Impl {
   Mat shell = nullptr;             // A for the Krylov method (MATSHELL: hooke's threaded product)
   KSP ksp = nullptr;
   ::Vec b = nullptr, x = nullptr, coords = nullptr;  // PETSc vectors (hooke::Vec is Eigen's)
+  ConcurrentSplit split;  // in use if split.split (adopt_concurrent_split)
   const SparseMatrix* A = nullptr;
   // The arrays M stores (wrap()): A's own, so values assembled into A are M's values.
   const void* wrapped[3] = {nullptr, nullptr, nullptr};
@@ -145,6 +289,7 @@ struct PetscSolver::Impl {
   void destroy() {
     if (finalized()) return;  // PETSc is gone (exit): the process frees everything
     if (ksp) KSPDestroy(&ksp);
+    split.destroy();
     if (M) MatDestroy(&M);
     if (shell) MatDestroy(&shell);
     for (::Vec* v : {&b, &x, &coords})
@@ -243,6 +388,42 @@ struct PetscSolver::Impl {
   bool wraps(const SparseMatrix& A) const {
     return wrapped[0] == A.outerIndexPtr() && wrapped[1] == A.innerIndexPtr() &&
            wrapped[2] == A.valuePtr();
+  }
+
+  /// After the first set-up: if the KSP's preconditioner is the coordinate split (the default)
+  /// and there are threads to share it, the splits are applied concurrently from now on
+  /// (ConcurrentSplit): the PCFIELDSPLIT moves behind a PCSHELL that the KSP uses instead.
+  void adopt_concurrent_split() {
+    if (split.split || !run_parallel(3, 2) || !g_mpi_thread_multiple) return;
+    PC pc = nullptr;
+    check(KSPGetPC(ksp, &pc), "KSPGetPC");
+    if (!is_coordinate_split(pc)) return;
+    PetscInt count = 0;
+    KSP* subs = nullptr;
+    check(PCFieldSplitGetSubKSP(pc, &count, &subs), "PCFieldSplitGetSubKSP");
+    for (int i = 0; i < 3; ++i) {
+      PetscErrorCode ierr = KSPGetPC(subs[i], &split.sub[i]);
+      if (ierr == 0) ierr = VecCreateSeq(PETSC_COMM_SELF, PetscInt(n / 3), &split.in[i]);
+      if (ierr == 0) ierr = VecCreateSeq(PETSC_COMM_SELF, PetscInt(n / 3), &split.out[i]);
+      if (ierr != 0) PetscFree(subs);
+      check(ierr, "concurrent split");
+    }
+    PetscFree(subs);
+    check(PetscObjectReference(reinterpret_cast<PetscObject>(pc)), "PetscObjectReference");
+    split.split = pc;
+    PC shell_pc = nullptr;
+    check(PCCreate(PETSC_COMM_SELF, &shell_pc), "PCCreate");
+    PetscErrorCode ierr = PCSetType(shell_pc, PCSHELL);
+    if (ierr == 0) ierr = PCShellSetContext(shell_pc, &split);
+    if (ierr == 0) ierr = PCShellSetName(shell_pc, "hooke concurrent fieldsplit");
+    if (ierr == 0) ierr = PCShellSetSetUp(shell_pc, split_setup);
+    if (ierr == 0) ierr = PCShellSetApply(shell_pc, split_apply);
+    if (ierr == 0) ierr = PCShellSetView(shell_pc, split_view);
+    if (ierr == 0) ierr = KSPSetPC(ksp, shell_pc);  // the KSP takes its own reference
+    PCDestroy(&shell_pc);
+    check(ierr, "concurrent split");
+    check(KSPSetOperators(ksp, shell, M), "KSPSetOperators");
+    check(KSPSetUp(ksp), "KSPSetUp");  // the shell's set-up: the split is already set up
   }
 
   /// The rigid-body modes of the free particles at `coordinates` as A's near-null space.
@@ -399,6 +580,7 @@ LinearSummary PetscSolver::factor(const SparseMatrix& A) {
       check(KSPSetReusePreconditioner(m->ksp, PETSC_FALSE), "KSPSetReusePreconditioner");
       check(KSPSetOperators(m->ksp, m->shell, m->M), "KSPSetOperators");
       check(KSPSetUp(m->ksp), "KSPSetUp");
+      m->adopt_concurrent_split();
       check(KSPSetReusePreconditioner(m->ksp, PETSC_TRUE), "KSPSetReusePreconditioner");
       ++m->builds;
       m->cost_since = m->setup_cost;

@@ -19,10 +19,16 @@ struct PetscSolverOptions {
 
 /// The defaults: CG on the true residual, preconditioned by one algebraic multigrid V-cycle per
 /// coordinate (PCFIELDSPLIT, additive, over the x, y and z unknowns of the particles, each split
-/// a hypre BoomerAMG on its scalar matrix A_xx, A_yy or A_zz). Measured on the backward-Euler
-/// target (hooke run target_backward_euler_256 --set integrator.linear_solver=petsc --set
-/// time.duration=0.03, and --set mesh.nx=N --set mesh.ny=N for the other sizes; one rank): 11
-/// iterations and 0.47 s per step at 256 x 256, 12 at 512 x 512, 12 to 14 at 1000 x 1000, where
+/// a hypre BoomerAMG on its scalar matrix A_xx, A_yy or A_zz). With two or more threads (and MPI
+/// initialised for concurrent calls, as this backend asks for) the three splits are applied
+/// concurrently, with the same results as PCFIELDSPLIT's one after another: hypre's V-cycle is
+/// serial, and this takes about a fifth off a step (408 x 408, 2 threads: 0.88-0.99 s per step,
+/// against 1.18-1.23 s with the splits forced one after another in the same build). Any other
+/// preconditioner, other splits, or -log_view (PETSc's event log is not thread-safe) keep PETSc's
+/// own application. Measured on the backward-Euler target (hooke run target_backward_euler_256
+/// --set integrator.linear_solver=petsc --set time.duration=0.03, and --set mesh.nx=N --set
+/// mesh.ny=N for the other sizes; one rank): 11 iterations and 0.47 s per step at 256 x 256 (the
+/// splits in turn), 12 at 512 x 512, 12 to 14 at 1000 x 1000, where
 /// smoothed aggregation on the coupled matrix (-pc_type gamg, with the Chebyshev and point-block
 /// Jacobi smoothing below) needs 35 to 45 iterations at 2.3 s per step at 256 x 256, and BoomerAMG
 /// on the coupled matrix 9 iterations at about 1.5 s. For -pc_type gamg the defaults smooth with
