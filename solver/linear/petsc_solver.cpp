@@ -167,6 +167,9 @@ extern "C" PetscErrorCode split_setup(PC pc) {
   PetscCall(PCGetOperators(pc, &A, &P));
   PetscCall(PCSetOperators(c->split, A, P));
   PetscCall(PCSetUp(c->split));
+  // The splits' own set-up (hypre's hierarchies), which PCFIELDSPLIT leaves to PCSetUpOnBlocks: a
+  // PCSHELL has no blocks, so it would otherwise happen inside the first apply, on two threads.
+  PetscCall(PCSetUpOnBlocks(c->split));
   return 0;
 }
 
@@ -184,6 +187,10 @@ extern "C" PetscErrorCode split_apply(PC pc, ::Vec x, ::Vec y) {
     PetscCall(VecRestoreArray(c->in[i], &v));
   }
   PetscCall(VecRestoreArrayRead(x, &xa));
+  // PCApply sets a preconditioner up first if its matrix changed: never on the worker threads
+  // (PETSc and hypre set-ups are not thread-safe), so here, one after another (a no-op when the
+  // splits are current, as split_setup leaves them).
+  for (int i = 0; i < 3; ++i) PetscCall(PCSetUp(c->sub[i]));
   PetscErrorCode err[3] = {0, 0, 0};
   std::string message[3];  // an error's message is recorded on the thread that raised it
   auto run = [&](int i) {
