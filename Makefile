@@ -28,12 +28,13 @@ configure: deps
 build: configure
 	cmake --build $(BUILD) -j $(JOBS)
 
-# The default scene: a cloth hanging from two corners -> out/demo/{final.png,log.csv,final.csv,frames/}
-# --force: a demo stopped by Ctrl-C leaves a checkpoint, which must not block the next `make demo`.
+# The demo (`hooke demo`, experiments/demo_command.cpp): the stiff cloth by backward Euler at a
+# step where symplectic Euler diverges, both run -> out/demo/{demo.png,summary.txt,implicit/,explicit/}
+# (each run folder holds log.csv, final.csv, frames/ and final.png).
 demo: configure
 	cmake --build $(BUILD) -j $(JOBS) --target hooke
-	$(BUILD)/bin/hooke run problems/scenes/hanging_cloth.toml --out out/demo --force
-	@echo "demo: picture out/demo/final.png, data out/demo/log.csv and out/demo/final.csv, frames out/demo/frames.pvd"
+	$(BUILD)/bin/hooke demo --out out/demo
+	@echo "demo: picture out/demo/demo.png, summary out/demo/summary.txt, data out/demo/implicit/ and out/demo/explicit/"
 
 # The paper: runs `hooke stability`, `hooke workprecision` and `hooke resolution` at their default
 # (small) size into out/paper/ and renders out/paper/paper.html from paper/paper.md with pandoc.

@@ -9,6 +9,7 @@
 //   hooke resolution [--full] [--n 8,16,32] [--out DIR] [--no-plot]
 //   hooke stability [--full] [--cases a,b] [--methods a,b] [--k 1e2,1e4] [--out DIR] [--no-plot]
 //   hooke scaling [--full] [--springs 1e4,1e5] [--methods a,b] [--threads 1,2] [--out DIR]
+//   hooke demo [SCENE] [--explicit METHOD] [--out DIR] [--no-plot]
 // Exit codes: 0 success, 1 internal or I/O error, 2 bad input (error: FILE: KEY: reason),
 // 3 a run that diverged or whose step failed numerically (the message names step, time and
 // backend; output so far is kept), 130 / 143 a run stopped by SIGINT / SIGTERM after writing a
@@ -33,6 +34,7 @@ Command add_stability_command(CLI::App& app);         // stability_map.cpp
 Command add_workprecision_command(CLI::App& app);     // work_precision.cpp
 Command add_resolution_command(CLI::App& app);        // resolution_study.cpp
 Command add_scaling_command(CLI::App& app);           // scaling_study.cpp
+Command add_demo_command(CLI::App& app);              // demo_command.cpp
 }  // namespace hooke::cli
 
 int main(int argc, char** argv) {
@@ -42,9 +44,10 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", HOOKE_VERSION);
   std::vector<Command> commands;
-  for (auto add : {add_run_command, add_resume_command, add_scenes_command, add_info_command,
-                   add_crosscheck_command, add_step_convergence_command, add_stability_command,
-                   add_workprecision_command, add_resolution_command, add_scaling_command})
+  for (auto add :
+       {add_run_command, add_resume_command, add_scenes_command, add_info_command,
+        add_crosscheck_command, add_step_convergence_command, add_stability_command,
+        add_workprecision_command, add_resolution_command, add_scaling_command, add_demo_command})
     commands.push_back(add(app));
 
   try {

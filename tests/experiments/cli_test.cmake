@@ -251,6 +251,26 @@ elseif(CASE STREQUAL "scaling")
   expect_rc(2)
   expect_contains("${err}" "--methods" "stderr")
 
+elseif(CASE STREQUAL "demo")
+  # `hooke demo`: the stiff cloth by backward Euler (runs to the end) and by symplectic Euler at the
+  # same step (diverges, which is the point: exit 0), the summary line in summary.txt, the picture.
+  # An --explicit method that is not explicit is an input error.
+  hooke_exec(demo --out "${OUT}")
+  expect_rc(0)
+  file(READ "${OUT}/summary.txt" summary)
+  expect_contains("${summary}" "symplectic-euler diverged at step " "summary.txt")
+  expect_contains("${summary}" "x its limit h < 2 / omega_max = " "summary.txt")
+  expect_contains("${summary}"
+                  "backward Euler (implicit, beta = 1) on pcg-cholmod stable: 400 steps to t = 2 s"
+                  "summary.txt")
+  expect_contains("${out}" "demo: symplectic-euler diverged" "stdout")
+  expect_file("${OUT}/demo.png")
+  expect_file("${OUT}/implicit/final.csv")
+  expect_file("${OUT}/explicit/log.csv")
+  hooke_exec(demo --explicit implicit --out "${OUT}/bad")
+  expect_rc(2)
+  expect_contains("${err}" "--explicit" "stderr")
+
 elseif(CASE STREQUAL "stability")
   hooke_exec(stability --cases two_particle --methods symplectic-euler,implicit-b1 --k 1e4
              --bisections 3 --out "${OUT}")
