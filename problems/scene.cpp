@@ -1,6 +1,7 @@
 #include "problems/scene.hpp"
 
 #include <algorithm>
+#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -310,6 +311,49 @@ void read_run_settings(TableReader& root, Scene& scene) {
   }
 }
 
+/// Shortest text that reads back as v.
+std::string shortest(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+/// The --set switches that take every spring damper out of a scene: each [springs] key of the
+/// scene (its file and --set switches: per-kind dampings default to `damping`) that names a damping
+/// (ends in "damping") and is > 0, set to 0, and the mesh's own spring rows ([mesh] springs of a
+/// particles mesh: [i, j, k, L, c]) with every c set to 0; empty if the dampers come from
+/// elsewhere.
+std::string damper_overrides(const toml::table& given) {
+  std::string out;
+  if (const toml::array* rows = given["mesh"]["springs"].as_array()) {
+    bool damped = false;
+    std::string text;
+    for (const toml::node& row : *rows) {
+      const toml::array* r = row.as_array();
+      if (r == nullptr) return out;
+      text += text.empty() ? "[[" : ", [";
+      for (size_t k = 0; k < r->size(); ++k) {
+        const auto v = (*r)[k].value<double>();
+        if (!v) return out;
+        damped = damped || (k == 4 && *v > 0.0);
+        text += (k ? ", " : "") + shortest(k == 4 ? 0.0 : *v);
+      }
+      text += "]";
+    }
+    if (damped) out = "--set 'mesh.springs=" + text + "]'";
+  }
+  if (const toml::table* springs = given["springs"].as_table())
+    for (const auto& [name, value] : *springs) {
+      const std::string key(name.str());
+      const std::string suffix = "damping";
+      const auto c = value.value<double>();
+      if (key.size() >= suffix.size() &&
+          key.compare(key.size() - suffix.size(), suffix.size(), suffix) == 0 && c && *c > 0.0)
+        out += (out.empty() ? "" : " ") + std::string("--set springs.") + key + "=0";
+    }
+  return out;
+}
+
 Scene load_parsed(toml::table tbl, const std::string& file,
                   const std::vector<std::string>& overrides) {
   auto context = std::make_shared<ReadContext>();
@@ -352,8 +396,20 @@ Scene load_parsed(toml::table tbl, const std::string& file,
   }
   read_run_settings(root, scene);
   if (scene.system) {
-    const std::string why = method_unsupported(scene.integrator.method, *scene.system);
-    if (!why.empty()) throw InputError(file, "integrator.method", why);
+    std::string why = method_unsupported(scene.integrator.method, *scene.system);
+    if (!why.empty()) {
+      const auto& forces = scene.system->forces();
+      const bool dampers = std::any_of(forces.begin(), forces.end(), [](const auto& f) {
+        return std::string(f->name()) == "spring-damper";
+      });
+      // Say how to run the scene anyway: the one switch (per damping key) that drops the dampers.
+      if (dampers) {
+        const std::string sets = damper_overrides(tbl);
+        why += sets.empty() ? "; or remove the scene's spring dampers (its damping keys)"
+                            : "; or run it without spring dampers: " + sets;
+      }
+      throw InputError(file, "integrator.method", why);
+    }
   } else if (method_info(scene.integrator.method).kind != MethodKind::Explicit) {
     std::string explicit_methods;
     for (const auto& m : methods())

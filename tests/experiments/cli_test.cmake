@@ -271,6 +271,39 @@ elseif(CASE STREQUAL "demo")
   expect_rc(2)
   expect_contains("${err}" "--explicit" "stderr")
 
+elseif(CASE STREQUAL "damper_override")
+  # fast-mass-spring and xpbd refuse spring dampers; the refusal prints the --set switches that
+  # take them out, and those switches run the scene. Every shipped scene with dampers (the large
+  # target scenes aside), briefly.
+  file(GLOB shipped "${SCENES_DIR}/*.toml")
+  set(checked 0)
+  foreach(scene IN LISTS shipped)
+    get_filename_component(stem "${scene}" NAME_WLE)
+    if(stem MATCHES "^target_")
+      continue()
+    endif()
+    foreach(method fast-mass-spring xpbd)
+      hooke_exec(run "${scene}" --set integrator.method=${method} --set time.duration=0.02
+                 --out "${OUT}/${stem}" --no-progress --force)
+      if(NOT err MATCHES "spring-damper")
+        continue()
+      endif()
+      expect_rc(2)
+      if(NOT err MATCHES "or run it without spring dampers: ([^\n]*)")
+        message(FATAL_ERROR "${stem}, ${method}: the refusal names no --set switches${report}")
+      endif()
+      string(STRIP "${CMAKE_MATCH_1}" sets)
+      separate_arguments(sets UNIX_COMMAND "${sets}")
+      hooke_exec(run "${scene}" --set integrator.method=${method} ${sets}
+                 --set time.duration=0.02 --out "${OUT}/${stem}" --no-progress --force)
+      expect_rc(0)
+      math(EXPR checked "${checked} + 1")
+    endforeach()
+  endforeach()
+  if(checked LESS 4)
+    message(FATAL_ERROR "only ${checked} (scene, method) refusals checked; expected at least 4")
+  endif()
+
 elseif(CASE STREQUAL "stability")
   hooke_exec(stability --cases two_particle --methods symplectic-euler,implicit-b1 --k 1e4
              --bisections 3 --out "${OUT}")
