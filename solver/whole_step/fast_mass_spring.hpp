@@ -109,12 +109,19 @@ class FastMassSpringStepper final : public Stepper {
   ~FastMassSpringStepper() override;
 
   const char* name() const override { return "fast-mass-spring"; }
-  /// iterations = local/global iterations; residual = last relative objective decrease (when the
-  /// objective is evaluated) else 0; NotConverged if tolerance > 0 and was not met.
+  /// iterations = local/global iterations; residual = the last relative objective decrease when
+  /// tolerance > 0 (what the tolerance tests), else the relative residual of the backward-Euler
+  /// equations at the result (step_residual()); NotConverged if tolerance > 0 and was not met.
   StepSummary step(const State& s0, double h, State& s1) override;
   /// Iterations, factorizations (or matrix refreshes), local / global / factor times, factor size.
   StepperStats stats() const override;
+  /// The counters above, and the worst step_residual() of the run with its step: a fixed
+  /// iteration count does not converge a step, and this line says how far from it the run was.
   std::string report() const override;
+  /// How far x1 (with v1 = (x1 - x0) / h) is from solving the backward-Euler step from s0 that the
+  /// iteration minimises: max |M (x1 - y) / h^2 - f(x1, v1)| over the free DOFs, relative to the
+  /// larger of max |M (x1 - y) / h^2| and max |f|, with y = x0 + h v0 (0 for an exact step).
+  double step_residual(const State& s0, double h, const State& s1);
 
   /// The objective g(x) of the step from s0 with size h (J, up to a constant), x a 3n vector.
   double objective(const State& s0, double h, ConstRef x) const;
@@ -188,6 +195,9 @@ class FastMassSpringStepper final : public Stepper {
 
   // Counters for report().
   long long m_steps = 0, m_iterations = 0, m_line_search_trials = 0, m_chebyshev_restarts = 0;
+  Vec m_force;                    // 3n scratch of step_residual()
+  double m_worst_residual = 0.0;  // the largest step_residual() so far, at step m_worst_step
+  long long m_worst_step = 0;
   double m_local_seconds = 0.0, m_global_seconds = 0.0, m_factor_seconds = 0.0;
 };
 

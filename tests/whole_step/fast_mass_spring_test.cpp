@@ -242,6 +242,36 @@ TEST(FastMassSpring, ToleranceStopsEarlyOrSaysItDidNot) {
   }
 }
 
+TEST(FastMassSpring, StepResidualMeasuresTheBackwardEulerEquations) {
+  // step_residual() is 0 for the exact step: hooke's Newton backward Euler (an independent solver
+  // of the same equations) gives round-off; a converged local/global step gives little; a fixed
+  // count of 2 iterations leaves much more, which the step's residual and report() then show.
+  const Scene scene = hanging_cloth(6, 0.05);
+  const double h = 1e-2;
+  const State s0 = moving_state(scene, h, 2);
+  State exact, s1;
+  ASSERT_EQ(test::newton_backward_euler(*scene.system)->step(s0, h, exact).status,
+            Status::Converged);
+  FastMassSpringStepper converged(*scene.system, with("none", 20000, 1e-14));
+  const double r_exact = converged.step_residual(s0, h, exact);
+  ASSERT_EQ(converged.step(s0, h, s1).status, Status::Converged);
+  const double r_converged = converged.step_residual(s0, h, s1);
+  FastMassSpringStepper two(*scene.system, with("none", 2));
+  const StepSummary r = two.step(s0, h, s1);
+  const double r_two = two.step_residual(s0, h, s1);
+  std::printf("[ residual ] exact %.2e, converged local/global %.2e, 2 iterations %.2e\n", r_exact,
+              r_converged, r_two);
+  EXPECT_LT(r_exact, 1e-9);
+  EXPECT_LT(r_converged, 1e-5);
+  EXPECT_GT(r_two, 100.0 * r_converged);
+  EXPECT_EQ(r.residual, r_two);  // tolerance 0: the step reports this residual
+  const std::string report = two.report();
+  EXPECT_NE(report.find("worst relative residual of the backward-Euler equations"),
+            std::string::npos)
+      << report;
+  EXPECT_NE(report.find("(step 1)"), std::string::npos) << report;
+}
+
 TEST(FastMassSpring, RefusesDampersAndBadOptions) {
   test::ClothSpec spec;
   spec.n = 4;
