@@ -14,6 +14,7 @@
 #include "experiments/divergence.hpp"
 #include "experiments/run_output.hpp"
 #include "experiments/stop_signals.hpp"
+#include "hooke/constraints/strain_limit.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
@@ -120,6 +121,10 @@ class MassSpringRun {
   Simulation m_sim;
   long long m_first_step = 1, m_not_converged = 0;
   long long m_step = 0;  // the step being taken (for messages)
+  // The scene's strain limit, if any, and the logged steps (of this invocation) that end above it.
+  const StrainLimit* m_strain_limit = nullptr;
+  long long m_strain_exceeded = 0, m_worst_strain_step = 0;
+  double m_worst_strain = 0.0;
   double m_wall = 0.0;
   std::unique_ptr<RunOutput> m_out;
   double m_E0 = 0.0, m_scale = 0.0, m_E_limit = 0.0;
@@ -163,6 +168,8 @@ MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const R
   m_E0 = m_sys.kinetic_energy(s0.v) + m_sys.potential_energy(s0.x);
   m_scale = std::max({divergence_energy_scale(m_sys, s0), std::abs(m_E0), 1e-30});
   m_E_limit = m_E0 + scene.run.energy_growth_limit * m_scale;
+  for (const auto& c : m_sys.constraints())
+    if (const auto* limit = dynamic_cast<const StrainLimit*>(c.get())) m_strain_limit = limit;
 }
 
 void MassSpringRun::restore(const Checkpoint& c) {
@@ -259,6 +266,13 @@ int MassSpringRun::after_step(long long step, const StepSummary& sum) {
   if (step % m_scene.output.log_every == 0 || last) {
     const double E = m_out->log_row(step, s, sum.iterations, sum.residual, m_wall);
     if (!(E <= m_E_limit)) return report_divergence(step, E);
+    if (m_strain_limit) {
+      const double e = m_strain_limit->worst_strain(s.x);
+      if (e > m_strain_limit->max_strain() * (1.0 + 1e-6)) {
+        ++m_strain_exceeded;
+        if (e > m_worst_strain) m_worst_strain = e, m_worst_strain_step = step;
+      }
+    }
   }
   if ((m_scene.output.every > 0 && step % m_scene.output.every == 0) || last) m_out->frame(step, s);
   m_progress.update(step, s.t);
@@ -344,6 +358,13 @@ int MassSpringRun::finish() {
   if (m_sim.halved_steps() > 0)
     std::fprintf(stderr, "note: %s: %lld of %lld steps were retried with a smaller h\n",
                  file.c_str(), m_sim.halved_steps(), m_steps);
+  if (m_strain_exceeded > 0)
+    std::fprintf(stderr,
+                 "note: %s: %lld logged steps (of this invocation) ended with a limited spring "
+                 "beyond the strain limit %g (worst %g at step %lld): its %d projection passes "
+                 "(strain_limit.passes) ran out first\n",
+                 file.c_str(), m_strain_exceeded, m_strain_limit->max_strain(), m_worst_strain,
+                 m_worst_strain_step, m_strain_limit->passes());
   const std::string summary = strprintf("%lld steps of %s to t = %.6g in %.3f s", m_steps,
                                         m_scene.integrator.method.c_str(), m_sim.state().t, m_wall);
   const std::vector<std::string> written = m_out->finish(m_sim.state(), summary);

@@ -1,6 +1,19 @@
 #include "hooke/constraints/strain_limit.hpp"
 
+#include <algorithm>
+#include <limits>
+
 namespace hooke {
+
+double StrainLimit::worst_strain(ConstRef x) const {
+  const SpringSet& s = m_springs;
+  double worst = -std::numeric_limits<double>::infinity();
+  for (size_t n = 0; n < s.size(); ++n) {
+    const double l = (x.segment<3>(3 * s.i[n]) - x.segment<3>(3 * s.j[n])).norm();
+    worst = std::max(worst, (l - s.rest_length[n]) / s.rest_length[n]);
+  }
+  return worst;
+}
 
 void StrainLimit::project(ConstRef /*x0*/, double h, const std::vector<char>& pinned, VecRef x1,
                           VecRef v1) const {

@@ -18,6 +18,10 @@ class StrainLimit final : public Constraint {
   void add(int a, int b, double L) { m_springs.add(a, b, 0.0, L); }
   size_t size() const { return m_springs.size(); }
   double max_strain() const { return m_max_strain; }
+  int passes() const { return m_passes; }
+  /// Largest relative elongation (l - L) / L over the limited springs at x (-infinity if none):
+  /// above max_strain() when the passes ran out before every spring met the bound.
+  double worst_strain(ConstRef x) const;
 
   const char* name() const override { return "strain-limit"; }
   void project(ConstRef x0, double h, const std::vector<char>& pinned, VecRef x1,

@@ -4,6 +4,7 @@
 // velocity (friction reduces the tangential one) and leave particles outside untouched.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 #include <vector>
@@ -91,6 +92,34 @@ TEST(StrainLimit, LeavesSpringsWithinBoundUntouched) {
   limit.project(x1, 0.01, std::vector<char>(n, 0), x1, v1);
   EXPECT_EQ(x1, x_before);
   EXPECT_EQ(v1, v_before);
+  EXPECT_NEAR(limit.worst_strain(x1), 0.1, 1e-15);  // the largest of 0.05, -0.5 and 0.1
+}
+
+TEST(StrainLimit, WorstStrainShowsWhenThePassesRunOut) {
+  // One pass over a chain stretched by 1.2 to 2.0 per link leaves links above the bound (fixing
+  // one link stretches its neighbours); enough passes bring the worst strain to the bound.
+  std::mt19937 rng(72);
+  const int n = 10;
+  const double L = 0.5, max_strain = 0.1;
+  std::vector<char> pinned(n, 0);
+  pinned[0] = 1;
+  const Vec x0 = stretched_chain(n, L, rng);
+  double worst_before = 0.0;
+  for (int i = 0; i + 1 < n; ++i)
+    worst_before = std::max(worst_before,
+                            ((x0.segment<3>(3 * i) - x0.segment<3>(3 * (i + 1))).norm() - L) / L);
+  for (const int passes : {1, 2000}) {
+    hooke::StrainLimit limit(max_strain, passes);
+    for (int i = 0; i + 1 < n; ++i) limit.add(i, i + 1, L);
+    EXPECT_EQ(limit.passes(), passes);
+    EXPECT_NEAR(limit.worst_strain(x0), worst_before, 1e-14);
+    Vec x1 = x0, v1 = Vec::Zero(3 * n);
+    limit.project(x0, 0.01, pinned, x1, v1);
+    if (passes == 1)
+      EXPECT_GT(limit.worst_strain(x1), max_strain * (1.0 + 1e-6));
+    else
+      EXPECT_LE(limit.worst_strain(x1), max_strain * (1.0 + 1e-9));
+  }
 }
 
 TEST(GroundPlane, ProjectsPenetratingParticlesAndRemovesInwardVelocity) {

@@ -304,6 +304,23 @@ elseif(CASE STREQUAL "damper_override")
     message(FATAL_ERROR "only ${checked} (scene, method) refusals checked; expected at least 4")
   endif()
 
+elseif(CASE STREQUAL "strain_limit_note")
+  # A run whose strain limiting cannot keep up (xpbd on the hanging cloth with a 1% limit) ends
+  # with a note naming the limit, the worst strain and the passes; with the scene's 10% limit,
+  # which its springs never reach, there is no note.
+  hooke_exec(run "${SCENES_DIR}/hanging_cloth.toml" --set integrator.method=xpbd
+             --set springs.damping=0 --set strain_limit.max_strain=0.01 --set time.duration=0.1
+             --out "${OUT}/tight" --no-progress)
+  expect_rc(0)
+  expect_contains("${err}" "beyond the strain limit 0.01 (worst " "stderr")
+  expect_contains("${err}" "projection passes (strain_limit.passes) ran out first" "stderr")
+  hooke_exec(run "${SCENES_DIR}/hanging_cloth.toml" --set integrator.method=xpbd
+             --set springs.damping=0 --set time.duration=0.1 --out "${OUT}/loose" --no-progress)
+  expect_rc(0)
+  if(err MATCHES "strain limit")
+    message(FATAL_ERROR "a note about the strain limit where no spring reached it${report}")
+  endif()
+
 elseif(CASE STREQUAL "stability")
   hooke_exec(stability --cases two_particle --methods symplectic-euler,implicit-b1 --k 1e4
              --bisections 3 --out "${OUT}")
