@@ -36,6 +36,15 @@ int run_crosscheck(const Scene& scene, const CrosscheckOptions& options) {
   const long long N = scene.time.steps();
   if (N == 0) throw InputError(scene.file, "time.duration", "is 0: nothing to compare");
   const std::vector<long long> samples = sample_steps(N, options.samples);
+  // A misspelt method is bad input, refused before the reference is computed.
+  for (const auto& name : options.methods) {
+    try {
+      method_info(name);
+    } catch (const UnknownName&) {
+      throw InputError("<command line>", "--methods",
+                       "unknown method '" + name + "' (" + method_names() + ")");
+    }
+  }
 
   std::cerr << "crosscheck: reference cvode at rtol " << options.reference_rtol << " ...\n";
   const Reference ref =

@@ -4,6 +4,7 @@
 #include <sstream>
 
 #include "hooke/registry.hpp"
+#include "problems/input_error.hpp"
 
 namespace hooke {
 
@@ -44,6 +45,16 @@ std::vector<StudyMethod> study_methods() {
 std::vector<StudyMethod> available_study_methods(const std::vector<StudyMethod>& all,
                                                  const std::vector<std::string>& only,
                                                  std::ostream& log) {
+  // A misspelt name is bad input, refused before any work (a study that silently ran without it
+  // would look complete).
+  for (const auto& name : only)
+    if (std::none_of(all.begin(), all.end(),
+                     [&](const StudyMethod& s) { return s.label == name || s.method == name; })) {
+      std::string labels;
+      for (const auto& s : all) labels += (labels.empty() ? "" : ", ") + s.label;
+      throw InputError("<command line>", "--methods",
+                       "unknown study method '" + name + "' (labels: " + labels + ")");
+    }
   std::vector<StudyMethod> out;
   for (const auto& s : all) {
     if (!only.empty() && std::find(only.begin(), only.end(), s.label) == only.end() &&
@@ -62,14 +73,6 @@ std::vector<StudyMethod> available_study_methods(const std::vector<StudyMethod>&
     }
     out.push_back(s);
   }
-  for (const auto& name : only)
-    if (std::none_of(all.begin(), all.end(),
-                     [&](const StudyMethod& s) { return s.label == name || s.method == name; }))
-      log << "skipped " << name << ": no such study method (labels: " << [&] {
-        std::string l;
-        for (const auto& s : all) l += (l.empty() ? "" : ", ") + s.label;
-        return l;
-      }() << ")\n";
   return out;
 }
 

@@ -33,8 +33,8 @@ struct StudyMethod {
 std::vector<StudyMethod> study_methods();
 
 /// The entries of `all` whose method is in this build's registry and whose label or method name
-/// is in `only` (empty: all). Each entry left out because the registry lacks it is named on `log`,
-/// as is each name in `only` that matches nothing.
+/// is in `only` (empty: all). Each entry left out because the registry lacks it is named on `log`;
+/// a name in `only` that matches no entry throws InputError (--methods), before any work.
 std::vector<StudyMethod> available_study_methods(const std::vector<StudyMethod>& all,
                                                  const std::vector<std::string>& only,
                                                  std::ostream& log);

@@ -189,6 +189,13 @@ elseif(CASE STREQUAL "crosscheck")
   if(out MATCHES "\\| rk4 \\|[^\n]*\\| - \\|")
     message(FATAL_ERROR "rk4 has no error against the reference${report}")
   endif()
+  # A misspelt method is an input error, before the reference is computed.
+  hooke_exec(crosscheck hanging_cloth_16 --methods rk4,rk5 --out "${OUT}/bad")
+  expect_rc(2)
+  expect_contains("${err}" "--methods: unknown method 'rk5'" "stderr")
+  if(err MATCHES "reference cvode")
+    message(FATAL_ERROR "the reference was computed before the bad --methods was refused${report}")
+  endif()
 
 elseif(CASE STREQUAL "step_convergence")
   # The default study writes its CSV, table and plot; at k = 100 (a soft cloth) every
@@ -333,6 +340,9 @@ elseif(CASE STREQUAL "stability")
   expect_contains("${text}" "two_particle,implicit-b1,implicit,10000," "stability.csv")
   expect_file("${OUT}/stability_two_particle.png")
   expect_file("${OUT}/stability_two_particle.md")
+  hooke_exec(stability --cases two_particle --methods symplectic-euler,implicit-b2 --out "${OUT}/bad")
+  expect_rc(2)
+  expect_contains("${err}" "--methods: unknown study method 'implicit-b2'" "stderr")
 
 elseif(CASE STREQUAL "workprecision")
   hooke_exec(workprecision --cases chain --methods rk4,implicit-b1,cvode --rtols 1e-4 --samples 2
@@ -347,6 +357,9 @@ elseif(CASE STREQUAL "workprecision")
     message(FATAL_ERROR "rk4 at h = 1e-4 has no finite error: '${rows}'${report}")
   endif()
   expect_file("${OUT}/workprecision_chain.png")
+  hooke_exec(workprecision --cases chain --methods rk4,nosuch --out "${OUT}/bad")
+  expect_rc(2)
+  expect_contains("${err}" "--methods: unknown study method 'nosuch'" "stderr")
 
 elseif(CASE STREQUAL "resolution")
   hooke_exec(resolution --n 4,6 --duration 0.5 --out "${OUT}" --no-plot)
