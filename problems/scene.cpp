@@ -205,6 +205,8 @@ void add_forces_and_constraints(TableReader& root, const MeshBuild& b, Scene& sc
   const Index n = b.num_particles();
   auto springs = std::make_unique<HookeSpring>();
   auto dampers = std::make_unique<SpringDamper>();
+  scene.edges.reserve(b.springs.size());
+  scene.edge_rest.reserve(b.springs.size());
   for (const auto& s : b.springs) {
     springs->add(s.i, s.j, s.k, s.L);
     if (s.c > 0.0) dampers->add(s.i, s.j, s.c);

@@ -3,43 +3,75 @@
 #include <cstdint>
 #include <cstring>
 #include <sstream>
+#include <string>
+#include <vector>
 
 #include "experiments/output/output_file.hpp"
 
 namespace hooke {
 
 namespace {
-// Legacy VTK binary data is big-endian.
-template <typename T>
-void put_be(std::ostringstream& out, T value) {
-  unsigned char b[sizeof(T)];
-  std::memcpy(b, &value, sizeof(T));
-  for (size_t k = 0; k < sizeof(T) / 2; ++k) std::swap(b[k], b[sizeof(T) - 1 - k]);
-  out.write(reinterpret_cast<const char*>(b), sizeof(T));
+/// Writes a frame through a fixed 64 KiB buffer into its OutputFile: a frame of a large cloth
+/// (hundreds of MB at 1000 x 1000) is never held in memory whole, which would add to a run's peak.
+class FrameWriter {
+ public:
+  explicit FrameWriter(OutputFile& f) : m_f(f) { m_buf.reserve(kSize); }
+  void text(const std::string& t) {
+    for (const char c : t) byte(c);
+  }
+  /// Legacy VTK binary data is big-endian.
+  template <typename T>
+  void be(T value) {
+    unsigned char b[sizeof(T)];
+    std::memcpy(b, &value, sizeof(T));
+    for (size_t k = sizeof(T); k-- > 0;) byte(char(b[k]));
+  }
+  void flush() {
+    if (!m_buf.empty()) m_f.write(m_buf.data(), m_buf.size());
+    m_buf.clear();
+  }
+
+ private:
+  static constexpr size_t kSize = 1 << 16;
+  void byte(char c) {
+    m_buf.push_back(c);
+    if (m_buf.size() == kSize) flush();
+  }
+  OutputFile& m_f;
+  std::vector<char> m_buf;
+};
+
+std::string number(double v) {
+  std::ostringstream os;
+  os << v;
+  return os.str();
 }
 }  // namespace
 
 void write_vtk_frame(const std::string& path, const State& s, const std::vector<char>& pinned,
                      const std::vector<std::array<int, 2>>& edges) {
-  std::ostringstream out(std::ios::binary);
+  OutputFile file = OutputFile::replace(path);
+  FrameWriter out(file);
   const Index n = s.num_particles();
-  out << "# vtk DataFile Version 3.0\nhooke frame t=" << s.t << "\nBINARY\nDATASET POLYDATA\n";
-  out << "FIELD FieldData 1\nTIME 1 1 double\n";
-  put_be<double>(out, s.t);
-  out << "\nPOINTS " << n << " double\n";
-  for (Index k = 0; k < 3 * n; ++k) put_be<double>(out, s.x[k]);
-  out << "\nLINES " << edges.size() << " " << 3 * edges.size() << "\n";
+  out.text("# vtk DataFile Version 3.0\nhooke frame t=" + number(s.t) +
+           "\nBINARY\nDATASET POLYDATA\nFIELD FieldData 1\nTIME 1 1 double\n");
+  out.be<double>(s.t);
+  out.text("\nPOINTS " + std::to_string(n) + " double\n");
+  for (Index k = 0; k < 3 * n; ++k) out.be<double>(s.x[k]);
+  out.text("\nLINES " + std::to_string(edges.size()) + " " + std::to_string(3 * edges.size()) +
+           "\n");
   for (const auto& e : edges) {
-    put_be<int32_t>(out, 2);
-    put_be<int32_t>(out, e[0]);
-    put_be<int32_t>(out, e[1]);
+    out.be<int32_t>(2);
+    out.be<int32_t>(e[0]);
+    out.be<int32_t>(e[1]);
   }
-  out << "\nPOINT_DATA " << n << "\nVECTORS velocity double\n";
-  for (Index k = 0; k < 3 * n; ++k) put_be<double>(out, s.v[k]);
-  out << "\nSCALARS pinned int 1\nLOOKUP_TABLE default\n";
-  for (Index i = 0; i < n; ++i) put_be<int32_t>(out, pinned[size_t(i)] ? 1 : 0);
-  out << "\n";
-  write_file(path, out.str());
+  out.text("\nPOINT_DATA " + std::to_string(n) + "\nVECTORS velocity double\n");
+  for (Index k = 0; k < 3 * n; ++k) out.be<double>(s.v[k]);
+  out.text("\nSCALARS pinned int 1\nLOOKUP_TABLE default\n");
+  for (Index i = 0; i < n; ++i) out.be<int32_t>(pinned[size_t(i)] ? 1 : 0);
+  out.text("\n");
+  out.flush();
+  file.commit();
 }
 
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& frames) {

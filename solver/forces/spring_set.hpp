@@ -44,6 +44,9 @@ struct SpringSet {
   }
   void bind(const BlockPattern& p) {
     partition(static_cast<long long>(p.num_particles()));
+    // The springs were added one by one: return the vectors' growth slack (up to half of them).
+    for (auto* v : {&i, &j}) v->shrink_to_fit();
+    for (auto* v : {&coeff, &rest_length}) v->shrink_to_fit();
     slots.resize(size());
     for (size_t s = 0; s < size(); ++s)
       slots[s] = {p.slot(i[s], i[s]), p.slot(j[s], j[s]), p.slot(i[s], j[s]), p.slot(j[s], i[s])};

@@ -61,9 +61,15 @@ ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme 
   // are guaranteed to converge (measured: with it, block Jacobi diverged on a damped cloth).
   m_jac_options.damping_position_terms = false;
   const Index N = system.dofs();
-  for (Vec* v : {&m_v0, &m_vb, &m_xa, &m_va, &m_xe, &m_v1, &m_xlin, &m_vlin, &m_f, &m_rhs, &m_tmp,
-                 &m_dx, &m_dv, &m_prev_x, &m_prev_v, &m_delta})
+  for (Vec* v : {&m_v0, &m_vb, &m_xa, &m_va, &m_xe, &m_v1, &m_xlin, &m_vlin, &m_rhs, &m_tmp, &m_dx,
+                 &m_delta})
     v->setZero(N);
+  // Only what a scheme and a system use: BDF2's history, and dv where there is a D to apply.
+  if (m_scheme == ImplicitScheme::Bdf2) {
+    m_prev_x.setZero(N);
+    m_prev_v.setZero(N);
+  }
+  if (system.has_velocity_jacobian()) m_dv.setZero(N);
   const LinearSummary a = m_solver->analyze(m_A.matrix());
   if (a.status != Status::Converged) throw SetupError(a.message);
   accumulate(m_totals, a);
@@ -79,13 +85,18 @@ std::string ImplicitStepper::report() const {
 
 std::vector<double> ImplicitStepper::history() const {
   const std::vector<char>& pinned = m_system.pinned();
+  const size_t N = size_t(m_system.dofs());
   std::vector<double> h;
-  h.reserve(size_t(3 + m_prev_x.size() + m_prev_v.size() + m_delta.size()));
+  h.reserve(3 + 2 * N + size_t(m_delta.size()));
   h.push_back(m_has_prev ? 1.0 : 0.0);
   h.push_back(m_prev_h);
   h.push_back(m_prev_t1);
-  h.insert(h.end(), m_prev_x.data(), m_prev_x.data() + m_prev_x.size());
-  h.insert(h.end(), m_prev_v.data(), m_prev_v.data() + m_prev_v.size());
+  if (m_prev_x.size() > 0) {
+    h.insert(h.end(), m_prev_x.data(), m_prev_x.data() + m_prev_x.size());
+    h.insert(h.end(), m_prev_v.data(), m_prev_v.data() + m_prev_v.size());
+  } else {  // not BDF2: the format keeps the (unused) previous state, as zeros
+    h.insert(h.end(), 2 * N, 0.0);
+  }
   // The correction on the free DOFs only, as checkpoints have always held it.
   for (Index i = 0; i < m_delta.size(); ++i)
     if (!pinned[size_t(i / 3)]) h.push_back(m_delta[i]);
@@ -94,15 +105,17 @@ std::vector<double> ImplicitStepper::history() const {
 
 void ImplicitStepper::restore_history(const std::vector<double>& h) {
   const std::vector<char>& pinned = m_system.pinned();
-  const size_t N = size_t(m_prev_x.size()), nf = N - 3 * size_t(m_system.num_pinned());
+  const size_t N = size_t(m_system.dofs()), nf = N - 3 * size_t(m_system.num_pinned());
   HOOKE_ASSERT(h.size() == 3 + 2 * N + nf, name() << ": history of " << h.size()
                                                   << " numbers, expected " << 3 + 2 * N + nf
                                                   << " for " << N << " dofs");
   m_has_prev = h[0] != 0.0;
   m_prev_h = h[1];
   m_prev_t1 = h[2];
-  m_prev_x = Eigen::Map<const Vec>(h.data() + 3, Index(N));
-  m_prev_v = Eigen::Map<const Vec>(h.data() + 3 + N, Index(N));
+  if (m_prev_x.size() > 0) {
+    m_prev_x = Eigen::Map<const Vec>(h.data() + 3, Index(N));
+    m_prev_v = Eigen::Map<const Vec>(h.data() + 3 + N, Index(N));
+  }
   size_t k = 3 + 2 * N;
   for (Index i = 0; i < m_delta.size(); ++i) m_delta[i] = pinned[size_t(i / 3)] ? 0.0 : h[k++];
 }
@@ -158,17 +171,16 @@ ImplicitStepper::OneLeg ImplicitStepper::set_up(const State& s0, double h) {
 
 void ImplicitStepper::assemble(const OneLeg& c) {
   const auto ta = Clock::now();
-  m_system.compute_forces(m_xlin, m_vlin, m_f);
+  m_system.compute_forces(m_xlin, m_vlin, m_rhs);
   m_A.assemble_jacobians(m_xlin, m_vlin, m_jac_options);
   const Jacobians& J = m_A.jacobians();
   // rhs = hf (f_lin + K dx + D dv) - M (v1 - vb), with dx, dv the gap between the current
   // iterate's arguments and the linearisation point (nonzero only in the first iteration).
   m_dx = m_xa + c.bx * m_v1 - m_xlin;
-  m_dv = m_va + c.cv * m_v1 - m_vlin;
-  m_rhs = m_f;
   m_tmp.noalias() = J.K * m_dx;
-  m_rhs += m_tmp;
+  m_rhs += m_tmp;  // m_rhs holds f_lin (compute_forces above)
   if (J.velocity_values() != nullptr) {
+    m_dv = m_va + c.cv * m_v1 - m_vlin;
     m_tmp.noalias() = J.D * m_dv;
     m_rhs += m_tmp;
   }

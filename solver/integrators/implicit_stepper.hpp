@@ -107,10 +107,11 @@ class ImplicitStepper final : public Stepper {
   LinearSummary m_totals;  // summed over all steps: iterations and times
   double m_assembly_seconds = 0.0, m_total_seconds = 0.0, m_last_residual = 0.0;
   long long m_steps = 0, m_newton_iterations = 0;
-  // Scratch, 3n each.
-  Vec m_v0, m_vb, m_xa, m_va, m_xe, m_v1, m_xlin, m_vlin, m_f, m_rhs, m_tmp, m_dx, m_dv;
+  // Scratch, 3n each (m_dv only with a stored D).
+  Vec m_v0, m_vb, m_xa, m_va, m_xe, m_v1, m_xlin, m_vlin, m_rhs, m_tmp, m_dx, m_dv;
   Vec m_delta;  // the last linear correction, zero on pinned DOFs
-  // BDF2 history: the start state of the previous step and that step's h and end time.
+  // BDF2 history: the start state of the previous step (3n, BDF2 only) and that step's h and end
+  // time.
   Vec m_prev_x, m_prev_v;
   double m_prev_h = 0.0, m_prev_t1 = 0.0;
   bool m_has_prev = false;
