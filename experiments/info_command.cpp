@@ -35,12 +35,39 @@ void print_scene_info(const Scene& scene, std::ostream& out) {
   for (const auto& c : sys.constraints()) out << " " << c->name();
   if (sys.constraints().empty()) out << " none";
   // Memory of a run: state, scratch and force buffers (~12 vectors of 3n doubles), the Jacobian
-  // pattern (two matrices of 9 scalars per block, 12 bytes each with indices) and spring arrays.
+  // pattern (K, and D with a velocity-dependent force: 9 scalars per block, 12 bytes each with
+  // indices) and spring arrays.
   const double nnz = 9.0 * double(sys.pattern().num_blocks());
+  const int matrices = sys.has_velocity_jacobian() ? 2 : 1;
   const double bytes =
-      12.0 * 8 * double(sys.dofs()) + 2 * 12.0 * nnz + 60.0 * double(scene.edges.size());
-  out << "\nmemory:     about " << bytes / (1 << 20) << " MiB (state, scratch, K and D with "
-      << std::size_t(nnz) << " stored entries each)\n";
+      12.0 * 8 * double(sys.dofs()) + matrices * 12.0 * nnz + 60.0 * double(scene.edges.size());
+  out << "\nmemory:     about " << bytes / (1 << 20) << " MiB (state, scratch, "
+      << (matrices == 2 ? "K and D" : "K") << " with " << std::size_t(nnz) << " stored entries"
+      << (matrices == 2 ? " each" : "") << "; a linear backend adds its own)\n";
+  // What a run writes: VTK frames (binary: positions and velocities, 24 bytes a particle each,
+  // pins 4, springs 12, plus headers), log.csv and final.csv (about 160 characters a row).
+  const long long steps = scene.time.steps();
+  const OutputSettings& o = scene.output;
+  long long frames = 0;
+  if (o.vtk) {
+    if (o.interval > 0.0) {
+      const double k = std::floor(scene.time.duration / o.interval + 1e-9);
+      frames = 1 + (long long)k + (k * o.interval < scene.time.duration * (1 - 1e-12) ? 1 : 0);
+    } else if (o.every > 0) {
+      frames = 1 + steps / o.every + (steps % o.every != 0 ? 1 : 0);
+    } else {
+      frames = steps > 0 ? 2 : 1;
+    }
+  }
+  const double frame_bytes = 52.0 * double(n) + 12.0 * double(scene.edges.size()) + 256.0;
+  const long long rows = 1 + steps / o.log_every + (steps % o.log_every != 0 ? 1 : 0);
+  const double log_bytes = 160.0 * double(rows), final_bytes = 160.0 * double(n);
+  const double total = double(frames) * frame_bytes + log_bytes + final_bytes;
+  const double MiB = 1 << 20;
+  out << "output:     " << frames << " VTK frames of about " << frame_bytes / MiB
+      << " MiB each, log.csv about " << log_bytes / MiB << " MiB (" << rows
+      << " rows), final.csv about " << final_bytes / MiB << " MiB: about " << total / MiB
+      << " MiB in all\n";
   const double w = largest_natural_frequency(sys, scene.initial);
   out << "omega_max:  " << w << " rad/s at the initial state (period " << 2 * M_PI / w
       << " s), undamped linearisation\n";

@@ -106,6 +106,9 @@ class MassSpringRun {
   /// After a successful step: log row, divergence check, frame, progress, stop request and
   /// periodic checkpoint. Returns an exit code to stop with, or -1 to go on.
   int after_step(long long step, const StepSummary& sum);
+  /// [output] interval: true (once) when t reached or passed the next multiple of the interval
+  /// (to round-off: a step landing on it counts), and the next one is then the first above t.
+  bool interval_frame_due(double t);
   int report_failure(long long step, const StepSummary& sum);
   int report_divergence(long long step, double E);
   int stop(long long step, int sig);
@@ -125,6 +128,7 @@ class MassSpringRun {
   const StrainLimit* m_strain_limit = nullptr;
   long long m_strain_exceeded = 0, m_worst_strain_step = 0;
   double m_worst_strain = 0.0;
+  long long m_next_frame = 1;  // [output] interval: the next frame is at m_next_frame * interval
   double m_wall = 0.0;
   std::unique_ptr<RunOutput> m_out;
   double m_E0 = 0.0, m_scale = 0.0, m_E_limit = 0.0;
@@ -209,6 +213,7 @@ void MassSpringRun::restore(const Checkpoint& c) {
                      "is at step " + std::to_string(c.step) + " but the scene has only " +
                          std::to_string(m_steps) + " steps");
   m_first_step = c.step + 1;
+  interval_frame_due(c.state.t);  // the frames up to the checkpoint were written before it
   m_not_converged = c.not_converged;
   m_sim.set_halved_steps(c.halved_steps);
   m_wall = c.wall;
@@ -260,6 +265,15 @@ int MassSpringRun::run_steps() {
   return finish();
 }
 
+bool MassSpringRun::interval_frame_due(double t) {
+  const double dt = m_scene.output.interval;
+  if (dt <= 0.0) return false;
+  const double slack = 1e-9 * std::max(dt, m_scene.time.dt);
+  if (t + slack < double(m_next_frame) * dt) return false;
+  while (double(m_next_frame) * dt <= t + slack) ++m_next_frame;
+  return true;
+}
+
 int MassSpringRun::after_step(long long step, const StepSummary& sum) {
   const bool last = step == m_steps;
   const State& s = m_sim.state();
@@ -274,7 +288,9 @@ int MassSpringRun::after_step(long long step, const StepSummary& sum) {
       }
     }
   }
-  if ((m_scene.output.every > 0 && step % m_scene.output.every == 0) || last) m_out->frame(step, s);
+  if ((m_scene.output.every > 0 && step % m_scene.output.every == 0) || last ||
+      interval_frame_due(s.t))
+    m_out->frame(step, s);
   m_progress.update(step, s.t);
   if (last) return -1;
   if (const int sig = stop_signal(); sig != 0 || step == m_options.stop_after)

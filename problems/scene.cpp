@@ -294,7 +294,28 @@ void read_run_settings(TableReader& root, Scene& scene) {
     TableReader& r = *it;
     scene.output.dir = r.string("dir", "out/" + scene.name);
     if (scene.output.dir.empty()) r.fail("dir", "must not be empty");
-    scene.output.every = r.integer("every", std::max(1LL, steps / 50), 0, 1LL << 62);
+    // Frames by steps (every) or by simulated time (interval), not both. A --set switch for one
+    // drops the other from the file with a warning (the command line cannot remove a key).
+    bool by_time = r.has("interval");
+    if (by_time && r.has("every")) {
+      const bool set_interval = r.overridden("interval"), set_every = r.overridden("every");
+      if (set_interval == set_every)
+        r.fail("every", "give every (steps) or interval (seconds) for the frames, not both");
+      const std::string dropped = set_interval ? "every" : "interval";
+      r.warn(dropped, std::string("has no effect with output.") +
+                          (set_interval ? "interval" : "every") + " (from --set); ignored");
+      r.skip(dropped);
+      by_time = set_interval;
+    }
+    if (by_time) {
+      scene.output.interval = r.positive("interval");
+      if (scene.time.duration / scene.output.interval > 1e9)
+        r.fail("interval", "interval = " + std::to_string(scene.output.interval) +
+                               " s gives more than 1e9 frames");
+      scene.output.every = 0;
+    } else {
+      scene.output.every = r.integer("every", std::max(1LL, steps / 50), 0, 1LL << 62);
+    }
     scene.output.log_every = r.integer("log_every", std::max(1LL, steps / 10000), 1, 1LL << 62);
     scene.output.vtk = r.boolean("vtk", true);
     scene.output.png = r.boolean("png", true);

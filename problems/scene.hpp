@@ -35,8 +35,11 @@ struct TimeSettings {
 
 /// [output]: where and how often to write.
 struct OutputSettings {
-  std::string dir;          ///< output directory (default out/<scene name>)
-  long long every = 0;      ///< write a VTK frame every N steps (0 = only the first and last)
+  std::string dir;      ///< output directory (default out/<scene name>)
+  long long every = 0;  ///< write a VTK frame every N steps (0 = only the first and last)
+  /// Write a VTK frame at every multiple of this simulated time (s) instead (0 = use `every`):
+  /// the frames do not change with dt. A step that reaches or passes a multiple writes one frame.
+  double interval = 0.0;
   long long log_every = 1;  ///< write a log.csv row every N steps
   bool vtk = true;          ///< write VTK frames at all
   bool png = true;          ///< write final.png (a picture of the final state)
