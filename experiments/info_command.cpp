@@ -44,8 +44,9 @@ void print_scene_info(const Scene& scene, std::ostream& out) {
   out << "\nmemory:     about " << bytes / (1 << 20) << " MiB (state, scratch, "
       << (matrices == 2 ? "K and D" : "K") << " with " << std::size_t(nnz) << " stored entries"
       << (matrices == 2 ? " each" : "") << "; a linear backend adds its own)\n";
-  // What a run writes: VTK frames (binary: positions and velocities, 24 bytes a particle each,
-  // pins 4, springs 12, plus headers), log.csv and final.csv (about 160 characters a row).
+  // What a run writes: VTK frames (binary: per particle positions, velocities 24 bytes each, pin
+  // flag 4, kinetic energy 8; per spring 12 and its strain 8; per triangle 16 and 8; plus headers),
+  // log.csv and final.csv (about 160 characters a row).
   const long long steps = scene.time.steps();
   const OutputSettings& o = scene.output;
   long long frames = 0;
@@ -59,7 +60,8 @@ void print_scene_info(const Scene& scene, std::ostream& out) {
       frames = steps > 0 ? 2 : 1;
     }
   }
-  const double frame_bytes = 52.0 * double(n) + 12.0 * double(scene.edges.size()) + 256.0;
+  const double frame_bytes = 60.0 * double(n) + 20.0 * double(scene.edges.size()) +
+                             24.0 * double(scene.triangles.size()) + 400.0;
   const long long rows = 1 + steps / o.log_every + (steps % o.log_every != 0 ? 1 : 0);
   const double log_bytes = 160.0 * double(rows), final_bytes = 160.0 * double(n);
   const double total = double(frames) * frame_bytes + log_bytes + final_bytes;

@@ -412,6 +412,7 @@ Scene load_parsed(toml::table tbl, const std::string& file,
       if (b.pinned[size_t(i)]) scene.initial.v.segment<3>(3 * i).setZero();
     scene.initial.t = 0.0;
     scene.exact = b.exact;
+    scene.triangles = std::move(b.triangles);
     std::vector<SceneCollider> colliders;
     add_forces_and_constraints(root, b, scene, colliders);
     scene.system->finalize();

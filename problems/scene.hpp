@@ -81,7 +81,9 @@ struct Scene {
   State initial;
   std::vector<std::array<int, 2>> edges;  ///< every spring's endpoints (for frames and pictures)
   std::vector<double> edge_rest;          ///< rest length of each edge (m)
-  ExactMassSpring exact;                  ///< empty unless the scene has an exact solution
+  /// The cloth's surface triangles (grid and OBJ meshes; empty for others), for frames.
+  std::vector<std::array<int, 3>> triangles;
+  ExactMassSpring exact;  ///< empty unless the scene has an exact solution
 
   // ODE scenes.
   std::unique_ptr<OdeSystem> ode;

@@ -2,6 +2,7 @@
 
 #include <cstdint>
 #include <cstring>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -48,8 +49,10 @@ std::string number(double v) {
 }
 }  // namespace
 
-void write_vtk_frame(const std::string& path, const State& s, const std::vector<char>& pinned,
-                     const std::vector<std::array<int, 2>>& edges) {
+void write_vtk_frame(const std::string& path, const State& s, const FrameMesh& mesh) {
+  const auto& edges = mesh.edges;
+  const auto& triangles = mesh.triangles;
+  const auto& pinned = mesh.pinned;
   OutputFile file = OutputFile::replace(path);
   FrameWriter out(file);
   const Index n = s.num_particles();
@@ -65,10 +68,30 @@ void write_vtk_frame(const std::string& path, const State& s, const std::vector<
     out.be<int32_t>(e[0]);
     out.be<int32_t>(e[1]);
   }
+  if (!triangles.empty()) {
+    out.text("\nPOLYGONS " + std::to_string(triangles.size()) + " " +
+             std::to_string(4 * triangles.size()) + "\n");
+    for (const auto& t : triangles) {
+      out.be<int32_t>(3);
+      for (const int v : t) out.be<int32_t>(v);
+    }
+  }
+  out.text("\nCELL_DATA " + std::to_string(edges.size() + triangles.size()) +
+           "\nSCALARS strain double 1\nLOOKUP_TABLE default\n");
+  for (size_t k = 0; k < edges.size(); ++k) {
+    const double L = mesh.rest[k];
+    const double l = (s.x.segment<3>(3 * edges[k][0]) - s.x.segment<3>(3 * edges[k][1])).norm();
+    out.be<double>(L > 0.0 ? (l - L) / L : 0.0);
+  }
+  for (size_t k = 0; k < triangles.size(); ++k)
+    out.be<double>(std::numeric_limits<double>::quiet_NaN());
   out.text("\nPOINT_DATA " + std::to_string(n) + "\nVECTORS velocity double\n");
   for (Index k = 0; k < 3 * n; ++k) out.be<double>(s.v[k]);
   out.text("\nSCALARS pinned int 1\nLOOKUP_TABLE default\n");
   for (Index i = 0; i < n; ++i) out.be<int32_t>(pinned[size_t(i)] ? 1 : 0);
+  out.text("\nSCALARS kinetic_energy double 1\nLOOKUP_TABLE default\n");
+  for (Index i = 0; i < n; ++i)
+    out.be<double>(0.5 * mesh.masses[i] * s.v.segment<3>(3 * i).squaredNorm());
   out.text("\n");
   out.flush();
   file.commit();

@@ -7,11 +7,21 @@
 
 namespace hooke {
 
-/// Writes one frame as a legacy binary VTK POLYDATA file (ParaView, VisIt): particle positions,
-/// springs as lines, velocity vectors, a pinned flag per particle and the time as field data.
-/// Throws std::runtime_error if the file cannot be written.
-void write_vtk_frame(const std::string& path, const State& s, const std::vector<char>& pinned,
-                     const std::vector<std::array<int, 2>>& edges);
+/// What a frame shows besides the state (references into the scene, which outlives the writes).
+struct FrameMesh {
+  const std::vector<std::array<int, 2>>& edges;      ///< springs
+  const std::vector<double>& rest;                   ///< rest length of each spring (m)
+  const std::vector<std::array<int, 3>>& triangles;  ///< cloth surface (may be empty)
+  const std::vector<char>& pinned;                   ///< per particle
+  const Vec& masses;                                 ///< per particle (kg)
+};
+
+/// Writes one frame as a legacy binary VTK POLYDATA file (ParaView, VisIt): the time as field
+/// data; particle positions; the springs as LINES and the cloth's surface triangles as POLYGONS
+/// (so a viewer can shade it); per cell, the strain (l - L) / L of each spring (NaN on the
+/// triangles, which are not springs); per particle, the velocity, a pinned flag and the kinetic
+/// energy m |v|^2 / 2 (J). Throws OutputError if the file cannot be written.
+void write_vtk_frame(const std::string& path, const State& s, const FrameMesh& mesh);
 
 /// Writes a ParaView collection (.pvd) listing frames (file names relative to the .pvd) and times.
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& frames);

@@ -23,6 +23,8 @@ struct MeshBuild {
   Vec masses;                ///< n masses
   std::vector<char> pinned;  ///< n flags
   std::vector<SpringSpec> springs;
+  /// The surface of a cloth (grid and OBJ meshes), for frames a viewer can shade; empty otherwise.
+  std::vector<std::array<int, 3>> triangles;
   ExactMassSpring exact;  ///< set by builders of scenes with a closed-form solution
 
   Index num_particles() const { return masses.size(); }

@@ -165,6 +165,7 @@ void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_
     out.masses[i] = mass;
   }
   pin_ids(mesh, "pinned", mesh.integers("pinned", std::vector<long long>{}), out);
+  out.triangles = obj.triangles;
   const double k = springs.non_negative("stiffness", 1e3);
   const double c = springs.non_negative("damping", 0.0);
   const double kb = springs.non_negative("bend_stiffness", 0.1 * k);
