@@ -59,7 +59,9 @@ def work_precision_findings(out):
     table = []
     for case in dict.fromkeys(r["case"] for r in rows):
         for label in dict.fromkeys(r["label"] for r in rows if r["case"] == case):
-            pts = [r for r in rows if r["case"] == case and r["label"] == label and num(r["rms_err_final"]) > 0]
+            # Only errors the reference resolves (above its own error estimate) are values.
+            pts = [r for r in rows if r["case"] == case and r["label"] == label and num(r["rms_err_final"]) > 0
+                   and r.get("resolved_final", "1") == "1"]
             order = "-"
             if len(pts) >= 2 and num(pts[0]["rtol"]) == 0:
                 xs = [math.log(num(r["h"])) for r in pts]
