@@ -62,10 +62,12 @@ def markdown_table(header, rows):
     return "\n".join(out) + "\n"
 
 
-# One distinct style per method label, stable across figures.
+# One distinct style per method label, stable across figures: the ten strong colours of tab20
+# first, then its ten tints, with twelve markers, so that up to 20 labels have 20 colours and no two
+# labels share both colour and marker.
 _MARKERS = "os^vD<>pP*Xh"
 
 
 def style(label, labels):
     i = sorted(set(labels)).index(label)
-    return {"marker": _MARKERS[i % len(_MARKERS)], "color": plt.cm.tab20(i % 20)}
+    return {"marker": _MARKERS[i % len(_MARKERS)], "color": plt.cm.tab20((2 * i + (i // 10) % 2) % 20)}

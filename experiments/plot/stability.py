@@ -8,6 +8,7 @@ OUT_DIR/stability_<case>.md (the same numbers as a table: k across, methods down
 import math
 import os
 import sys
+import textwrap
 
 from common import g3, markdown_table, num, plt, read_csv, save_figure, style, write_text
 
@@ -45,10 +46,11 @@ def main(out_dir):
                         color=st["color"], label=f"{label}: theory y / omega_max")
         h_max = max(num(r["h_stable"]) for r in sub)
         ax.axhline(h_max, color="0.5", lw=0.8, ls=":")
-        if always:
-            ax.text(0.99, 0.97, "stable at h = " + g3(h_max) + " s (the largest tried) for every k:\n"
-                    + ", ".join(always), transform=ax.transAxes, ha="right", va="top", fontsize=7,
-                    bbox={"facecolor": "white", "alpha": 0.85, "edgecolor": "0.7"})
+        note = ""
+        if always:  # below the axes, never over the data
+            note = ("Stable at h = " + g3(h_max) + " s (the largest tried) for every k, so not drawn: "
+                    + ", ".join(always))
+            fig.text(0.01, 0.01, "\n".join(textwrap.wrap(note, 160)), fontsize=7, ha="left", va="bottom")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("stiffness k (N/m)")
@@ -57,7 +59,7 @@ def main(out_dir):
                      fontsize=9)
         ax.set_ylim(bottom=min(h_lo / 3, 1e-5), top=h_max * 3)
         ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
-        fig.tight_layout()
+        fig.tight_layout(rect=(0, 0.06 if note else 0, 1, 1))
         save_figure(fig, os.path.join(out_dir, f"stability_{case}.png"))
         plt.close(fig)
 
