@@ -71,10 +71,9 @@ Command add_demo_command(CLI::App& app) {
   auto a = std::make_shared<Args>();
   auto* cmd = app.add_subcommand(
       "demo",
-      "The implicit step's reason to exist: the scene (default falling_stiff_cloth, backward Euler "
-      "at "
-      "h = 5 ms) and the same scene with an explicit method at the same h, which diverges; "
-      "writes DIR/implicit/, DIR/explicit/, DIR/summary.txt and DIR/demo.png");
+      "The implicit step's reason to exist: the scene (default falling_stiff_cloth, backward "
+      "Euler at h = 5 ms) and the same scene with an explicit method at the same h, which "
+      "diverges; writes DIR/implicit/, DIR/explicit/, DIR/summary.txt and DIR/demo.png");
   add_scene(cmd, a->scene, false);
   cmd->add_option("--explicit", a->method,
                   "the explicit method run at the scene's step (default symplectic-euler)");
@@ -134,7 +133,7 @@ Command add_demo_command(CLI::App& app) {
         std::ostringstream line;
         line << a->method;
         if (explicit_code == 3)
-          line << " diverged at step " << g(exp.count("step") ? exp.at("step") : 0)
+          line << " diverged at step " << (exp.count("step") ? (long long)exp.at("step") : 0)
                << " (t = " << g(exp.count("t") ? exp.at("t") : 0.0) << " s)";
         else
           line << " stayed stable (exit " << explicit_code << ")";
@@ -144,7 +143,7 @@ Command add_demo_command(CLI::App& app) {
                << " / omega_max = " << g(y / w) << " s";
         line << "; " << implicit_name;
         if (implicit_code == 0)
-          line << " stable: " << g(imp.count("step") ? imp.at("step") : 0)
+          line << " stable: " << (imp.count("step") ? (long long)imp.at("step") : 0)
                << " steps to t = " << g(imp.count("t") ? imp.at("t") : 0.0) << " s in "
                << g(imp.count("wall_time") ? imp.at("wall_time") : 0.0)
                << " s, largest spring strain at the end "

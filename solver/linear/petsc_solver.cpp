@@ -49,12 +49,13 @@ void check(PetscErrorCode ierr, const char* call) {
   throw PetscFailure(std::string(call) + ": " + text);
 }
 
-/// PETSc is initialised once, on first use, with no arguments (PETSC_OPTIONS is read by each
-/// solver itself, see Impl::options), and finalised at exit.
 /// True if MPI allows calls from several threads at once (MPI_THREAD_MULTIPLE): the concurrent
 /// split (ConcurrentSplit) calls hypre, which may call MPI, from two threads.
 bool g_mpi_thread_multiple = false;
 
+/// PETSc is initialised once, on first use, with no arguments (PETSC_OPTIONS is read by each
+/// solver itself, see Impl::options), and finalised at exit; MPI is started first, asking for
+/// MPI_THREAD_MULTIPLE, unless the host program started it.
 void ensure_petsc() {
   static const bool done = [] {
     int mpi_up = 0;
