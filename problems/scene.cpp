@@ -227,28 +227,30 @@ void add_forces_and_constraints(TableReader& root, const MeshBuild& b, Scene& sc
   }
 
   if (auto c = root.table("collision")) {
-    if (auto g = c->table("ground")) {
-      const Vec3 normal = g->vec3("normal", Vec3(0, 1, 0));
-      if (normal.norm() == 0.0) g->fail("normal", "must be a nonzero vector");
-      const double height = g->number("height", 0.0);
-      const double mu = g->non_negative("friction", 0.0);
-      g->finish();
+    // Each kind as one table ([collision.ground]) or several ([[collision.ground]]: walls,
+    // floors, any normal; [[collision.sphere]]), applied in the order given, planes first.
+    for (TableReader& g : c->tables("ground")) {
+      const Vec3 normal = g.vec3("normal", Vec3(0, 1, 0));
+      if (normal.norm() == 0.0) g.fail("normal", "must be a nonzero vector");
+      const double height = g.number("height", 0.0);
+      const double mu = g.non_negative("friction", 0.0);
+      g.finish();
       auto plane = std::make_unique<GroundPlane>(normal, height, mu);
-      colliders.push_back({c->path("ground"),
+      colliders.push_back({g.name(),
                            "the ground plane (normal " + fmt(Vec3(normal.normalized())) +
                                ", height " + fmt(height) + ")",
-                           g->path("height") + ", " + g->path("normal"), plane.get()});
+                           g.path("height") + ", " + g.path("normal"), plane.get()});
       sys.add_constraint(std::move(plane));
     }
-    if (auto sp = c->table("sphere")) {
-      const Vec3 centre = sp->vec3("center", Vec3::Zero());
-      const double radius = sp->positive("radius", 0.5);
-      const double mu = sp->non_negative("friction", 0.0);
-      sp->finish();
+    for (TableReader& sp : c->tables("sphere")) {
+      const Vec3 centre = sp.vec3("center", Vec3::Zero());
+      const double radius = sp.positive("radius", 0.5);
+      const double mu = sp.non_negative("friction", 0.0);
+      sp.finish();
       auto sphere = std::make_unique<SphereCollider>(centre, radius, mu);
-      colliders.push_back({c->path("sphere"),
+      colliders.push_back({sp.name(),
                            "the sphere (center " + fmt(centre) + ", radius " + fmt(radius) + ")",
-                           sp->path("center") + ", " + sp->path("radius"), sphere.get()});
+                           sp.path("center") + ", " + sp.path("radius"), sphere.get()});
       sys.add_constraint(std::move(sphere));
     }
     c->finish();

@@ -302,6 +302,29 @@ std::optional<TableReader> TableReader::table(const std::string& key) {
   return TableReader(*t, *it->second.as_table(), m_file, path(key), m_context);
 }
 
+std::vector<TableReader> TableReader::tables(const std::string& key) {
+  std::vector<TableReader> out;
+  if (const toml::array* a = has(key) ? node(key).as_array() : nullptr) {
+    m_used.insert(key);
+    for (size_t k = 0; k < a->size(); ++k)
+      if (!(*a)[k].is_table())
+        fail(key, "element " + std::to_string(k) + " must be a table ([[" + path(key) +
+                      "]]), got " + type_name((*a)[k]));
+    // The resolved array first, whole, so that the readers' references into it stay valid.
+    toml::array resolved;
+    for (size_t k = 0; k < a->size(); ++k) resolved.push_back(toml::table{});
+    auto [it, inserted] = m_out.insert_or_assign(key, std::move(resolved));
+    (void)inserted;
+    toml::array& r = *it->second.as_array();
+    for (size_t k = 0; k < a->size(); ++k)
+      out.emplace_back(*(*a)[k].as_table(), *r[k].as_table(), m_file,
+                       path(key) + "[" + std::to_string(k) + "]", m_context);
+    return out;
+  }
+  if (auto t = table(key)) out.push_back(std::move(*t));
+  return out;
+}
+
 void TableReader::reject_if_present(const std::string& key, const std::string& reason) const {
   if (m_tbl.contains(key)) fail(key, reason);
 }

@@ -91,6 +91,11 @@ class TableReader {
   void set_resolved(const std::string& key, const std::string& value);
   /// The sub-table key, if present (it must be a table).
   std::optional<TableReader> table(const std::string& key);
+  /// The sub-tables of key: one for a table ([a.b]), one per element for an array of tables
+  /// ([[a.b]], paths "a.b[0]", "a.b[1]", ...), none if key is absent.
+  std::vector<TableReader> tables(const std::string& key);
+  /// Dotted path of this table ("collision.sphere[1]"; "" for the root).
+  const std::string& name() const { return m_prefix; }
   /// Throws if key is present: reason says why it does not apply.
   void reject_if_present(const std::string& key, const std::string& reason) const;
   /// Throws for the first key no getter asked for, listing the known keys of this table; `why`, if

@@ -42,7 +42,11 @@ void for_each_number(toml::node& n, const std::string& key, F&& f) {
     for (auto&& [k, v] : *t)
       for_each_number(v, key.empty() ? std::string(k.str()) : key + "." + std::string(k.str()), f);
   } else if (auto* a = n.as_array()) {
-    for (auto& v : *a) for_each_number(v, key, f);
+    // An array of tables ([[collision.sphere]]) names its elements by index, as the loader does.
+    for (size_t i = 0; i < a->size(); ++i) {
+      toml::node& v = *a->get(i);
+      for_each_number(v, v.is_table() ? key + "[" + std::to_string(i) + "]" : key, f);
+    }
   } else if (n.is_integer() || n.is_floating_point()) {
     f(key, n);
   }

@@ -15,6 +15,9 @@
 #include <set>
 #include <sstream>
 
+#include "hooke/registry.hpp"
+#include "hooke/simulation.hpp"
+
 namespace hooke {
 namespace {
 
@@ -389,6 +392,69 @@ TEST(SceneColliders, PinnedParticlesMayStartInside) {
   const InputError e = load_error(text + sphere);
   EXPECT_EQ(e.key(), "collision.sphere");
   expect_contains(e.reason(), "free particle 0 at (0, 0, 0) starts 0.4 m inside");
+}
+
+TEST(SceneColliders, SeveralPlanesAndSpheresAsArraysOfTables) {
+  // Two spheres and two planes ([[...]]): four constraints, planes first, in the order given;
+  // a particle inside the second sphere is refused under that sphere's indexed key; an array
+  // element that is not a table is refused under the array's key.
+  const std::string colliders =
+      "[[collision.sphere]]\ncenter = [0.25, -0.5, 0.5]\nradius = 0.2\n"
+      "[[collision.sphere]]\ncenter = [0.75, -0.5, 0.5]\nradius = 0.2\n"
+      "[[collision.ground]]\nheight = -1.0\n"
+      "[[collision.ground]]\nnormal = [-1.0, 0.0, 0.0]\nheight = -1.05\n";
+  const Scene s = load_scene_from_string(flat_grid(colliders), "arrays.toml");
+  ASSERT_EQ(s.system->constraints().size(), 4u);
+  for (size_t k = 0; k < 4; ++k)
+    EXPECT_STREQ(s.system->constraints()[k]->name(), k < 2 ? "ground-plane" : "sphere-collider")
+        << "constraint " << k;
+  const toml::array* spheres = s.resolved["collision"]["sphere"].as_array();
+  ASSERT_NE(spheres, nullptr);
+  EXPECT_EQ(spheres->size(), 2u);
+  const InputError inside =
+      load_error(flat_grid("[[collision.sphere]]\ncenter = [0.0, -5.0, 0.0]\nradius = 0.2\n"
+                           "[[collision.sphere]]\ncenter = [0.5, -0.1, 0.5]\nradius = 0.3\n"));
+  EXPECT_EQ(inside.key(), "collision.sphere[1]");
+  expect_contains(inside.reason(), "(collision.sphere[1].center, collision.sphere[1].radius)");
+  const InputError bad = load_error(flat_grid("[collision]\nsphere = [1, 2]\n"));
+  EXPECT_EQ(bad.key(), "collision.sphere");
+  expect_contains(bad.reason(), "element 0 must be a table");
+}
+
+TEST(SceneColliders, ClothDrapesOverTwoSpheresAndStaysInsideTheWalls) {
+  // A free 16 x 16 cloth falls for 1.5 s onto two spheres, beside a wall at x = 1.05 and above a
+  // floor at y = -1: at every sampled step no particle is inside a sphere, beyond the wall or
+  // below the floor (to round-off), and the cloth does rest on the spheres (some particle touches
+  // one).
+  const std::string text =
+      "[mesh]\ntype = \"grid\"\nnx = 16\nny = 16\npins = []\n"
+      "[springs]\nstructural_stiffness = 2000.0\nshear_stiffness = 500.0\n"
+      "flexion_stiffness = 50.0\n[forces]\ngravity = [0.0, -9.81, 0.0]\n"
+      "[[collision.sphere]]\ncenter = [0.25, -0.5, 0.5]\nradius = 0.2\n"
+      "[[collision.sphere]]\ncenter = [0.75, -0.5, 0.5]\nradius = 0.2\n"
+      "[[collision.ground]]\nheight = -1.0\n"
+      "[[collision.ground]]\nnormal = [-1.0, 0.0, 0.0]\nheight = -1.05\n"
+      "[integrator]\nmethod = \"symplectic-euler\"\n[time]\ndt = 2e-4\nduration = 1.5\n";
+  const Scene s = load_scene_from_string(text, "drape.toml");
+  hooke::Simulation sim(*s.system, hooke::make_stepper("symplectic-euler", *s.system, {}),
+                        s.initial);
+  const Vec3 c[2] = {Vec3(0.25, -0.5, 0.5), Vec3(0.75, -0.5, 0.5)};
+  double closest = 1e9;
+  for (long long k = 1; k <= s.time.steps(); ++k) {
+    ASSERT_EQ(sim.advance(s.time.dt).status, hooke::Status::Converged);
+    if (k % 250 != 0) continue;
+    const hooke::Vec& x = sim.state().x;
+    for (Index i = 0; i < s.system->num_particles(); ++i) {
+      const Vec3 p = x.segment<3>(3 * i);
+      for (const Vec3& centre : c) {
+        EXPECT_GE((p - centre).norm(), 0.2 - 1e-12) << "particle " << i << " at step " << k;
+        closest = std::min(closest, (p - centre).norm() - 0.2);
+      }
+      EXPECT_LE(p[0], 1.05 + 1e-12) << "particle " << i << " at step " << k;
+      EXPECT_GE(p[1], -1.0 - 1e-12) << "particle " << i << " at step " << k;
+    }
+  }
+  EXPECT_LT(closest, 1e-9);  // it lies on the spheres
 }
 
 // ---------------------------------------------------------------------------------------------
