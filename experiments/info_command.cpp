@@ -102,7 +102,24 @@ Command add_info_command(CLI::App& app) {
   add_scene(cmd, a->scene);
   add_sets(cmd, a->sets);
   return {cmd, [a] {
-            print_scene_info(load_scene_argument(a->scene, a->sets), std::cout);
+            try {
+              print_scene_info(load_scene_argument(a->scene, a->sets), std::cout);
+            } catch (const MemoryBudgetError& e) {
+              // Too large to load, which is when the sizes matter most: say what is known
+              // without building it.
+              const double MiB = 1 << 20, GiB = 1 << 30;
+              std::cout << std::setprecision(6) << "scene:      " << e.file()
+                        << "\nparticles:  " << e.particles << "\nsprings:    " << e.springs
+                        << "\nmemory:     about " << e.bytes / GiB
+                        << " GiB: over the memory budget, so a run is refused (" << e.key() << ": "
+                        << e.reason() << ")\n"
+                        << "output:     VTK frames of about "
+                        << (60.0 * e.particles + 20.0 * e.springs + 48.0 * e.particles + 400.0) /
+                               MiB
+                        << " MiB each (triangles of a cloth counted as 2 per particle), final.csv "
+                           "about "
+                        << 160.0 * e.particles / MiB << " MiB\n";
+            }
             return 0;
           }};
 }

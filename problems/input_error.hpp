@@ -21,4 +21,18 @@ class InputError : public std::runtime_error {
   std::string m_file, m_key, m_reason;
 };
 
+/// A mesh refused before allocation because the run would not fit the memory budget
+/// (scene_memory_limit()): an InputError that also carries the sizes, so that `hooke info` can
+/// still describe the scene.
+class MemoryBudgetError : public InputError {
+ public:
+  MemoryBudgetError(std::string file, std::string key, std::string reason, double particles,
+                    double springs, double bytes)
+      : InputError(std::move(file), std::move(key), std::move(reason)),
+        particles(particles),
+        springs(springs),
+        bytes(bytes) {}
+  double particles, springs, bytes;  ///< the mesh's sizes and the run's estimated memory
+};
+
 }  // namespace hooke

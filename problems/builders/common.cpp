@@ -80,7 +80,7 @@ void check_size(TableReader& mesh, const std::string& key, double particles, dou
        << bytes / kGiB << " GiB, above the memory budget of " << limit / kGiB
        << " GiB (default: the smaller of 64 GiB and physical memory; HOOKE_MAX_MEMORY_GIB sets it)";
     if (particles > 2147483647.0) os << " and above 2^31 - 1 particles";
-    mesh.fail(key, os.str());
+    throw MemoryBudgetError(mesh.file(), mesh.path(key), os.str(), particles, springs, bytes);
   }
 }
 
