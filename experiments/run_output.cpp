@@ -130,10 +130,12 @@ void RunOutput::frame(long long step, const State& s) {
   if (!m_scene.output.vtk) return;
   char name[64];
   std::snprintf(name, sizeof name, "frame_%08lld.vtk", step);
-  write_vtk_frame(m_frames_dir + "/" + name, s,
+  // Frames carry the step's nominal time (0.1, not a sum of steps 0.10000000000000002).
+  const double t = m_scene.time.time_at(step);
+  write_vtk_frame(m_frames_dir + "/" + name, s, t,
                   FrameMesh{m_scene.edges, m_scene.edge_rest, m_scene.triangles,
                             m_scene.system->pinned(), m_scene.system->masses()});
-  m_frames.emplace_back(s.t, std::string("frames/") + name);
+  m_frames.emplace_back(t, std::string("frames/") + name);
   write_pvd(m_dir->file("frames.pvd"), m_frames);
 }
 

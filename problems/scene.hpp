@@ -27,6 +27,9 @@ struct TimeSettings {
   double duration = 1.0;  ///< simulated time (s), >= 0; the last step is shortened to land on it
   /// Number of steps needed to reach duration with steps of at most dt.
   long long steps() const;
+  /// The nominal time at the end of step `step` (0: the start): step dt, and duration for the
+  /// last step; the simulation's own clock accumulates h and may differ in the last bits.
+  double time_at(long long step) const { return step >= steps() ? duration : double(step) * dt; }
   /// Size of step `step` (1-based) starting at time t: exactly dt, except the last step, which
   /// lands on duration. Every other step has the same h bit for bit, so methods that cache
   /// h-dependent work (factorizations, BDF history) never see rounding-level changes of h.

@@ -1,5 +1,6 @@
 #include "experiments/output/vtk_writer.hpp"
 
+#include <charconv>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -49,16 +50,16 @@ std::string number(double v) {
 }
 }  // namespace
 
-void write_vtk_frame(const std::string& path, const State& s, const FrameMesh& mesh) {
+void write_vtk_frame(const std::string& path, const State& s, double t, const FrameMesh& mesh) {
   const auto& edges = mesh.edges;
   const auto& triangles = mesh.triangles;
   const auto& pinned = mesh.pinned;
   OutputFile file = OutputFile::replace(path);
   FrameWriter out(file);
   const Index n = s.num_particles();
-  out.text("# vtk DataFile Version 3.0\nhooke frame t=" + number(s.t) +
+  out.text("# vtk DataFile Version 3.0\nhooke frame t=" + number(t) +
            "\nBINARY\nDATASET POLYDATA\nFIELD FieldData 1\nTIME 1 1 double\n");
-  out.be<double>(s.t);
+  out.be<double>(t);
   out.text("\nPOINTS " + std::to_string(n) + " double\n");
   for (Index k = 0; k < 3 * n; ++k) out.be<double>(s.x[k]);
   out.text("\nLINES " + std::to_string(edges.size()) + " " + std::to_string(3 * edges.size()) +
@@ -99,10 +100,12 @@ void write_vtk_frame(const std::string& path, const State& s, const FrameMesh& m
 
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& frames) {
   std::ostringstream out;
-  out.precision(17);
   out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
-  for (const auto& [t, file] : frames)
-    out << "  <DataSet timestep=\"" << t << "\" file=\"" << file << "\"/>\n";
+  for (const auto& [t, file] : frames) {
+    char buf[32];
+    const auto r = std::to_chars(buf, buf + sizeof buf, t);
+    out << "  <DataSet timestep=\"" << std::string(buf, r.ptr) << "\" file=\"" << file << "\"/>\n";
+  }
   out << "</Collection>\n</VTKFile>\n";
   write_file(path, out.str());
 }

@@ -21,9 +21,11 @@ struct FrameMesh {
 /// (so a viewer can shade it); per cell, the strain (l - L) / L of each spring (NaN on the
 /// triangles, which are not springs); per particle, the velocity, a pinned flag and the kinetic
 /// energy m |v|^2 / 2 (J). Throws OutputError if the file cannot be written.
-void write_vtk_frame(const std::string& path, const State& s, const FrameMesh& mesh);
+/// t: the time written (the step's nominal time; s.t is not used).
+void write_vtk_frame(const std::string& path, const State& s, double t, const FrameMesh& mesh);
 
-/// Writes a ParaView collection (.pvd) listing frames (file names relative to the .pvd) and times.
+/// Writes a ParaView collection (.pvd) listing frames (file names relative to the .pvd) and times,
+/// each in the shortest form that reads back as the same double (0.1, not 0.10000000000000001).
 void write_pvd(const std::string& path, const std::vector<std::pair<double, std::string>>& frames);
 
 }  // namespace hooke

@@ -113,7 +113,7 @@ TEST(VtkWriter, FrameHoldsTrianglesStrainAndKineticEnergy) {
   s.t = 0.125;
   const std::string path =
       (std::filesystem::temp_directory_path() / "hooke_vtk_writer_test.vtk").string();
-  write_vtk_frame(path, s,
+  write_vtk_frame(path, s, s.t,
                   FrameMesh{scene.edges, scene.edge_rest, scene.triangles, scene.system->pinned(),
                             scene.system->masses()});
   const VtkFile f = read_vtk(path);
