@@ -258,12 +258,20 @@ const std::vector<ReaderEntry>& readers() {
 }  // namespace
 
 MethodOptions read_method_options(TableReader& integrator, const std::string& method) {
+  // A method chosen with --set leaves the file's keys of its own method without effect: they are
+  // dropped with a warning (the command line cannot remove them), as refuse_ignored() does.
+  auto drop_if_switched = [&] {
+    if (integrator.overridden("method"))
+      integrator.drop_unread_file_keys("has no effect with method = '" + method + "' (from --set)");
+  };
   for (const auto& e : readers())
     if (method == e.method) {
       MethodOptions o = e.read(integrator, method);
+      drop_if_switched();
       integrator.finish("method '" + method + "' does not take this key");
       return o;
     }
+  drop_if_switched();
   integrator.finish("method '" + method + "' takes no options (explicit methods have none)");
   return {};
 }

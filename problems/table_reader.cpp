@@ -51,6 +51,19 @@ void TableReader::warn(const std::string& key, const std::string& reason) const 
 
 void TableReader::skip(const std::string& key) { m_used.insert(key); }
 
+void TableReader::drop_unread_file_keys(const std::string& reason) {
+  std::vector<std::string> dropped;
+  for (const auto& [k, v] : m_tbl) {
+    (void)v;
+    const std::string key(k.str());
+    if (!m_used.count(key) && !overridden(key)) dropped.push_back(key);
+  }
+  for (const auto& key : dropped) {
+    warn(key, reason + "; ignored");
+    skip(key);
+  }
+}
+
 bool TableReader::has(const std::string& key) const {
   m_known.insert(key);
   return m_tbl.contains(key);

@@ -46,6 +46,10 @@ class TableReader {
   /// Marks key as read without recording it in the resolved scene: a key that has no effect and
   /// is dropped (after a warn()), so that finish() does not call it unknown.
   void skip(const std::string& key);
+  /// Drops, with the warning "FILE: KEY: reason; ignored", every key of this table that no getter
+  /// read and that the scene file gave (not a --set switch): for a --set switch that made the
+  /// file's keys ineffective (another method). Keys given with --set stay, for finish() to refuse.
+  void drop_unread_file_keys(const std::string& reason);
 
   /// A finite number (integer or float). Without a default the key is required.
   double number(const std::string& key, std::optional<double> def = std::nullopt);

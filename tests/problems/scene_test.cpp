@@ -484,6 +484,33 @@ TEST(SceneOverrides, ChangeValues) {
   EXPECT_EQ(r.time.dt, 0.004);
 }
 
+TEST(SceneOverrides, ASwitchedMethodDropsTheFilesKeysOfTheOldOne) {
+  // The file's implicit keys have no effect once --set picks an explicit method: dropped with a
+  // warning each. The same keys in a file that names the explicit method itself, or a key of the
+  // old method given with --set, are still refused.
+  const std::string implicit =
+      flat_grid("[integrator]\nmethod = \"implicit\"\nbeta = 1.0\nlinear_tolerance = 1e-8\n");
+  const Scene s =
+      load_scene_from_string(implicit, "switch.toml", {"integrator.method=symplectic-euler"});
+  EXPECT_EQ(s.integrator.method, "symplectic-euler");
+  ASSERT_EQ(s.warnings.size(), 2u);
+  expect_contains(s.warnings[0],
+                  "switch.toml: integrator.beta: has no effect with method = "
+                  "'symplectic-euler' (from --set); ignored");
+  expect_contains(s.warnings[1], "integrator.linear_tolerance: has no effect");
+  EXPECT_FALSE(s.resolved["integrator"].as_table()->contains("beta"));
+  const InputError in_file = load_error(
+      flat_grid("[integrator]\nmethod = \"symplectic-euler\"\nbeta = 1.0\n"), "file.toml");
+  EXPECT_EQ(in_file.key(), "integrator.beta");
+  try {
+    load_scene_from_string(implicit, "switch.toml",
+                           {"integrator.method=symplectic-euler", "integrator.beta=0.5"});
+    ADD_FAILURE() << "a --set key the new method does not take was accepted";
+  } catch (const InputError& e) {
+    EXPECT_EQ(e.key(), "integrator.beta");
+  }
+}
+
 TEST(SceneOverrides, BadPathIsAnInputError) {
   struct Case {
     std::string item, file, key;
