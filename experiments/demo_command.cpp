@@ -10,7 +10,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
-#include <iomanip>
 #include <map>
 #include <sstream>
 
@@ -19,6 +18,7 @@
 #include "experiments/plot_script.hpp"
 #include "experiments/run_command.hpp"
 #include "experiments/study_output.hpp"
+#include "experiments/trajectory.hpp"
 #include "hooke/integrators/stability.hpp"
 #include "hooke/registry.hpp"
 
@@ -52,12 +52,6 @@ std::string with_method(const std::string& path, const std::string& method) {
   tbl.insert_or_assign("integrator", toml::table{{"method", method}});
   std::ostringstream os;
   os << tbl;
-  return os.str();
-}
-
-std::string g(double v) {
-  std::ostringstream os;
-  os << std::setprecision(3) << v;
   return os.str();
 }
 
@@ -134,20 +128,20 @@ Command add_demo_command(CLI::App& app) {
         line << a->method;
         if (explicit_code == 3)
           line << " diverged at step " << (exp.count("step") ? (long long)exp.at("step") : 0)
-               << " (t = " << g(exp.count("t") ? exp.at("t") : 0.0) << " s)";
+               << " (t = " << fmt(exp.count("t") ? exp.at("t") : 0.0) << " s)";
         else
           line << " stayed stable (exit " << explicit_code << ")";
-        line << " at h = " << g(h) << " s";
+        line << " at h = " << fmt(h) << " s";
         if (y > 0.0 && w > 0.0)
-          line << ", " << g(h / (y / w)) << " x its limit h < " << g(y)
-               << " / omega_max = " << g(y / w) << " s";
+          line << ", " << fmt(h / (y / w)) << " x its limit h < " << fmt(y)
+               << " / omega_max = " << fmt(y / w) << " s";
         line << "; " << implicit_name;
         if (implicit_code == 0)
           line << " stable: " << (imp.count("step") ? (long long)imp.at("step") : 0)
-               << " steps to t = " << g(imp.count("t") ? imp.at("t") : 0.0) << " s in "
-               << g(imp.count("wall_time") ? imp.at("wall_time") : 0.0)
+               << " steps to t = " << fmt(imp.count("t") ? imp.at("t") : 0.0) << " s in "
+               << fmt(imp.count("wall_time") ? imp.at("wall_time") : 0.0)
                << " s, largest spring strain at the end "
-               << g(100.0 * (imp.count("max_strain") ? imp.at("max_strain") : 0.0)) << " %";
+               << fmt(100.0 * (imp.count("max_strain") ? imp.at("max_strain") : 0.0)) << " %";
         else
           line << " failed (exit " << implicit_code << ")";
         const std::string summary = line.str();

@@ -22,8 +22,10 @@ struct PetscSolverOptions {
 /// a hypre BoomerAMG on its scalar matrix A_xx, A_yy or A_zz). With two or more threads (and MPI
 /// initialised for concurrent calls, as this backend asks for) the three splits are applied
 /// concurrently, with the same results as PCFIELDSPLIT's one after another: hypre's V-cycle is
-/// serial, and this takes about a fifth off a step (408 x 408, 2 threads: 0.88-0.99 s per step,
-/// against 1.18-1.23 s with the splits forced one after another in the same build). Any other
+/// serial, and this takes about a quarter off a step (hooke run target_backward_euler_256 --set
+/// mesh.nx=408 --set mesh.ny=408 --set integrator.linear_solver=petsc --set time.duration=0.03,
+/// 2 threads: 0.82-0.86 s per warm step, against 1.16-1.20 s with --set
+/// integrator.petsc_options=-log_view, which applies the splits one after another). Any other
 /// preconditioner, other splits, or -log_view (PETSc's event log is not thread-safe) keep PETSc's
 /// own application. Measured on the backward-Euler target (hooke run target_backward_euler_256
 /// --set integrator.linear_solver=petsc --set time.duration=0.03, and --set mesh.nx=N --set

@@ -394,16 +394,19 @@ TEST(SceneColliders, PinnedParticlesMayStartInside) {
   expect_contains(e.reason(), "free particle 0 at (0, 0, 0) starts 0.4 m inside");
 }
 
+/// Two spheres of radius 0.2 centred at (0.25, -0.5, 0.5) and (0.75, -0.5, 0.5), a floor at
+/// y = -1 and a wall at x = 1.05, as arrays of tables.
+constexpr const char* kTwoSpheresFloorAndWall =
+    "[[collision.sphere]]\ncenter = [0.25, -0.5, 0.5]\nradius = 0.2\n"
+    "[[collision.sphere]]\ncenter = [0.75, -0.5, 0.5]\nradius = 0.2\n"
+    "[[collision.ground]]\nheight = -1.0\n"
+    "[[collision.ground]]\nnormal = [-1.0, 0.0, 0.0]\nheight = -1.05\n";
+
 TEST(SceneColliders, SeveralPlanesAndSpheresAsArraysOfTables) {
   // Two spheres and two planes ([[...]]): four constraints, planes first, in the order given;
   // a particle inside the second sphere is refused under that sphere's indexed key; an array
   // element that is not a table is refused under the array's key.
-  const std::string colliders =
-      "[[collision.sphere]]\ncenter = [0.25, -0.5, 0.5]\nradius = 0.2\n"
-      "[[collision.sphere]]\ncenter = [0.75, -0.5, 0.5]\nradius = 0.2\n"
-      "[[collision.ground]]\nheight = -1.0\n"
-      "[[collision.ground]]\nnormal = [-1.0, 0.0, 0.0]\nheight = -1.05\n";
-  const Scene s = load_scene_from_string(flat_grid(colliders), "arrays.toml");
+  const Scene s = load_scene_from_string(flat_grid(kTwoSpheresFloorAndWall), "arrays.toml");
   ASSERT_EQ(s.system->constraints().size(), 4u);
   for (size_t k = 0; k < 4; ++k)
     EXPECT_STREQ(s.system->constraints()[k]->name(), k < 2 ? "ground-plane" : "sphere-collider")
@@ -429,11 +432,8 @@ TEST(SceneColliders, ClothDrapesOverTwoSpheresAndStaysInsideTheWalls) {
   const std::string text =
       "[mesh]\ntype = \"grid\"\nnx = 16\nny = 16\npins = []\n"
       "[springs]\nstructural_stiffness = 2000.0\nshear_stiffness = 500.0\n"
-      "flexion_stiffness = 50.0\n[forces]\ngravity = [0.0, -9.81, 0.0]\n"
-      "[[collision.sphere]]\ncenter = [0.25, -0.5, 0.5]\nradius = 0.2\n"
-      "[[collision.sphere]]\ncenter = [0.75, -0.5, 0.5]\nradius = 0.2\n"
-      "[[collision.ground]]\nheight = -1.0\n"
-      "[[collision.ground]]\nnormal = [-1.0, 0.0, 0.0]\nheight = -1.05\n"
+      "flexion_stiffness = 50.0\n[forces]\ngravity = [0.0, -9.81, 0.0]\n" +
+      std::string(kTwoSpheresFloorAndWall) +
       "[integrator]\nmethod = \"symplectic-euler\"\n[time]\ndt = 2e-4\nduration = 1.5\n";
   const Scene s = load_scene_from_string(text, "drape.toml");
   hooke::Simulation sim(*s.system, hooke::make_stepper("symplectic-euler", *s.system, {}),
