@@ -2,6 +2,7 @@
 //   hooke run SCENE.toml [--set section.key=value]... [--out DIR]
 //   hooke resume DIR
 //   hooke scenes
+//   hooke keys [SECTION] [--markdown]
 //   hooke info SCENE.toml [--set ...]
 //   hooke crosscheck SCENE.toml [--methods a,b] [--reference-rtol R] [--set ...] [--out DIR]
 //   hooke step-convergence [SCENE] [--full] [--out DIR]
@@ -28,6 +29,7 @@ Command add_run_command(CLI::App& app);               // run_command.cpp
 Command add_resume_command(CLI::App& app);            // run_command.cpp
 Command add_scenes_command(CLI::App& app);            // info_command.cpp
 Command add_info_command(CLI::App& app);              // info_command.cpp
+Command add_keys_command(CLI::App& app);              // keys_command.cpp
 Command add_crosscheck_command(CLI::App& app);        // crosscheck_command.cpp
 Command add_step_convergence_command(CLI::App& app);  // step_convergence_command.cpp
 Command add_stability_command(CLI::App& app);         // stability_map.cpp
@@ -45,7 +47,7 @@ int main(int argc, char** argv) {
   app.set_version_flag("--version", HOOKE_VERSION);
   std::vector<Command> commands;
   for (auto add :
-       {add_run_command, add_resume_command, add_scenes_command, add_info_command,
+       {add_run_command, add_resume_command, add_scenes_command, add_info_command, add_keys_command,
         add_crosscheck_command, add_step_convergence_command, add_stability_command,
         add_workprecision_command, add_resolution_command, add_scaling_command, add_demo_command})
     commands.push_back(add(app));

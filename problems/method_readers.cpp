@@ -124,8 +124,7 @@ void read_sundials(TableReader& r, SundialsOptions& o, bool linear_solves = true
                    const Governing& nonlinear = {}) {
   o.rtol = r.number("rtol", o.rtol);
   o.atol = r.number("atol", o.atol);
-  o.max_steps = long(r.integer("max_steps", o.max_steps, std::numeric_limits<long>::min(),
-                               std::numeric_limits<long>::max()));
+  o.max_steps = long(r.integer("max_steps", o.max_steps, 1, 1LL << 62));
   if (!linear_solves) {
     for (const char* key :
          {"linear_solver", "preconditioner", "preconditioner_tolerance", "petsc_options"})

@@ -1,7 +1,6 @@
 #include "problems/scene.hpp"
 
 #include <algorithm>
-#include <charconv>
 #include <cmath>
 #include <filesystem>
 #include <fstream>
@@ -107,6 +106,8 @@ std::string apply_override(toml::table& root, const std::string& item) {
 MeshBuild build_mesh(TableReader& mesh, TableReader& springs, const std::string& base_dir) {
   MeshBuild b;
   const std::string type = mesh.choice("type", std::nullopt, mesh_types());
+  mesh.set_variant(type);
+  springs.set_variant(type);
   for (const auto& t : mesh_table())
     if (type == t.name) t.build(mesh, springs, base_dir, b);
   return b;
@@ -114,6 +115,7 @@ MeshBuild build_mesh(TableReader& mesh, TableReader& springs, const std::string&
 
 void read_ode(TableReader& ode, Scene& scene) {
   const std::string problem = ode.choice("problem", std::nullopt, {"decay", "circle"});
+  ode.set_variant(problem);
   if (problem == "decay") {
     const double rate = ode.number("rate", 1.0);
     const double x0 = ode.number("x0", 1.0);
@@ -278,6 +280,7 @@ void read_run_settings(TableReader& root, Scene& scene) {
       r.fail("method", e.what());
     }
     scene.integrator.method = method;
+    r.set_variant(method);
     scene.integrator.options = read_method_options(r, method);
   }
   {
@@ -336,13 +339,6 @@ void read_run_settings(TableReader& root, Scene& scene) {
   }
 }
 
-/// Shortest text that reads back as v.
-std::string shortest(double v) {
-  char buf[32];
-  const auto r = std::to_chars(buf, buf + sizeof buf, v);
-  return std::string(buf, r.ptr);
-}
-
 /// The --set switches that take every spring damper out of a scene: each [springs] key of the
 /// scene (its file and --set switches: per-kind dampings default to `damping`) that names a damping
 /// (ends in "damping") and is > 0, set to 0, and the mesh's own spring rows ([mesh] springs of a
@@ -361,7 +357,7 @@ std::string damper_overrides(const toml::table& given) {
         const auto v = (*r)[k].value<double>();
         if (!v) return out;
         damped = damped || (k == 4 && *v > 0.0);
-        text += (k ? ", " : "") + shortest(k == 4 ? 0.0 : *v);
+        text += (k ? ", " : "") + shortest_number(k == 4 ? 0.0 : *v);
       }
       text += "]";
     }

@@ -13,6 +13,30 @@ std::string fmt(double v) {
   os << v;
   return os.str();
 }
+/// A default as TOML text, the way the key table (scene_keys.cpp) writes it.
+std::string toml_text(double v) { return shortest_number(v); }
+std::string toml_text(long long v) { return std::to_string(v); }
+std::string toml_text(bool v) { return v ? "true" : "false"; }
+std::string toml_text(const std::string& v) { return "'" + v + "'"; }
+std::string toml_text(const std::vector<double>& v);
+template <class Seq>
+std::string toml_list(const Seq& v) {
+  std::string s = "[";
+  for (size_t i = 0; i < size_t(v.size()); ++i) s += (i ? ", " : "") + toml_text(v[i]);
+  return s + "]";
+}
+std::string toml_text(const std::vector<double>& v) { return toml_list(v); }
+std::string toml_text(const std::vector<long long>& v) { return toml_list(v); }
+std::string toml_text(const Vec3& v) {
+  return "[" + toml_text(v[0]) + ", " + toml_text(v[1]) + ", " + toml_text(v[2]) + "]";
+}
+std::string toml_text(const std::vector<std::vector<double>>& v) { return toml_list(v); }
+template <class V>
+std::optional<std::string> text_of(const std::optional<V>& def) {
+  if (!def) return std::nullopt;
+  return toml_text(*def);
+}
+
 const char* type_name(const toml::node& n) {
   switch (n.type()) {
     case toml::node_type::table:
@@ -50,6 +74,52 @@ void TableReader::warn(const std::string& key, const std::string& reason) const 
 }
 
 void TableReader::skip(const std::string& key) { m_used.insert(key); }
+
+std::string TableReader::deprecated_alias(const std::string& old_key, const std::string& key) {
+  if (!m_tbl.contains(old_key)) return key;
+  if (m_tbl.contains(key)) fail(old_key, "is the old name of " + path(key) + "; give only " + key);
+  warn(old_key, "is deprecated; use " + path(key) + " (same meaning)");
+  m_alias[old_key] = key;
+  return old_key;
+}
+
+const SceneKey* TableReader::audit(const std::string& key, KeyType type,
+                                   const std::optional<std::string>& def_text) const {
+  const std::string name = key_without_indices(path(key));
+  const std::string where = name + (m_variant.empty() ? "" : " (" + m_variant + ")");
+  const SceneKey* k = find_scene_key(name, m_variant);
+  if (!k) {
+    note_scene_key_problem(where + ": read but missing from the key table (scene_keys.cpp)");
+    return nullptr;
+  }
+  note_scene_key_use(k);
+  if (k->type != type)
+    note_scene_key_problem(where + ": the key table says " + to_string(k->type) +
+                           ", the reader reads " + to_string(type));
+  if (def_text && k->def.empty())
+    note_scene_key_problem(where + ": the reader's default is " + *def_text +
+                           ", the key table says required");
+  else if (def_text && !k->computed && *def_text != k->def)
+    note_scene_key_problem(where + ": the reader's default is " + *def_text +
+                           ", the key table says " + k->def);
+  return k;
+}
+
+void TableReader::audit_range(const SceneKey* k, const KeyRange& accepted) const {
+  if (!k) return;
+  const KeyRange& doc = k->range;
+  // Every value the table allows must pass the getter: the table's bounds lie within its bounds.
+  const bool lo_ok =
+      !accepted.lo || (doc.lo && (*doc.lo > *accepted.lo ||
+                                  (*doc.lo == *accepted.lo && (doc.lo_open || !accepted.lo_open))));
+  const bool hi_ok =
+      !accepted.hi || (doc.hi && (*doc.hi < *accepted.hi ||
+                                  (*doc.hi == *accepted.hi && (doc.hi_open || !accepted.hi_open))));
+  if (!lo_ok || !hi_ok)
+    note_scene_key_problem(k->name + ": the key table allows " +
+                           (doc.bounded() ? doc.text() : "any value") + ", the reader only " +
+                           accepted.text());
+}
 
 void TableReader::drop_unread_file_keys(const std::string& reason) {
   std::vector<std::string> dropped;
@@ -91,8 +161,11 @@ double TableReader::to_number(const toml::node& n, const std::string& key) const
   return v;
 }
 
-void TableReader::record(const std::string& key, toml::node&& value) {
-  // Copy into the resolved table; node&& is a concrete value/array created by the caller.
+void TableReader::record(const std::string& read_key, toml::node&& value) {
+  // Copy into the resolved table; node&& is a concrete value/array created by the caller. A
+  // deprecated name is recorded under its current one.
+  const auto alias = m_alias.find(read_key);
+  const std::string& key = alias == m_alias.end() ? read_key : alias->second;
   if (auto a = value.as_array())
     m_out.insert_or_assign(key, std::move(*a));
   else if (auto s = value.as_string())
@@ -106,6 +179,7 @@ void TableReader::record(const std::string& key, toml::node&& value) {
 }
 
 double TableReader::number(const std::string& key, std::optional<double> def) {
+  audit(key, KeyType::Number, text_of(def));
   m_used.insert(key);
   double v;
   if (has(key))
@@ -119,12 +193,16 @@ double TableReader::number(const std::string& key, std::optional<double> def) {
 }
 
 double TableReader::positive(const std::string& key, std::optional<double> def) {
+  audit_range(find_scene_key(key_without_indices(path(key)), m_variant),
+              {0.0, std::nullopt, true, false});
   const double v = number(key, def);
   if (!(v > 0.0)) fail(key, "must be > 0, got " + fmt(v));
   return v;
 }
 
 double TableReader::non_negative(const std::string& key, std::optional<double> def) {
+  audit_range(find_scene_key(key_without_indices(path(key)), m_variant),
+              {0.0, std::nullopt, false, false});
   const double v = number(key, def);
   if (!(v >= 0.0)) fail(key, "must be >= 0, got " + fmt(v));
   return v;
@@ -132,6 +210,7 @@ double TableReader::non_negative(const std::string& key, std::optional<double> d
 
 long long TableReader::integer(const std::string& key, std::optional<long long> def, long long lo,
                                long long hi) {
+  audit_range(audit(key, KeyType::Integer, text_of(def)), {double(lo), double(hi), false, false});
   m_used.insert(key);
   long long v;
   if (has(key)) {
@@ -153,6 +232,7 @@ long long TableReader::integer(const std::string& key, std::optional<long long> 
 }
 
 bool TableReader::boolean(const std::string& key, std::optional<bool> def) {
+  audit(key, KeyType::Boolean, text_of(def));
   m_used.insert(key);
   bool v;
   if (has(key)) {
@@ -171,6 +251,7 @@ bool TableReader::boolean(const std::string& key, std::optional<bool> def) {
 }
 
 std::string TableReader::string(const std::string& key, std::optional<std::string> def) {
+  audit(key, KeyType::String, text_of(def));
   m_used.insert(key);
   std::string v;
   if (has(key)) {
@@ -191,6 +272,10 @@ std::string TableReader::string(const std::string& key, std::optional<std::strin
 std::string TableReader::choice(const std::string& key, std::optional<std::string> def,
                                 const std::vector<std::string>& allowed) {
   const std::string v = string(key, def);
+  if (const SceneKey* k = find_scene_key(key_without_indices(path(key)), m_variant);
+      k && std::set<std::string>(k->choices.begin(), k->choices.end()) !=
+               std::set<std::string>(allowed.begin(), allowed.end()))
+    note_scene_key_problem(k->name + ": the key table's choices differ from the reader's");
   for (const auto& a : allowed)
     if (a == v) return v;
   std::string list;
@@ -199,6 +284,7 @@ std::string TableReader::choice(const std::string& key, std::optional<std::strin
 }
 
 Vec3 TableReader::vec3(const std::string& key, std::optional<Vec3> def) {
+  audit(key, KeyType::Vector3, text_of(def));
   m_used.insert(key);
   Vec3 v;
   if (has(key)) {
@@ -216,6 +302,7 @@ Vec3 TableReader::vec3(const std::string& key, std::optional<Vec3> def) {
 
 std::vector<double> TableReader::numbers(const std::string& key,
                                          std::optional<std::vector<double>> def) {
+  audit(key, KeyType::Numbers, text_of(def));
   m_used.insert(key);
   std::vector<double> v;
   if (has(key)) {
@@ -237,6 +324,7 @@ std::vector<double> TableReader::numbers(const std::string& key,
 
 std::vector<long long> TableReader::integers(const std::string& key,
                                              std::optional<std::vector<long long>> def) {
+  audit(key, KeyType::Integers, text_of(def));
   m_used.insert(key);
   std::vector<long long> v;
   if (has(key)) {
@@ -262,6 +350,7 @@ std::vector<long long> TableReader::integers(const std::string& key,
 std::vector<std::vector<double>> TableReader::rows(
     const std::string& key, size_t min_len, size_t max_len,
     std::optional<std::vector<std::vector<double>>> def) {
+  audit(key, KeyType::Rows, text_of(def));
   m_used.insert(key);
   std::vector<std::vector<double>> v;
   if (!has(key)) {

@@ -1,6 +1,7 @@
 #pragma once
 #include <toml++/toml.h>
 
+#include <map>
 #include <memory>
 #include <optional>
 #include <set>
@@ -10,6 +11,7 @@
 #include "hooke/core.hpp"
 #include "hooke/options.hpp"
 #include "problems/input_error.hpp"
+#include "problems/scene_keys.hpp"
 
 namespace hooke {
 
@@ -100,6 +102,13 @@ class TableReader {
   std::vector<TableReader> tables(const std::string& key);
   /// Dotted path of this table ("collision.sphere[1]"; "" for the root).
   const std::string& name() const { return m_prefix; }
+  /// The variant this table's keys belong to in the key table (scene_keys()): the mesh type for
+  /// [mesh] and [springs], the method for [integrator], the problem for [ode]; "" for none.
+  void set_variant(std::string variant) { m_variant = std::move(variant); }
+  /// The name to read for a key that has a deprecated alias: `old_key` (with a deprecation
+  /// warning) if the scene gives it, else `key`. Giving both is an error. What is read under
+  /// `old_key` is recorded in the resolved scene under `key`.
+  std::string deprecated_alias(const std::string& old_key, const std::string& key);
   /// Throws if key is present: reason says why it does not apply.
   void reject_if_present(const std::string& key, const std::string& reason) const;
   /// Throws for the first key no getter asked for, listing the known keys of this table; `why`, if
@@ -110,6 +119,12 @@ class TableReader {
   const toml::node& node(const std::string& key) const;
   double to_number(const toml::node& n, const std::string& key) const;
   void record(const std::string& key, toml::node&& value);
+  /// Checks a getter's call against the key table (scene_keys.hpp): that the key is there for
+  /// this variant with this type and, when the getter has one, this default (TOML text).
+  const SceneKey* audit(const std::string& key, KeyType type,
+                        const std::optional<std::string>& def_text) const;
+  /// Checks that the key table's range for key lies within what the getter accepts.
+  void audit_range(const SceneKey* k, const KeyRange& accepted) const;
 
   const toml::table& m_tbl;
   toml::table& m_out;
@@ -117,6 +132,8 @@ class TableReader {
   std::set<std::string> m_used;
   mutable std::set<std::string> m_known;  ///< keys asked about with has(), for finish()'s hint
   std::shared_ptr<ReadContext> m_context;
+  std::string m_variant;
+  std::map<std::string, std::string> m_alias;  ///< deprecated key read -> key recorded
 };
 
 }  // namespace hooke

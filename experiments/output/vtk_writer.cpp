@@ -1,6 +1,5 @@
 #include "experiments/output/vtk_writer.hpp"
 
-#include <charconv>
 #include <cstdint>
 #include <cstring>
 #include <limits>
@@ -9,6 +8,7 @@
 #include <vector>
 
 #include "experiments/output/output_file.hpp"
+#include "problems/scene_keys.hpp"
 
 namespace hooke {
 
@@ -102,9 +102,7 @@ void write_pvd(const std::string& path, const std::vector<std::pair<double, std:
   std::ostringstream out;
   out << "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"0.1\">\n<Collection>\n";
   for (const auto& [t, file] : frames) {
-    char buf[32];
-    const auto r = std::to_chars(buf, buf + sizeof buf, t);
-    out << "  <DataSet timestep=\"" << std::string(buf, r.ptr) << "\" file=\"" << file << "\"/>\n";
+    out << "  <DataSet timestep=\"" << shortest_number(t) << "\" file=\"" << file << "\"/>\n";
   }
   out << "</Collection>\n</VTKFile>\n";
   write_file(path, out.str());

@@ -164,7 +164,8 @@ void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_
     out.x.segment<3>(3 * i) = scale * obj.vertices[size_t(i)] + shift;
     out.masses[i] = mass;
   }
-  pin_ids(mesh, "pinned", mesh.integers("pinned", std::vector<long long>{}), out);
+  const std::string pins = mesh.deprecated_alias("pinned", "pins");
+  pin_ids(mesh, pins, mesh.integers(pins, std::vector<long long>{}), out);
   out.triangles = obj.triangles;
   const double k = springs.non_negative("stiffness", 1e3);
   const double c = springs.non_negative("damping", 0.0);

@@ -51,14 +51,14 @@ void build_particles(TableReader& mesh, TableReader& springs, MeshBuild& out) {
       for (int c = 0; c < 3; ++c) out.v[3 * i + c] = vel[size_t(i)][size_t(c)];
   }
 
-  const auto pins = mesh.integers("pinned", std::vector<long long>{});
+  const std::string pins_key = mesh.deprecated_alias("pinned", "pins");
+  const auto pins = mesh.integers(pins_key, std::vector<long long>{});
   for (size_t k = 0; k < pins.size(); ++k)
-    out.pinned[size_t(read_id(mesh, "pinned[" + std::to_string(k) + "]", double(pins[k]), n))] = 1;
+    out.pinned[size_t(
+        read_id(mesh, pins_key + "[" + std::to_string(k) + "]", double(pins[k]), n))] = 1;
 
   const double c_default = springs.non_negative("damping", 0.0);
-  const auto sp = mesh.has("springs")
-                      ? mesh.rows("springs", 3, 5)
-                      : mesh.rows("springs", 3, 5, std::vector<std::vector<double>>{});
+  const auto sp = mesh.rows("springs", 3, 5, std::vector<std::vector<double>>{});
   for (size_t s = 0; s < sp.size(); ++s) {
     const std::string key = "springs[" + std::to_string(s) + "]";
     const auto& r = sp[s];

@@ -180,7 +180,7 @@ faults)
 [mesh]
 type = "particles"
 positions = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.5, 0.8, 0.0]]
-pinned = [0]
+pins = [0]
 springs = [[0, 1, 1e4, 10.0], [1, 2, 1e4], [0, 2, 1e4]]
 
 [integrator]

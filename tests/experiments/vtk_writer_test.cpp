@@ -20,6 +20,7 @@
 #include <vector>
 
 #include "problems/scene.hpp"
+#include "tests/support/scene_key_audit.hpp"
 
 namespace hooke {
 namespace {

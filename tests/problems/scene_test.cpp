@@ -295,7 +295,7 @@ TEST(SceneParticles, PinnedParticlesStartAtRest) {
 type = "particles"
 positions = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0]]
 velocities = [[1.0, 2.0, 3.0], [0.0, 0.0, 0.5]]
-pinned = [0]
+pins = [0]
 springs = [[0, 1, 10.0]]
 )",
                                          "particles.toml");
@@ -388,7 +388,7 @@ TEST(SceneColliders, PinnedParticlesMayStartInside) {
   const std::string sphere = "\n[collision.sphere]\ncenter = [0.0, 0.1, 0.0]\nradius = 0.5\n";
   // Particle 0 is inside the sphere: accepted while it is pinned (colliders never move pinned
   // particles), refused once it is free.
-  EXPECT_NO_THROW(load_scene_from_string(text + "pinned = [0]\n" + sphere, "pinned.toml"));
+  EXPECT_NO_THROW(load_scene_from_string(text + "pins = [0]\n" + sphere, "pinned.toml"));
   const InputError e = load_error(text + sphere);
   EXPECT_EQ(e.key(), "collision.sphere");
   expect_contains(e.reason(), "free particle 0 at (0, 0, 0) starts 0.4 m inside");
@@ -678,7 +678,7 @@ TEST(SceneObj, ByteOrderMarkAndWindowsLineEndsAreNotContent) {
   for (const auto& [name, text] : files) {
     std::ofstream(dir / name, std::ios::binary) << text;
     const Scene s = load_scene_from_string(
-        "[mesh]\ntype = \"obj\"\nfile = \"" + name + "\"\ntotal_mass = 0.1\npinned = [0]\n",
+        "[mesh]\ntype = \"obj\"\nfile = \"" + name + "\"\ntotal_mass = 0.1\npins = [0]\n",
         (dir / "scene.toml").string());
     EXPECT_EQ(s.system->num_particles(), 4) << name;
     positions.push_back(s.initial.x);

@@ -1,0 +1,967 @@
+#include "problems/scene_keys.hpp"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <mutex>
+#include <sstream>
+
+namespace hooke {
+
+namespace {
+
+/// Builds one SceneKey: K("mesh.nx", KeyType::Integer).in({"grid"}).def("20")...
+struct K {
+  SceneKey k;
+  K(std::string name, KeyType type) {
+    k.name = std::move(name);
+    k.type = type;
+  }
+  K& in(std::vector<std::string> variants) {
+    k.when = std::move(variants);
+    return *this;
+  }
+  K& unit(std::string u) {
+    k.unit = std::move(u);
+    return *this;
+  }
+  K& def(std::string d) {
+    k.def = std::move(d);
+    return *this;
+  }
+  /// A default that depends on other keys or the build, in words.
+  K& computed(std::string d) {
+    k.def = std::move(d);
+    k.computed = true;
+    return *this;
+  }
+  K& range(std::optional<double> lo, bool lo_open, std::optional<double> hi, bool hi_open) {
+    k.range = {lo, hi, lo_open, hi_open};
+    return *this;
+  }
+  K& positive() { return range(0.0, true, std::nullopt, false); }
+  K& non_negative() { return range(0.0, false, std::nullopt, false); }
+  /// An integer option held in an int: from lo to the largest int.
+  K& int_from(double lo) { return between(lo, 2147483647.0); }
+  K& between(double lo, double hi) { return range(lo, false, hi, false); }
+  K& choices(std::vector<std::string> c) {
+    k.choices = std::move(c);
+    return *this;
+  }
+  K& needs(std::vector<std::string> n) {
+    k.needs = std::move(n);
+    return *this;
+  }
+  K& example(std::string e) {
+    k.example = std::move(e);
+    return *this;
+  }
+  K& replaced_by(std::string r) {
+    k.replaced_by = std::move(r);
+    return *this;
+  }
+  K& build(std::string b) {
+    k.build = std::move(b);
+    return *this;
+  }
+  SceneKey meaning(std::string m) {
+    k.meaning = std::move(m);
+    return k;
+  }
+};
+
+using T = KeyType;
+constexpr double kMaxCount = 1e9;                    // nx, ny, n: the builders' bound
+constexpr double kMaxSteps = 4611686018427387904.0;  // 2^62: step counts
+
+const std::vector<std::string> kLattices = {"grid", "cantilever"};
+const std::vector<std::string> kLines = {"chain", "hair"};
+const std::vector<std::string> kImplicit = {"implicit", "implicit-midpoint", "bdf2"};
+const std::vector<std::string> kSundials = {"cvode", "ida"};
+
+std::vector<SceneKey> make_table() {
+  std::vector<SceneKey> t;
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
+  const std::string spread = "mass spread evenly over the particles; give this or mesh.mass";
+  const std::string each = "mass of each particle; give this or mesh.total_mass";
+
+  // [mesh]: one builder per type (problems/builders/).
+  add(K("mesh.type", T::String)
+          .choices({"grid", "cantilever", "chain", "hair", "damped-springs", "two-particle",
+                    "particles", "obj"})
+          .example("'grid'")
+          .meaning("the mesh builder; the other [mesh] and [springs] keys depend on it"));
+  add(K("mesh.nx", T::Integer)
+          .in({"grid"})
+          .def("20")
+          .between(2, kMaxCount)
+          .meaning("particles along the width (x)"));
+  add(K("mesh.ny", T::Integer)
+          .in({"grid"})
+          .def("20")
+          .between(2, kMaxCount)
+          .meaning("particles along the height (z when horizontal, -y when vertical)"));
+  add(K("mesh.width", T::Number)
+          .in({"grid"})
+          .unit("m")
+          .def("1")
+          .positive()
+          .meaning("extent along x"));
+  add(K("mesh.height", T::Number)
+          .in({"grid"})
+          .unit("m")
+          .def("1")
+          .positive()
+          .meaning("extent along z (horizontal) or -y (vertical)"));
+  add(K("mesh.orientation", T::String)
+          .in({"grid"})
+          .def("'horizontal'")
+          .choices({"horizontal", "vertical"})
+          .meaning("horizontal: in the x-z plane at y = 0; vertical: in the x-y plane, hanging "
+                   "down from y = 0"));
+  add(K("mesh.flexion_stride", T::Integer)
+          .in({"grid"})
+          .def("1")
+          .between(1, 2)
+          .meaning("flexion springs start at every stride-th particle (2: the non-overlapping "
+                   "bending springs "
+                   "of public local/global demos)"));
+  add(K("mesh.pins", T::Rows)
+          .in({"grid"})
+          .def("[[0, 0], [-1, 0]]")
+          .meaning("pinned particles as grid coordinates [i, j]; negative values count from the "
+                   "end (the default: the two corners of row 0)"));
+  add(K("mesh.nx", T::Integer)
+          .in({"cantilever"})
+          .def("21")
+          .between(2, kMaxCount)
+          .meaning("particles along the beam (x); the column x = 0 is clamped"));
+  add(K("mesh.ny", T::Integer)
+          .in({"cantilever"})
+          .def("3")
+          .between(2, kMaxCount)
+          .meaning("particles across the beam (-y)"));
+  add(K("mesh.length", T::Number)
+          .in({"cantilever"})
+          .unit("m")
+          .def("1")
+          .positive()
+          .meaning("length of the beam along x"));
+  add(K("mesh.thickness", T::Number)
+          .in({"cantilever"})
+          .unit("m")
+          .def("0.1")
+          .positive()
+          .meaning("thickness of the beam along -y"));
+  for (const char* kind : {"structural", "shear", "flexion"}) {
+    const std::string what = kind == std::string("structural") ? "(i+1, j) and (i, j+1)"
+                             : kind == std::string("shear")    ? "along the cell diagonals"
+                                                               : "(i+2, j) and (i, j+2)";
+    add(K(std::string("mesh.") + kind, T::Boolean)
+            .in(kLattices)
+            .def("true")
+            .meaning(std::string("add the ") + kind + " springs, " + what));
+  }
+  add(K("mesh.n", T::Integer)
+          .in(kLines)
+          .def("20")
+          .between(2, kMaxCount)
+          .meaning("number of particles along the line"));
+  add(K("mesh.length", T::Number)
+          .in(kLines)
+          .unit("m")
+          .def("1")
+          .positive()
+          .meaning("length of the line"));
+  add(K("mesh.direction", T::Vector3)
+          .in(kLines)
+          .def("[1, 0, 0]")
+          .meaning("direction of the line from start (any nonzero length)"));
+  add(K("mesh.start", T::Vector3)
+          .in(kLines)
+          .unit("m")
+          .def("[0, 0, 0]")
+          .meaning("position of particle 0"));
+  add(K("mesh.pins", T::Integers)
+          .in(kLines)
+          .def("[0]")
+          .meaning("ids of the pinned particles; negative ids count from the end"));
+  add(K("mesh.curl_radius", T::Number)
+          .in({"hair"})
+          .unit("m")
+          .def("0")
+          .non_negative()
+          .meaning("radius of the helix of curly hair (0: straight)"));
+  add(K("mesh.curl_turns", T::Number)
+          .in({"hair"})
+          .def("0")
+          .non_negative()
+          .meaning("turns of the helix over the strand's length (0: straight)"));
+  add(K("mesh.total_mass", T::Number).in(kLattices).unit("kg").def("1").positive().meaning(spread));
+  add(K("mesh.total_mass", T::Number)
+          .in(kLines)
+          .unit("kg")
+          .computed("0.1 * mesh.n")
+          .positive()
+          .meaning(spread));
+  add(K("mesh.mass", T::Number)
+          .in({"grid", "cantilever", "chain", "hair", "obj"})
+          .unit("kg")
+          .computed("mesh.total_mass / particles")
+          .positive()
+          .example("0.01")
+          .meaning(each));
+  // obj: a Wavefront file.
+  add(K("mesh.file", T::String)
+          .in({"obj"})
+          .example("'meshes/square.obj'")
+          .meaning("Wavefront OBJ file (v and f lines), relative to the scene file's folder"));
+  add(K("mesh.scale", T::Number)
+          .in({"obj"})
+          .def("1")
+          .positive()
+          .meaning("factor applied to the OBJ coordinates"));
+  add(K("mesh.translate", T::Vector3)
+          .in({"obj"})
+          .unit("m")
+          .def("[0, 0, 0]")
+          .meaning("shift added after scaling"));
+  add(K("mesh.total_mass", T::Number).in({"obj"}).unit("kg").def("1").positive().meaning(spread));
+  add(K("mesh.pins", T::Integers)
+          .in({"obj", "particles"})
+          .def("[]")
+          .meaning("ids of the pinned particles (0-based; OBJ vertex k is id k - 1); negative ids "
+                   "count from "
+                   "the end"));
+  add(K("mesh.pinned", T::Integers)
+          .in({"obj", "particles"})
+          .def("[]")
+          .example("[0]")
+          .replaced_by("mesh.pins")
+          .meaning("the old name of mesh.pins"));
+  // two-particle, damped-springs: oscillators with known behaviour.
+  add(K("mesh.mass", T::Number)
+          .in({"two-particle", "damped-springs", "particles"})
+          .unit("kg")
+          .def("1")
+          .positive()
+          .meaning("mass of each particle"));
+  add(K("mesh.rest_length", T::Number)
+          .in({"two-particle", "damped-springs"})
+          .unit("m")
+          .def("1")
+          .positive()
+          .meaning("rest length of the springs"));
+  add(K("mesh.stretch", T::Number)
+          .in({"two-particle"})
+          .unit("m")
+          .computed("0.1 * mesh.rest_length")
+          .example("0.05")
+          .meaning("initial extension of the spring (rest_length + stretch > 0)"));
+  add(K("mesh.count", T::Integer)
+          .in({"damped-springs"})
+          .def("5")
+          .between(1, 1e7)
+          .meaning("number of oscillators, each a particle hanging from a pinned anchor"));
+  add(K("mesh.spacing", T::Number)
+          .in({"damped-springs"})
+          .unit("m")
+          .def("0.5")
+          .positive()
+          .meaning("distance between neighbouring anchors along x"));
+  add(K("mesh.displacement", T::Number)
+          .in({"damped-springs"})
+          .unit("m")
+          .def("0.2")
+          .meaning("initial extension of every spring (rest_length + displacement > 0)"));
+  // particles: written out by hand.
+  add(K("mesh.positions", T::Rows)
+          .in({"particles"})
+          .unit("m")
+          .example("[[0, 5, 0], [1, 5, 0], [0, 6, 0]]")
+          .meaning("initial positions [x, y, z], one row per particle"));
+  add(K("mesh.masses", T::Numbers)
+          .in({"particles"})
+          .unit("kg")
+          .computed("mesh.mass for every particle")
+          .example("[1, 2, 3]")
+          .meaning("mass of each particle, one entry per particle; give this or mesh.mass"));
+  add(K("mesh.velocities", T::Rows)
+          .in({"particles"})
+          .unit("m/s")
+          .computed("all zero")
+          .example("[[0, 0, 0], [0, 1, 0], [0, 0, 0]]")
+          .meaning("initial velocities [vx, vy, vz], one row per particle"));
+  add(K("mesh.springs", T::Rows)
+          .in({"particles"})
+          .def("[]")
+          .example("[[0, 1, 100], [1, 2, 100, 1.5, 0.1]]")
+          .meaning("springs [i, j, k] | [i, j, k, L] | [i, j, k, L, c]: ids, stiffness (N/m), rest "
+                   "length (m; default: the initial distance), damping (N s/m; default: "
+                   "springs.damping)"));
+
+  // [springs]: stiffness and damping of the springs each mesh type builds.
+  add(K("springs.stiffness", T::Number)
+          .in({"grid"})
+          .unit("N/m")
+          .def("1000")
+          .non_negative()
+          .meaning("stiffness of each spring kind whose own *_stiffness key is not given"));
+  add(K("springs.stiffness", T::Number)
+          .in({"cantilever", "two-particle"})
+          .unit("N/m")
+          .def("10000")
+          .non_negative()
+          .meaning("stiffness of each spring kind whose own *_stiffness key is not given"));
+  add(K("springs.damping", T::Number)
+          .in({"grid", "cantilever"})
+          .unit("N s/m")
+          .def("0")
+          .non_negative()
+          .meaning("axial damping of each spring kind whose own *_damping key is not given"));
+  for (const char* kind : {"structural", "shear", "flexion"}) {
+    add(K(std::string("springs.") + kind + "_stiffness", T::Number)
+            .in(kLattices)
+            .unit("N/m")
+            .computed("springs.stiffness")
+            .non_negative()
+            .example("500")
+            .meaning(std::string("stiffness of the ") + kind + " springs"));
+    add(K(std::string("springs.") + kind + "_damping", T::Number)
+            .in(kLattices)
+            .unit("N s/m")
+            .computed("springs.damping")
+            .non_negative()
+            .example("0.5")
+            .meaning(std::string("axial damping of the ") + kind + " springs"));
+  }
+  add(K("springs.stiffness", T::Number)
+          .in({"chain", "hair", "obj"})
+          .unit("N/m")
+          .def("1000")
+          .non_negative()
+          .meaning("stiffness of the stretch springs (chain and hair: i to i+1; obj: the edges)"));
+  add(K("springs.damping", T::Number)
+          .in({"chain", "hair", "obj", "two-particle"})
+          .unit("N s/m")
+          .def("0")
+          .non_negative()
+          .meaning("axial damping of the stretch springs"));
+  add(K("springs.bend_stiffness", T::Number)
+          .in({"hair"})
+          .unit("N/m")
+          .def("100")
+          .non_negative()
+          .meaning("stiffness of the bending springs, i to i+2"));
+  add(K("springs.bend_stiffness", T::Number)
+          .in({"obj"})
+          .unit("N/m")
+          .computed("0.1 * springs.stiffness")
+          .non_negative()
+          .example("50")
+          .meaning("stiffness of the bending springs across each interior edge (between the two "
+                   "opposite vertices); 0 with bend_damping = 0: none"));
+  add(K("springs.bend_damping", T::Number)
+          .in({"hair", "obj"})
+          .unit("N s/m")
+          .def("0")
+          .non_negative()
+          .meaning("axial damping of the bending springs"));
+  add(K("springs.stiffness", T::Number)
+          .in({"damped-springs"})
+          .unit("N/m")
+          .def("100")
+          .non_negative()
+          .meaning("stiffness of every oscillator's spring"));
+  add(K("springs.max_damping", T::Number)
+          .in({"damped-springs"})
+          .unit("N s/m")
+          .computed("2 sqrt(springs.stiffness * mesh.mass), critical damping")
+          .non_negative()
+          .example("5")
+          .meaning("damping of the last oscillator; it grows linearly from 0 on the first"));
+  add(K("springs.damping", T::Number)
+          .in({"particles"})
+          .unit("N s/m")
+          .def("0")
+          .non_negative()
+          .meaning("damping of the mesh.springs rows that give none"));
+
+  // [forces]: each present only when given.
+  add(K("forces.gravity", T::Vector3)
+          .unit("m/s^2")
+          .computed("none (no gravity force)")
+          .example("[0, -9.81, 0]")
+          .meaning("gravitational acceleration; every particle feels m g"));
+  add(K("forces.drag", T::Number)
+          .unit("kg/s")
+          .def("0")
+          .non_negative()
+          .meaning("air drag per particle: f = -drag (v - wind)"));
+  add(K("forces.wind", T::Vector3)
+          .unit("m/s")
+          .def("[0, 0, 0]")
+          .meaning("air velocity that the drag pulls towards; needs forces.drag > 0"));
+
+  // [collision.*]: one table or an array of tables ([[collision.ground]]) per kind.
+  add(K("collision.ground.normal", T::Vector3)
+          .def("[0, 1, 0]")
+          .meaning("normal of the plane, pointing to the free side (any nonzero length)"));
+  add(K("collision.ground.height", T::Number)
+          .unit("m")
+          .def("0")
+          .meaning("the plane is n . x = height (n the unit normal); particles stay at n . x >= "
+                   "height"));
+  add(K("collision.ground.friction", T::Number)
+          .def("0")
+          .non_negative()
+          .meaning("Coulomb friction coefficient of the contact"));
+  add(K("collision.sphere.center", T::Vector3)
+          .unit("m")
+          .def("[0, 0, 0]")
+          .meaning("centre of the sphere"));
+  add(K("collision.sphere.radius", T::Number)
+          .unit("m")
+          .def("0.5")
+          .positive()
+          .meaning("radius of the sphere"));
+  add(K("collision.sphere.friction", T::Number)
+          .def("0")
+          .non_negative()
+          .meaning("Coulomb friction coefficient of the contact"));
+
+  // [strain_limit]: Provot's strain limiting after each step.
+  add(K("strain_limit.max_strain", T::Number)
+          .def("0.1")
+          .positive()
+          .meaning("largest relative stretch (l - L) / L of the structural, shear, stretch and "
+                   "edge springs"));
+  add(K("strain_limit.passes", T::Integer)
+          .def("10")
+          .between(1, 1e6)
+          .meaning("most Gauss-Seidel passes over the springs per step"));
+
+  // [ode]: a scalar or planar test equation instead of a mesh.
+  add(K("ode.problem", T::String)
+          .choices({"decay", "circle"})
+          .example("'decay'")
+          .meaning("decay: x' = -rate x; circle: (x, y)' = (-y, x)"));
+  add(K("ode.rate", T::Number)
+          .in({"decay"})
+          .unit("1/s")
+          .def("1")
+          .meaning("decay rate (negative: growth)"));
+  add(K("ode.x0", T::Number).in({"decay"}).def("1").meaning("initial value"));
+  add(K("ode.x0", T::Numbers).in({"circle"}).def("[1, 0]").meaning("initial point [x, y]"));
+
+  // [integrator]: the method, then the keys of the chosen method.
+  add(K("integrator.method", T::String)
+          .def("'symplectic-euler'")
+          .choices({"forward-euler", "symplectic-euler", "midpoint", "trapezoid", "rk4", "implicit",
+                    "implicit-midpoint", "bdf2", "cvode", "ida", "ceres-implicit",
+                    "fast-mass-spring", "xpbd"})
+          .meaning("the time stepper; explicit methods (the first five) take no other keys"));
+  add(K("integrator.beta", T::Number)
+          .in({"implicit"})
+          .def("1")
+          .between(0, 1)
+          .meaning(
+              "(M - beta h D - beta h^2 K) dv = h (f + beta h K v): 1 backward Euler, 0 symplectic "
+              "Euler"));
+  add(K("integrator.linear_solver", T::String)
+          .in(kImplicit)
+          .computed("'cholmod' ('pcg-block' without CHOLMOD)")
+          .choices({"cholmod", "pcg-cholmod", "pcg-nodal", "pcg-block", "pcg", "cg", "petsc",
+                    "colored-gauss-seidel", "gauss-seidel", "jacobi"})
+          .example("'pcg-nodal'")
+          .meaning("linear backend of each Newton iteration (pcg = Jacobi-preconditioned CG, cg = "
+                   "unpreconditioned; cholmod and pcg-* with CHOLMOD; petsc with PETSc)"));
+  add(K("integrator.preconditioner", T::String)
+          .in(kImplicit)
+          .def("''")
+          .choices({"", "cholmod", "nodal", "block", "jacobi", "none"})
+          .needs({"integrator.linear_solver=pcg"})
+          .example("'block'")
+          .meaning("preconditioner of linear_solver = 'pcg' ('' = jacobi); 'pcg' + 'nodal' is "
+                   "'pcg-nodal'"));
+  add(K("integrator.petsc_options", T::String)
+          .in(kImplicit)
+          .def("''")
+          .needs({"integrator.linear_solver=petsc"})
+          .build("PETSc")
+          .example("'-pc_type gamg'")
+          .meaning("PETSc options of the KSP and PC, over hooke's defaults (CG + GAMG) and under "
+                   "the environment's PETSC_OPTIONS"));
+  add(K("integrator.newton_iterations", T::Integer)
+          .in(kImplicit)
+          .def("1")
+          .between(1, 100000)
+          .meaning("most Newton iterations per step; 1 is the linearised step"));
+  add(K("integrator.tolerance", T::Number)
+          .in(kImplicit)
+          .def("1e-10")
+          .positive()
+          .needs({"integrator.newton_iterations=2"})
+          .meaning("Newton stops when max |dv| <= tolerance * max(|v1|, |v0|) (infinity norms)"));
+  add(K("integrator.linear_tolerance", T::Number)
+          .in(kImplicit)
+          .def("1e-08")
+          .positive()
+          .needs({"integrator.linear_solver=pcg"})
+          .meaning("relative residual at which an iterative linear backend stops"));
+  add(K("integrator.max_linear_iterations", T::Integer)
+          .in(kImplicit)
+          .def("10000")
+          .int_from(1)
+          .needs({"integrator.linear_solver=pcg"})
+          .meaning("iteration cap of an iterative linear backend"));
+  add(K("integrator.clamp_compressed", T::Boolean)
+          .in(kImplicit)
+          .def("true")
+          .meaning(
+              "drop the indefinite part of compressed springs' stiffness, keeping the matrix SPD"));
+
+  add(K("integrator.rtol", T::Number)
+          .in(kSundials)
+          .def("1e-08")
+          .range(0, true, 1, true)
+          .build("SUNDIALS")
+          .meaning("relative tolerance of the local error test on [x; v]"));
+  add(K("integrator.atol", T::Number)
+          .in(kSundials)
+          .def("1e-10")
+          .positive()
+          .build("SUNDIALS")
+          .meaning("absolute tolerance of the local error test (m for x, m/s for v)"));
+  add(K("integrator.max_steps", T::Integer)
+          .in(kSundials)
+          .def("100000")
+          .between(1, kMaxSteps)
+          .build("SUNDIALS")
+          .meaning("most internal steps per output step"));
+  add(K("integrator.linear_solver", T::String)
+          .in(kSundials)
+          .def("'klu'")
+          .choices({"klu", "spgmr"})
+          .build("SUNDIALS")
+          .meaning("klu: sparse direct LU of the 6n Newton matrix; spgmr: matrix-free GMRES with "
+                   "a hooke linear backend as preconditioner"));
+  add(K("integrator.preconditioner", T::String)
+          .in(kSundials)
+          .computed("'' = 'cholmod' ('pcg-block' without CHOLMOD)")
+          .needs({"integrator.linear_solver=spgmr"})
+          .build("SUNDIALS")
+          .example("'pcg-block'")
+          .meaning("linear backend (integrator.linear_solver's names) or 'none' that solves "
+                   "SPGMR's preconditioner system M - g D - g^2 K"));
+  add(K("integrator.preconditioner_tolerance", T::Number)
+          .in(kSundials)
+          .def("1e-10")
+          .range(0, true, 1, true)
+          .needs({"integrator.linear_solver=spgmr", "integrator.preconditioner=pcg-block"})
+          .build("SUNDIALS")
+          .meaning("relative residual of each iterative preconditioner solve"));
+  add(K("integrator.petsc_options", T::String)
+          .in(kSundials)
+          .def("''")
+          .needs({"integrator.linear_solver=spgmr", "integrator.preconditioner=petsc"})
+          .build("SUNDIALS and PETSc")
+          .example("'-pc_type gamg'")
+          .meaning("PETSc options of the preconditioner's KSP and PC"));
+  add(K("integrator.adams", T::Boolean)
+          .in({"cvode"})
+          .def("false")
+          .build("SUNDIALS")
+          .meaning("Adams-Moulton (non-stiff problems) instead of BDF"));
+  add(K("integrator.max_order", T::Integer)
+          .in({"cvode"})
+          .computed("5 (12 with adams)")
+          .between(1, 12)
+          .build("SUNDIALS")
+          .example("3")
+          .meaning("largest method order: at most 5 for BDF, 12 for Adams"));
+  add(K("integrator.nonlinear_solver", T::String)
+          .in({"cvode"})
+          .def("'newton'")
+          .choices({"newton", "fixed-point"})
+          .build("SUNDIALS")
+          .meaning("Newton, or functional iteration (Adams only, no linear solves)"));
+  add(K("integrator.max_order", T::Integer)
+          .in({"ida"})
+          .def("5")
+          .between(1, 5)
+          .build("SUNDIALS")
+          .meaning("largest BDF order"));
+
+  add(K("integrator.formulation", T::String)
+          .in({"ceres-implicit"})
+          .def("'residual'")
+          .choices({"residual", "energy"})
+          .build("Ceres")
+          .meaning("least squares of the backward Euler residual, or of the incremental "
+                   "potential (Gauss-Newton drops geometric stiffness: slower, looser)"));
+  add(K("integrator.max_iterations", T::Integer)
+          .in({"ceres-implicit"})
+          .def("100")
+          .int_from(1)
+          .build("Ceres")
+          .meaning("most Levenberg-Marquardt iterations per step"));
+  for (const char* which : {"function", "gradient", "parameter"})
+    add(K(std::string("integrator.") + which + "_tolerance", T::Number)
+            .in({"ceres-implicit"})
+            .def("1e-14")
+            .non_negative()
+            .build("Ceres")
+            .meaning(std::string("Ceres' ") + which + " tolerance (0 disables that test)"));
+  add(K("integrator.residual_tolerance", T::Number)
+          .in({"ceres-implicit"})
+          .def("1e-06")
+          .non_negative()
+          .build("Ceres")
+          .meaning("a step converged only if |G| <= this * (|M dv / h| + |f|) on the free DOFs"));
+  add(K("integrator.linear_solver", T::String)
+          .in({"ceres-implicit"})
+          .def("'sparse-normal-cholesky'")
+          .choices({"sparse-normal-cholesky", "dense-qr", "cgnr"})
+          .build("Ceres")
+          .meaning("linear solver of each Levenberg-Marquardt iteration"));
+  add(K("integrator.threads", T::Integer)
+          .in({"ceres-implicit"})
+          .def("1")
+          .int_from(1)
+          .build("Ceres")
+          .meaning("threads Ceres uses"));
+
+  add(K("integrator.iterations", T::Integer)
+          .in({"fast-mass-spring"})
+          .def("10")
+          .int_from(1)
+          .build("CHOLMOD")
+          .meaning("local/global iterations per step (at most, with a tolerance)"));
+  add(K("integrator.tolerance", T::Number)
+          .in({"fast-mass-spring"})
+          .def("0")
+          .range(0, false, 1, true)
+          .build("CHOLMOD")
+          .meaning("stop once an iteration lowers the objective by at most tolerance times the "
+                   "decrease so far; 0: a fixed iteration count"));
+  add(K("integrator.warm_start", T::String)
+          .in({"fast-mass-spring"})
+          .def("'inertial'")
+          .choices({"inertial", "previous"})
+          .build("CHOLMOD")
+          .meaning("first iterate: x0 + h v0 (inertial) or x0 (previous)"));
+  add(K("integrator.acceleration", T::String)
+          .in({"fast-mass-spring"})
+          .def("'none'")
+          .choices({"none", "chebyshev", "lbfgs"})
+          .build("CHOLMOD")
+          .meaning("plain local/global, Chebyshev (Wang 2015) or L-BFGS (Liu et al. 2017)"));
+  add(K("integrator.chebyshev_rho", T::Number)
+          .in({"fast-mass-spring"})
+          .def("0")
+          .range(0, false, 1, true)
+          .needs({"integrator.acceleration=chebyshev"})
+          .build("CHOLMOD")
+          .meaning("spectral radius of the plain iteration; 0: estimated in every step"));
+  add(K("integrator.chebyshev_delay", T::Integer)
+          .in({"fast-mass-spring"})
+          .def("10")
+          .int_from(0)
+          .needs({"integrator.acceleration=chebyshev"})
+          .build("CHOLMOD")
+          .meaning("plain iterations before Chebyshev starts (at least 2 when chebyshev_rho = 0)"));
+  add(K("integrator.lbfgs_history", T::Integer)
+          .in({"fast-mass-spring"})
+          .def("5")
+          .between(1, 1000)
+          .needs({"integrator.acceleration=lbfgs"})
+          .build("CHOLMOD")
+          .meaning("(s, t) pairs L-BFGS keeps"));
+  add(K("integrator.global_solver", T::String)
+          .in({"fast-mass-spring"})
+          .def("'cholmod'")
+          .choices({"cholmod", "jacobi"})
+          .build("CHOLMOD")
+          .meaning("global step: exact prefactored solve, or one Jacobi sweep (pair it with "
+                   "Chebyshev; not with L-BFGS)"));
+
+  add(K("integrator.substeps", T::Integer)
+          .in({"xpbd"})
+          .def("10")
+          .int_from(1)
+          .meaning("substeps per step (Macklin et al. 2019)"));
+  add(K("integrator.iterations", T::Integer)
+          .in({"xpbd"})
+          .def("1")
+          .int_from(1)
+          .meaning("constraint sweeps per substep"));
+
+  // [time], [output], [run]: every scene has them.
+  add(K("time.dt", T::Number).unit("s").def("0.001").positive().meaning("time step"));
+  add(K("time.duration", T::Number)
+          .unit("s")
+          .def("1")
+          .non_negative()
+          .meaning("simulated time; the last step is shortened to end on it"));
+  add(K("output.dir", T::String)
+          .computed("'out/<scene file name without .toml>'")
+          .example("'out/walk'")
+          .meaning("output folder, relative to the current folder (not the scene file's)"));
+  add(K("output.every", T::Integer)
+          .computed("steps / 50, at least 1")
+          .between(0, kMaxSteps)
+          .example("5")
+          .meaning("a frame every this many steps; 0: none; give this or output.interval"));
+  add(K("output.interval", T::Number)
+          .unit("s")
+          .computed("none (frames by output.every)")
+          .positive()
+          .example("0.1")
+          .meaning("a frame every this much simulated time; give this or output.every"));
+  add(K("output.log_every", T::Integer)
+          .computed("steps / 10000, at least 1")
+          .between(1, kMaxSteps)
+          .example("5")
+          .meaning("a log.csv row every this many steps"));
+  add(K("output.vtk", T::Boolean).def("true").meaning("write frames as legacy VTK for ParaView"));
+  add(K("output.png", T::Boolean).def("true").meaning("draw final.png at the end of the run"));
+  add(K("run.energy_growth_limit", T::Number)
+          .def("10")
+          .positive()
+          .meaning(
+              "stop (exit 3) once total energy grows by this many times the scene's energy scale"));
+  add(K("run.allow_not_converged", T::Boolean)
+          .def("false")
+          .meaning("accept steps that miss their tolerance (with a warning) instead of stopping"));
+  add(K("run.max_step_halvings", T::Integer)
+          .def("0")
+          .between(0, 30)
+          .meaning("retry a failed step as two half steps, down to h / 2^this"));
+  add(K("run.checkpoint_every", T::Integer)
+          .def("0")
+          .between(0, kMaxSteps)
+          .meaning("write checkpoint.bin every this many steps; 0: not by count"));
+  add(K("run.checkpoint_seconds", T::Number)
+          .unit("s")
+          .def("300")
+          .positive()
+          .meaning("write checkpoint.bin when this much wall time has passed since the last"));
+  return t;
+}
+
+bool applies(const SceneKey& k, const std::string& variant) {
+  return k.when.empty() || std::find(k.when.begin(), k.when.end(), variant) != k.when.end();
+}
+
+/// The section of a dotted name: everything before the last dot.
+std::string section_of(const std::string& name) { return name.substr(0, name.rfind('.')); }
+
+std::string join(const std::vector<std::string>& v, const std::string& sep) {
+  std::string s;
+  for (const auto& e : v) s += (s.empty() ? "" : sep) + e;
+  return s;
+}
+
+/// "mesh.type = grid, cantilever" for a key with variants; "" otherwise.
+std::string applies_text(const SceneKey& k) {
+  if (k.when.empty()) return "";
+  const std::string selector = k.name.rfind("integrator.", 0) == 0 ? "integrator.method"
+                               : k.name.rfind("ode.", 0) == 0      ? "ode.problem"
+                                                                   : "mesh.type";
+  return selector + " = " + join(k.when, ", ");
+}
+
+std::string needs_text(const SceneKey& k) {
+  std::vector<std::string> n;
+  for (const auto& item : k.needs) {
+    const auto eq = item.find('=');
+    n.push_back(item.substr(0, eq) + " = " + item.substr(eq + 1));
+  }
+  return join(n, " and ");
+}
+
+struct AuditState {
+  std::mutex mutex;
+  SceneKeyAudit audit;
+};
+AuditState& audit_state() {
+  static AuditState s;
+  return s;
+}
+
+}  // namespace
+
+std::string shortest_number(double v) {
+  char buf[32];
+  const auto r = std::to_chars(buf, buf + sizeof buf, v);
+  return std::string(buf, r.ptr);
+}
+
+bool KeyRange::contains(double v) const {
+  if (lo && (lo_open ? !(v > *lo) : !(v >= *lo))) return false;
+  if (hi && (hi_open ? !(v < *hi) : !(v <= *hi))) return false;
+  return true;
+}
+
+namespace {
+/// A bound: integers exactly (4611686018427387904, not 4.611686018427388e+18).
+std::string bound(double v) {
+  if (v == std::floor(v) && std::fabs(v) < 9.2e18) return std::to_string(static_cast<long long>(v));
+  return shortest_number(v);
+}
+}  // namespace
+
+std::string KeyRange::text() const {
+  if (lo && hi)
+    return std::string(lo_open ? "(" : "[") + bound(*lo) + ", " + bound(*hi) +
+           (hi_open ? ")" : "]");
+  if (lo) return std::string(lo_open ? "> " : ">= ") + bound(*lo);
+  if (hi) return std::string(hi_open ? "< " : "<= ") + bound(*hi);
+  return "";
+}
+
+const std::vector<SceneKey>& scene_keys() {
+  static const std::vector<SceneKey> table = make_table();
+  return table;
+}
+
+std::string key_without_indices(const std::string& path) {
+  std::string out;
+  out.reserve(path.size());
+  for (size_t i = 0; i < path.size(); ++i) {
+    if (path[i] == '[') {
+      const size_t close = path.find(']', i);
+      if (close == std::string::npos) break;
+      i = close;
+      continue;
+    }
+    out += path[i];
+  }
+  return out;
+}
+
+const SceneKey* find_scene_key(const std::string& name, const std::string& variant) {
+  for (const auto& k : scene_keys())
+    if (k.name == name && applies(k, variant)) return &k;
+  return nullptr;
+}
+
+const char* to_string(KeyType t) {
+  switch (t) {
+    case KeyType::Number:
+      return "number";
+    case KeyType::Integer:
+      return "integer";
+    case KeyType::Boolean:
+      return "boolean";
+    case KeyType::String:
+      return "string";
+    case KeyType::Vector3:
+      return "[x, y, z]";
+    case KeyType::Numbers:
+      return "[numbers]";
+    case KeyType::Integers:
+      return "[integers]";
+    case KeyType::Rows:
+      return "[[numbers], ...]";
+  }
+  return "";
+}
+
+std::string default_text(const SceneKey& k) { return k.def.empty() ? "required" : k.def; }
+
+std::string range_text(const SceneKey& k) {
+  if (!k.choices.empty()) {
+    std::vector<std::string> quoted;
+    for (const auto& c : k.choices) quoted.push_back("'" + c + "'");
+    return join(quoted, " | ");
+  }
+  return k.range.text();
+}
+
+std::string scene_keys_text(const std::string& section) {
+  std::ostringstream os;
+  for (const auto& k : scene_keys()) {
+    if (!section.empty() && k.name.rfind(section + ".", 0) != 0) continue;
+    os << k.name << "  " << to_string(k.type);
+    if (!k.unit.empty()) os << " (" << k.unit << ")";
+    os << ", default " << default_text(k);
+    if (const std::string r = range_text(k); !r.empty()) os << ", allowed " << r;
+    if (const std::string a = applies_text(k); !a.empty()) os << "; with " << a;
+    if (!k.needs.empty()) os << "; takes effect with " << needs_text(k);
+    if (!k.build.empty()) os << "; needs a build with " << k.build;
+    os << "\n    ";
+    if (!k.replaced_by.empty()) os << "DEPRECATED: use " << k.replaced_by << "; ";
+    os << k.meaning << "\n";
+  }
+  return os.str();
+}
+
+std::string scene_keys_markdown() {
+  std::ostringstream os;
+  os << "# Scene keys\n\n"
+        "<!-- Generated by `hooke keys --markdown` from problems/scene_keys.cpp, the table the "
+        "scene readers check themselves against; the test SceneKeys.ReferenceIsFresh fails when "
+        "this file differs. Do not edit by hand. -->\n\n"
+        "Every key a scene file (TOML) accepts, by section. `hooke keys [SECTION]` prints the "
+        "same list in the terminal; `--set section.key=value` changes any key from the command "
+        "line. A key that does not apply to the scene (another mesh type or method, or a setting "
+        "that makes it ineffective) is refused with the reason, never silently ignored.\n\n"
+        "Paths: `mesh.file` is relative to the folder of the scene file; `output.dir` is "
+        "relative to the current folder (where hooke runs). The resolved scene that a run "
+        "writes (`scene.toml` in its output folder) holds absolute paths, so it runs from "
+        "anywhere.\n\n"
+        "Array tables: `[collision.ground]` and `[collision.sphere]` may be given once or as "
+        "arrays (`[[collision.sphere]]`), one table per collider.\n";
+  std::string current;
+  for (const auto& k : scene_keys()) {
+    const std::string sec = section_of(k.name);
+    if (sec != current) {
+      current = sec;
+      os << "\n## [" << sec << "]\n\n"
+         << "| key | applies to | type | unit | default | allowed | meaning |\n"
+         << "|---|---|---|---|---|---|---|\n";
+    }
+    std::string meaning = k.meaning;
+    if (!k.replaced_by.empty())
+      meaning = "**Deprecated**: use `" + k.replaced_by + "` (accepted with a warning); " + meaning;
+    std::string applies_to = applies_text(k);
+    if (!k.needs.empty()) applies_to += (applies_to.empty() ? "" : "; ") + needs_text(k);
+    if (!k.build.empty()) applies_to += (applies_to.empty() ? "" : "; ") + k.build + " build";
+    std::string range = range_text(k);
+    // A pipe inside a cell would split the Markdown table.
+    for (std::string* cell : {&meaning, &applies_to, &range}) {
+      for (size_t p = 0; (p = cell->find('|', p)) != std::string::npos; p += 2)
+        cell->replace(p, 1, "\\|");
+    }
+    std::string type = to_string(k.type);
+    os << "| `" << k.name << "` | " << applies_to << " | " << type << " | " << k.unit << " | "
+       << (k.computed || k.def.empty() ? default_text(k) : "`" + k.def + "`") << " | " << range
+       << " | " << meaning << " |\n";
+  }
+  return os.str();
+}
+
+SceneKeyAudit scene_key_audit() {
+  std::lock_guard<std::mutex> lock(audit_state().mutex);
+  return audit_state().audit;
+}
+
+void reset_scene_key_audit() {
+  std::lock_guard<std::mutex> lock(audit_state().mutex);
+  audit_state().audit = {};
+}
+
+void note_scene_key_use(const SceneKey* entry) {
+  std::lock_guard<std::mutex> lock(audit_state().mutex);
+  audit_state().audit.used.insert(entry);
+}
+
+void note_scene_key_problem(const std::string& problem) {
+  std::lock_guard<std::mutex> lock(audit_state().mutex);
+  auto& p = audit_state().audit.problems;
+  if (std::find(p.begin(), p.end(), problem) == p.end()) p.push_back(problem);
+}
+
+}  // namespace hooke
