@@ -400,7 +400,7 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
   OutputDir folder(dir, "hooke run " + scene.file);
   check_no_stopped_run(folder, options.force);
   folder.remove_files({"final.csv", "status.txt", "log.csv", "final.csv.tmp", "final.png",
-                       "checkpoint.bin", "frames", "frames.pvd"});
+                       "final.vtk", "checkpoint.bin", "frames", "frames.pvd"});
   folder.set_status("running");
   write_resolved_scene(scene, folder.file("scene.toml"));
   const StopSignals stop_signals;
@@ -528,8 +528,9 @@ Command add_run_command(CLI::App& app) {
     bool no_progress = false;
   };
   auto a = std::make_shared<Args>();
-  auto* cmd = app.add_subcommand(
-      "run", "Run a scene and write scene.toml, log.csv, final.csv, frames/*.vtk and final.png");
+  auto* cmd = app.add_subcommand("run",
+                                 "Run a scene and write scene.toml, log.csv, final.csv, "
+                                 "frames/*.vtk, final.vtk and final.png");
   add_scene(cmd, a->scene);
   add_sets(cmd, a->sets);
   add_out(cmd, a->run.out_dir, "[output] dir, or out/<scene>");

@@ -1,11 +1,13 @@
 #include "experiments/run_output.hpp"
 
+#include <cstdio>
 #include <cstdlib>
 #include <filesystem>
 #include <sstream>
 
 #include "experiments/output/png_writer.hpp"
 #include "experiments/output/vtk_writer.hpp"
+#include "experiments/plot_script.hpp"
 #include "hooke_config.hpp"
 
 namespace hooke {
@@ -81,9 +83,9 @@ void RunOutput::start_fresh(bool force) {
   check_no_stopped_run(*m_dir, force);
   // Everything an earlier run left, its mark of completion first: final.csv must exist only for
   // a run that finished. Removed before status.txt is written, which frees the space it needs.
-  m_dir->remove_files({"final.csv", "status.txt", "final.png", "checkpoint.bin", "frames.pvd",
-                       "log.csv", "final.csv.tmp", "final.png.tmp", "checkpoint.bin.tmp",
-                       "frames.pvd.tmp", "scene.toml.tmp", "status.txt.tmp"});
+  m_dir->remove_files({"final.csv", "status.txt", "final.png", "final.vtk", "checkpoint.bin",
+                       "frames.pvd", "log.csv", "final.csv.tmp", "final.png.tmp", "final.vtk.tmp",
+                       "checkpoint.bin.tmp", "frames.pvd.tmp", "scene.toml.tmp", "status.txt.tmp"});
   m_dir->set_status("running");
   write_resolved_scene(m_scene, m_dir->file("scene.toml"));
   m_log = std::make_unique<OutputFile>(OutputFile::stream(m_dir->file("log.csv")));
@@ -167,8 +169,21 @@ std::vector<std::string> RunOutput::finish(const State& s, const std::string& su
   m_log->commit();
   if (m_scene.output.vtk) written.insert(written.end(), {"frames/", "frames.pvd"});
   if (m_scene.output.png) {
-    write_png_picture(m_dir->file("final.png"), s, m_scene.system->pinned(), m_scene.edges,
-                      m_scene.edge_rest);
+    // The final state as a frame (ParaView opens it too), drawn by experiments/plot/final.py with
+    // matplotlib: axes in metres, the time, a strain colour bar, the colliders. Without Python or
+    // matplotlib, the built-in renderer still leaves a picture.
+    write_vtk_frame(m_dir->file("final.vtk"), s, s.t,
+                    FrameMesh{m_scene.edges, m_scene.edge_rest, m_scene.triangles,
+                              m_scene.system->pinned(), m_scene.system->masses()});
+    written.push_back("final.vtk");
+    if (run_plot_script("final.py", m_dir->path(), false) != 0) {
+      std::fprintf(stderr,
+                   "warning: experiments/plot/final.py failed (it needs /usr/bin/python3 with "
+                   "python3-matplotlib; HOOKE_PLOT_DIR finds the script): final.png is drawn by "
+                   "the built-in renderer instead, without axes or colour bar\n");
+      write_png_picture(m_dir->file("final.png"), s, m_scene.system->pinned(), m_scene.edges,
+                        m_scene.edge_rest);
+    }
     written.push_back("final.png");
   }
   // final.csv last: its presence says the run finished, so nothing may fail after it.

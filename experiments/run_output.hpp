@@ -24,11 +24,13 @@ void check_no_stopped_run(const OutputDir& dir, bool force);
 /// The files of one mass-spring run in its locked output folder (OutputDir), over their whole
 /// life. A fresh run refuses a folder that holds a resumable checkpoint (unless forced), marks the
 /// folder "running" in status.txt, removes every output of an earlier run (final.csv, final.png,
-/// checkpoint.bin, frames) and writes scene.toml and a new log.csv. A resumed run cuts log.csv
-/// back to the checkpointed step and removes the frames written after it. Then one row per
-/// logged step, VTK frames with their frames.pvd, checkpoints, and at the end final.csv and
-/// final.png, after which status.txt says "finished". Every file of a run is opened, written and
-/// named here and nowhere else, through OutputFile: a failed write throws OutputError.
+/// final.vtk, checkpoint.bin, frames) and writes scene.toml and a new log.csv. A resumed run cuts
+/// log.csv back to the checkpointed step and removes the frames written after it. Then one row per
+/// logged step, VTK frames with their frames.pvd, checkpoints, and at the end final.vtk,
+/// final.png and final.csv, after which status.txt says "finished". Every file of a run is
+/// opened, written and named here and nowhere else, through OutputFile (a failed write throws
+/// OutputError), except final.png, which experiments/plot/final.py draws from final.vtk and
+/// writes just as atomically (common.save_figure), or the built-in renderer if it cannot.
 class RunOutput {
  public:
   /// scene must outlive the object. resume: the checkpoint a resumed run continues from, or
@@ -57,8 +59,8 @@ class RunOutput {
   /// The run failed (exit 3, or an error): status.txt says "failed" with why, and log.csv keeps
   /// its complete rows. Never throws; returns false if status.txt could not be written.
   bool failed(const std::string& why) noexcept;
-  /// The end of a complete run: writes final.csv (and final.png if [output] png) from s, removes
-  /// the checkpoint (nothing is left to resume) and marks the folder finished. Returns the
+  /// The end of a complete run: writes final.csv (and final.vtk, final.png if [output] png) from s,
+  /// removes the checkpoint (nothing is left to resume) and marks the folder finished. Returns the
   /// names of the files the run wrote, for the end-of-run line.
   std::vector<std::string> finish(const State& s, const std::string& summary);
 

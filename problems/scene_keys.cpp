@@ -725,7 +725,9 @@ std::vector<SceneKey> make_table() {
           .example("5")
           .meaning("a log.csv row every this many steps"));
   add(K("output.vtk", T::Boolean).def("true").meaning("write frames as legacy VTK for ParaView"));
-  add(K("output.png", T::Boolean).def("true").meaning("draw final.png at the end of the run"));
+  add(K("output.png", T::Boolean)
+          .def("true")
+          .meaning("write final.vtk and draw final.png at the end of the run"));
   add(K("run.energy_growth_limit", T::Number)
           .def("10")
           .positive()

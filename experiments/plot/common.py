@@ -2,8 +2,10 @@
 import csv
 import math
 import os
+import re
 
 import matplotlib
+import numpy as np
 
 matplotlib.use("Agg")
 import matplotlib.pyplot as plt  # noqa: E402
@@ -71,3 +73,49 @@ _MARKERS = "os^vD<>pP*Xh"
 def style(label, labels):
     i = sorted(set(labels)).index(label)
     return {"marker": _MARKERS[i % len(_MARKERS)], "color": plt.cm.tab20((2 * i + (i // 10) % 2) % 20)}
+
+
+def read_vtk(path):
+    """A frame written by hooke (experiments/output/vtk_writer.cpp: legacy binary POLYDATA,
+    big-endian) as a dict: t, points (n x 3), lines (m x 2 particle ids), triangles (k x 3),
+    strain (per line), velocity (n x 3), pinned (n booleans), kinetic_energy (n)."""
+    with open(path, "rb") as f:
+        data = f.read()
+    pos = 0
+
+    def section(pattern):
+        nonlocal pos
+        m = re.compile(pattern).search(data, pos)
+        if not m:
+            return None
+        pos = m.end()
+        return m
+
+    def array(dtype, count):
+        nonlocal pos
+        a = np.frombuffer(data, dtype=dtype, count=count, offset=pos)
+        pos += a.nbytes
+        return a
+
+    out = {"t": float("nan"), "triangles": np.zeros((0, 3), dtype=int)}
+    if section(rb"TIME 1 1 double\n"):
+        out["t"] = float(array(">f8", 1)[0])
+    n = int(section(rb"POINTS (\d+) double\n").group(1))
+    out["points"] = array(">f8", 3 * n).reshape(n, 3)
+    m = int(section(rb"\nLINES (\d+) \d+\n").group(1))
+    out["lines"] = array(">i4", 3 * m).reshape(m, 3)[:, 1:].astype(int)
+    tri = re.compile(rb"\nPOLYGONS (\d+) \d+\n").match(data, pos)
+    if tri:
+        pos = tri.end()
+        k = int(tri.group(1))
+        out["triangles"] = array(">i4", 4 * k).reshape(k, 4)[:, 1:].astype(int)
+    cells = int(section(rb"\nCELL_DATA (\d+)\nSCALARS strain double 1\nLOOKUP_TABLE default\n")
+                .group(1))
+    out["strain"] = array(">f8", cells)[:m]
+    section(rb"\nPOINT_DATA \d+\nVECTORS velocity double\n")
+    out["velocity"] = array(">f8", 3 * n).reshape(n, 3)
+    section(rb"\nSCALARS pinned int 1\nLOOKUP_TABLE default\n")
+    out["pinned"] = array(">i4", n) != 0
+    section(rb"\nSCALARS kinetic_energy double 1\nLOOKUP_TABLE default\n")
+    out["kinetic_energy"] = array(">f8", n)
+    return out

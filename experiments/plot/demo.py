@@ -14,25 +14,7 @@ import textwrap
 
 import numpy as np
 
-from common import num, plt, read_csv, save_figure
-
-
-def read_vtk(path):
-    """Points (n x 3) and line segments (m x 2) of a legacy binary (big-endian) POLYDATA frame."""
-    with open(path, "rb") as f:
-        data = f.read()
-    m = re.search(rb"POINTS (\d+) double\n", data)
-    n = int(m.group(1))
-    start = m.end()
-    points = np.frombuffer(data, dtype=">f8", count=3 * n, offset=start).reshape(n, 3)
-    m = re.search(rb"LINES (\d+) (\d+)\n", data[start + 24 * n:])
-    lines = np.zeros((0, 2), dtype=int)
-    if m:
-        count, size = int(m.group(1)), int(m.group(2))
-        off = start + 24 * n + m.end()
-        cells = np.frombuffer(data, dtype=">i4", count=size, offset=off).reshape(count, 3)
-        lines = cells[:, 1:].astype(int)
-    return points, lines
+from common import num, plt, read_csv, read_vtk, save_figure
 
 
 def frames(run_dir):
@@ -81,7 +63,8 @@ def main(out_dir):
                 chosen.append(best)
         cmap = plt.get_cmap("viridis")
         for k, (time, path) in enumerate(chosen):
-            p, lines = read_vtk(path)
+            frame = read_vtk(path)
+            p, lines = frame["points"], frame["lines"]
             px = p[:, 0] + 0.35 * p[:, 2]
             py = p[:, 1] + 0.2 * p[:, 2]
             colour = cmap(k / max(1, len(chosen) - 1))

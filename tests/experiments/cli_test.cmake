@@ -18,6 +18,8 @@
 #   workprecision  `hooke workprecision` on the chain with three methods: workprecision.csv and
 #               reference.csv have their headers, rk4's smallest step has a finite error; the PNG.
 #   resolution  `hooke resolution` at n = 4, 6: one row per variant and size with a finite sag.
+#   final_picture  final.png by matplotlib (axes, colour bar, colliders) and, without the plot
+#               script, by the built-in renderer with a warning.
 foreach(var CASE HOOKE SCENES_DIR OUT)
   if(NOT DEFINED ${var})
     message(FATAL_ERROR "cli_test.cmake: pass -D${var}=...")
@@ -320,6 +322,38 @@ elseif(CASE STREQUAL "demo")
   hooke_exec(demo --explicit implicit --out "${OUT}/bad")
   expect_rc(2)
   expect_contains("${err}" "--explicit" "stderr")
+
+elseif(CASE STREQUAL "final_picture")
+  # final.png is drawn by experiments/plot/final.py from final.vtk and scene.toml (matplotlib's
+  # 7.6 x 6.2 in at 110 dpi: 836 x 682 pixels); without the script, by the built-in renderer
+  # (960 x 720) with a warning. Either way the run succeeds and final.vtk is the final state.
+  foreach(variant matplotlib builtin)
+    if(variant STREQUAL "builtin")
+      set(ENV{HOOKE_PLOT_DIR} "${OUT}/no_plot_scripts_here")
+      set(want_size "000003c0000002d0")
+    else()
+      unset(ENV{HOOKE_PLOT_DIR})
+      set(want_size "00000344000002aa")
+    endif()
+    hooke_exec(run cloth_on_two_spheres --set time.duration=0.05 --out "${OUT}/${variant}")
+    expect_rc(0)
+    expect_file("${OUT}/${variant}/final.vtk")
+    expect_file("${OUT}/${variant}/final.png")
+    # The PNG's IHDR: width and height, big-endian, at bytes 16..23.
+    file(READ "${OUT}/${variant}/final.png" size OFFSET 16 LIMIT 8 HEX)
+    if(NOT size STREQUAL want_size)
+      message(FATAL_ERROR "final.png (${variant}) has IHDR size ${size}, expected ${want_size}"
+                          "${report}")
+    endif()
+    if(variant STREQUAL "builtin")
+      expect_contains("${err}" "final.png is drawn by the built-in renderer" "stderr")
+    else()
+      string(FIND "${err}" "warning" warned)
+      if(NOT warned EQUAL -1)
+        message(FATAL_ERROR "unexpected warning${report}")
+      endif()
+    endif()
+  endforeach()
 
 elseif(CASE STREQUAL "damper_override")
   # fast-mass-spring and xpbd refuse spring dampers; the refusal prints the --set switches that

@@ -99,15 +99,26 @@ full_disk)
   grep -q '^running$\|^failed$' "$mnt/log/status.txt" || fail "status.txt: $(cat "$mnt/log/status.txt")"
   ok
   rm -rf "${mnt:?}"/*
-  # A short run whose log fits but whose picture (about 280 KiB) does not.
+  # A short run whose log fits but whose picture's data (final.vtk, about 100 KiB) does not.
   hk run "$cloth" --out "$mnt/png" --no-progress --set output.vtk=false --set time.duration=0.01
+  expect_rc 1 "final.vtk on a full disk"
+  expect_err "error: cannot write $mnt/png/final.vtk: No space left on device" "vtk write error"
+  absent "$mnt/png/final.csv" "$mnt/png/final.png" "$mnt/png/final.vtk"
+  no_tmp "$mnt/png"
+  complete_rows "$mnt/png/log.csv"
+  expect_status "$mnt/png" failed
+  grep -q "wrote" "$OUT/last.out" && fail "a failed run printed a 'wrote' line: $(cat "$OUT/last.out")"
+  rm -rf "${mnt:?}"/*
+  # An 8 x 8 cloth: final.vtk (13 KiB) fits, final.png does not, neither as matplotlib draws it
+  # (about 200 KiB) nor as the built-in renderer does after it (about 100 KiB).
+  hk run "$small" --out "$mnt/png" --no-progress --set output.vtk=false --set time.duration=0.01 \
+    --set mesh.nx=8 --set mesh.ny=8
   expect_rc 1 "final.png on a full disk"
   expect_err "error: cannot write $mnt/png/final.png: No space left on device" "png write error"
   absent "$mnt/png/final.csv" "$mnt/png/final.png"
   no_tmp "$mnt/png"
   complete_rows "$mnt/png/log.csv"
   expect_status "$mnt/png" failed
-  grep -q "wrote" "$OUT/last.out" && fail "a failed run printed a 'wrote' line: $(cat "$OUT/last.out")"
   rm -rf "${mnt:?}"/*
   # A study on a disk that is already full.
   dd if=/dev/zero of="$mnt/filler" bs=1k count=128 status=none 2> /dev/null
