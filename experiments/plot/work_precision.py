@@ -2,12 +2,13 @@
 
 Usage: /usr/bin/python3 experiments/plot/work_precision.py OUT_DIR
 Reads OUT_DIR/workprecision.csv and OUT_DIR/reference.csv; writes, per case,
-OUT_DIR/workprecision_<case>.png (RMS position error at the final time and the largest over the
-trajectory against wall time, log-log, one line per method through the points the reference
-resolves, each point annotated with its h or rtol; the reference's own error estimate as a dotted
-line, and the points below it, which it cannot resolve, as hollow triangles on that line rather
-than as values) and OUT_DIR/workprecision_<case>.md (every run as a table row). Wall times are the
-medians of the `repeats` runs the CSV records.
+OUT_DIR/workprecision_<case>.png and OUT_DIR/workprecision_<case>.md (every run as a table row).
+The figure is one panel, error against wall time (log-log), one line per method through its RMS
+position error at the final time; a whisker from each point rises to the largest RMS error over
+the trajectory, so both measures are read at the same point (they were two panels that showed
+the same ranking). Each point is annotated with its h or rtol. The reference's own error estimate
+is a dotted line, and the points below it, which it cannot resolve, are hollow triangles on that
+line rather than values. Wall times are the medians of the `repeats` runs the CSV records.
 """
 import math
 import os
@@ -23,39 +24,53 @@ def main(out_dir):
     for case in dict.fromkeys(r["case"] for r in rows):
         sub = [r for r in rows if r["case"] == case]
         ref = refs.get(case)
-        fig, axes = plt.subplots(1, 2, figsize=(13, 4.8), sharey=True)
-        for ax, col, what in ((axes[0], "rms_err_final", "at the final time"),
-                              (axes[1], "rms_err_traj", "max over the trajectory")):
-            resolved = "resolved_final" if col == "rms_err_final" else "resolved_traj"
-            bound = math.nan
-            if ref is not None:
-                bound = num(ref["err_rms_final" if col == "rms_err_final" else "err_rms_traj"])
-            marked = False
-            for label in dict.fromkeys(r["label"] for r in sub):
-                mine = [r for r in sub if r["label"] == label and num(r[col]) > 0]
-                pts = [r for r in mine if r.get(resolved, "1") == "1"]
-                below = [r for r in mine if r.get(resolved, "1") != "1"]
-                st = style(label, labels)
-                if pts:
-                    ax.plot([num(r["wall_s"]) for r in pts], [num(r[col]) for r in pts], "-", lw=1.2,
-                            ms=5, label=label, **st)
-                    for r in pts:
-                        tag = f"rtol {g3(num(r['rtol']))}" if num(r["rtol"]) > 0 else f"h {g3(num(r['h']))}"
-                        ax.annotate(tag, (num(r["wall_s"]), num(r[col])), textcoords="offset points",
-                                    xytext=(3, 2), fontsize=4.5, color=st.get("color", "k"))
-                if below and bound > 0:
-                    ax.plot([num(r["wall_s"]) for r in below], [bound] * len(below), ls="none",
-                            marker="v", mfc="none", ms=6, color=st.get("color", "k"),
-                            label=None if marked else "below the reference error (not resolved)")
-                    marked = True
-            if bound > 0:
-                ax.axhline(bound, ls=":", color="k", lw=1, label="reference error estimate")
-            ax.set_xscale("log")
-            ax.set_yscale("log")
-            ax.set_xlabel("wall time (s)")
-            ax.set_title(f"{case}: RMS position error {what}")
-        axes[0].set_ylabel("RMS position error vs reference (m)")
-        axes[1].legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
+        fig, ax = plt.subplots(figsize=(9.5, 5.6))
+        bound = num(ref["err_rms_final"]) if ref is not None else math.nan
+        bound_traj = num(ref["err_rms_traj"]) if ref is not None else math.nan
+        marked = False
+        for label in dict.fromkeys(r["label"] for r in sub):
+            mine = [r for r in sub if r["label"] == label and num(r["rms_err_final"]) > 0]
+            pts = [r for r in mine if r.get("resolved_final", "1") == "1"]
+            below = [r for r in mine if r.get("resolved_final", "1") != "1"]
+            st = style(label, labels)
+            colour = st.get("color", "k")
+            if pts:
+                ax.plot([num(r["wall_s"]) for r in pts], [num(r["rms_err_final"]) for r in pts],
+                        "-", lw=1.2, ms=5, label=label, **st)
+                for r in pts:
+                    w, e = num(r["wall_s"]), num(r["rms_err_final"])
+                    tag = f"rtol {g3(num(r['rtol']))}" if num(r["rtol"]) > 0 else f"h {g3(num(r['h']))}"
+                    ax.annotate(tag, (w, e), textcoords="offset points", xytext=(3, -7),
+                                fontsize=4.5, color=colour)
+            # Whiskers: final error (or the reference bound, where unresolved) up to the
+            # trajectory's largest error, where the reference resolves that.
+            for r in mine:
+                traj = num(r["rms_err_traj"])
+                if r.get("resolved_traj", "1") != "1" or not traj > 0:
+                    continue
+                lo = num(r["rms_err_final"]) if r in pts else bound
+                if lo > 0 and traj > lo:
+                    ax.plot([num(r["wall_s"])] * 2, [lo, traj], "-", color=colour, lw=0.6,
+                            alpha=0.6)
+                    ax.plot(num(r["wall_s"]), traj, "_", color=colour, ms=5, mew=0.8)
+            if below and bound > 0:
+                ax.plot([num(r["wall_s"]) for r in below], [bound] * len(below), ls="none",
+                        marker="v", mfc="none", ms=6, color=colour,
+                        label=None if marked else "final error below the reference's (not resolved)")
+                marked = True
+        if bound > 0:
+            ax.axhline(bound, ls=":", color="k", lw=1, label="reference error estimate (final)")
+        if bound_traj > 0 and not math.isclose(bound_traj, bound, rel_tol=0.1):
+            ax.axhline(bound_traj, ls=":", color="0.5", lw=1,
+                       label="reference error estimate (trajectory)")
+        ax.plot([], [], "-", color="0.3", lw=0.6, label="whisker: largest error over the trajectory")
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("wall time (s), median of the repeats")
+        ax.set_ylabel("RMS position error vs reference (m)")
+        ax.set_title(f"{case}: RMS position error at the final time (points) and over the "
+                     "trajectory (whiskers)")
+        ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0))
         fig.tight_layout()
         save_figure(fig, os.path.join(out_dir, f"workprecision_{case}.png"))
         plt.close(fig)
