@@ -199,6 +199,69 @@ void check_particles_outside(const std::vector<SceneCollider>& colliders, const 
   }
 }
 
+/// [[pin_motion]]: scripted pins. Each table moves the pinned particles whose initial position lies
+/// in its box (every pinned particle without one) along a rigid motion; a particle may follow one
+/// motion only. The initial state takes their prescribed velocity.
+void read_pin_motion(TableReader& root, Scene& scene) {
+  if (!root.has("pin_motion")) return;
+  const MassSpringSystem& sys = *scene.system;
+  const std::vector<char>& pinned = sys.pinned();
+  const Vec& x = scene.initial.x;
+  PinMotion motion;
+  std::vector<std::string> owner(pinned.size());
+  for (TableReader& m : root.tables("pin_motion")) {
+    RigidMotion r;
+    std::optional<std::vector<std::vector<double>>> box;
+    if (m.has("box")) {
+      box = m.rows("box", 3, 3);
+      if (box->size() != 2)
+        m.fail("box", "must be two corners [[xmin, ymin, zmin], [xmax, ymax, zmax]]");
+    }
+    r.velocity = m.vec3("velocity", Vec3::Zero());
+    r.angular_velocity = m.vec3("angular_velocity", Vec3::Zero());
+    r.start = m.non_negative("start", 0.0);
+    if (m.has("stop")) {
+      r.stop = m.positive("stop");
+      if (!(r.stop > r.start)) m.fail("stop", "must be after start = " + fmt(r.start) + " s");
+    }
+    // Selection errors name the box, or the table when it has none.
+    auto refuse = [&](const std::string& reason) {
+      throw InputError(m.file(), box ? m.path("box") : m.name(), reason);
+    };
+    std::vector<Index> chosen;
+    Vec3 lo = Vec3::Constant(HUGE_VAL), hi = -lo, sum = Vec3::Zero();
+    for (Index i = 0; i < sys.num_particles(); ++i) {
+      if (!pinned[size_t(i)]) continue;
+      const Vec3 p = x.segment<3>(3 * i);
+      lo = lo.cwiseMin(p);
+      hi = hi.cwiseMax(p);
+      if (box && ((p - Vec3((*box)[0].data())).minCoeff() < 0.0 ||
+                  (Vec3((*box)[1].data()) - p).minCoeff() < 0.0))
+        continue;
+      if (!owner[size_t(i)].empty())
+        refuse("pinned particle " + std::to_string(i) + " at " + fmt(p) + " already follows " +
+               owner[size_t(i)] + "; each pin follows one motion");
+      chosen.push_back(i);
+      sum += p;
+    }
+    if (chosen.empty()) {
+      const std::string span =
+          sys.num_pinned() ? "; the pinned particles lie in " + fmt(lo) + " .. " + fmt(hi) : "";
+      refuse("selects no pinned particle" + span +
+             " (pin_motion moves pinned particles: pin them in [mesh])");
+    }
+    r.center = m.vec3("center", sum / double(chosen.size()));
+    m.finish();
+    const int id = motion.add_motion(r);
+    for (const Index i : chosen) {
+      motion.add_particle(i, id, x.segment<3>(3 * i));
+      owner[size_t(i)] = m.name();
+    }
+  }
+  motion.place(0.0, scene.initial.x, scene.initial.v);
+  scene.system->set_pin_motion(std::move(motion));
+}
+
 /// Forces, colliders and strain limiting: each added only when the scene declares it. The
 /// colliders are listed in `colliders` for check_particles_outside().
 void add_forces_and_constraints(TableReader& root, const MeshBuild& b, Scene& scene,
@@ -390,7 +453,7 @@ Scene load_parsed(toml::table tbl, const std::string& file,
   TableReader root(tbl, scene.resolved, file, "", context);
 
   if (is_ode) {
-    for (const char* sec : {"mesh", "springs", "forces", "collision", "strain_limit"})
+    for (const char* sec : {"mesh", "springs", "forces", "collision", "strain_limit", "pin_motion"})
       root.reject_if_present(sec, "an [ode] scene has no particles; remove this section");
     auto ode = root.table("ode");
     read_ode(*ode, scene);
@@ -413,6 +476,7 @@ Scene load_parsed(toml::table tbl, const std::string& file,
     scene.triangles = std::move(b.triangles);
     std::vector<SceneCollider> colliders;
     add_forces_and_constraints(root, b, scene, colliders);
+    read_pin_motion(root, scene);
     scene.system->finalize();
     check_particles_outside(colliders, scene);
   }

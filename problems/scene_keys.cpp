@@ -430,6 +430,38 @@ std::vector<SceneKey> make_table() {
           .non_negative()
           .meaning("Coulomb friction coefficient of the contact"));
 
+  // [[pin_motion]]: scripted pins, one table (or array element) per rigid motion.
+  add(K("pin_motion.box", T::Rows)
+          .unit("m")
+          .computed("every pinned particle")
+          .example("[[-1, 4, -1], [0.5, 5.5, 1]]")
+          .meaning("[[xmin, ymin, zmin], [xmax, ymax, zmax]]: the pinned particles whose initial "
+                   "position lies inside follow this motion (each pin follows one motion)"));
+  add(K("pin_motion.velocity", T::Vector3)
+          .unit("m/s")
+          .def("[0, 0, 0]")
+          .meaning("translation velocity u: x(t) = c + u tau + R(w tau) (X - c), tau = t - start"));
+  add(K("pin_motion.angular_velocity", T::Vector3)
+          .unit("rad/s")
+          .def("[0, 0, 0]")
+          .meaning("rotation w: axis times rate, about the centre c (which moves with u)"));
+  add(K("pin_motion.center", T::Vector3)
+          .unit("m")
+          .computed("mean initial position of the pins it moves")
+          .example("[0, 5, 0]")
+          .meaning("centre c of the rotation at the start"));
+  add(K("pin_motion.start", T::Number)
+          .unit("s")
+          .def("0")
+          .non_negative()
+          .meaning("the pins rest until this time"));
+  add(K("pin_motion.stop", T::Number)
+          .unit("s")
+          .computed("never")
+          .positive()
+          .example("0.5")
+          .meaning("the pins stop here and stay (must be after start)"));
+
   // [strain_limit]: Provot's strain limiting after each step.
   add(K("strain_limit.max_strain", T::Number)
           .def("0.1")
@@ -914,8 +946,8 @@ std::string scene_keys_markdown() {
         "relative to the current folder (where hooke runs). The resolved scene that a run "
         "writes (`scene.toml` in its output folder) holds absolute paths, so it runs from "
         "anywhere.\n\n"
-        "Array tables: `[collision.ground]` and `[collision.sphere]` may be given once or as "
-        "arrays (`[[collision.sphere]]`), one table per collider.\n";
+        "Array tables: `[collision.ground]`, `[collision.sphere]` and `[pin_motion]` may be "
+        "given once or as arrays (`[[collision.sphere]]`), one table per collider or motion.\n";
   std::string current;
   for (const auto& k : scene_keys()) {
     const std::string sec = section_of(k.name);

@@ -192,8 +192,14 @@ MethodOptions options_for(const std::string& name, const MethodOptions& options)
 }
 
 std::string method_unsupported(const std::string& name, const MassSpringSystem& system) {
-  for (const auto& e : whole_step_table())
-    if (name == e.info.name && e.unsupported) return e.unsupported(system);
+  for (const auto& e : whole_step_table()) {
+    if (name != e.info.name) continue;
+    if (system.has_pin_motion())
+      return "'" + name +
+             "' keeps pinned particles still and cannot follow scripted pins (pin_motion); use "
+             "an explicit method or implicit, implicit-midpoint or bdf2";
+    if (e.unsupported) return e.unsupported(system);
+  }
   return "";
 }
 

@@ -49,6 +49,8 @@ StepSummary Simulation::advance_once(double h) {
                 " short of t + h = " + std::to_string(m_state.t + h) + ": " + s.message;
     return s;
   }
+  // Scripted pins end the step exactly on their path, whatever the stepper's round-off or order.
+  if (m_system.has_pin_motion()) m_system.pin_motion().place(m_next.t, m_next.x, m_next.v);
   m_system.apply_constraints(m_state.x, h, m_next.x, m_next.v);
   if (!m_next.is_finite()) {
     s.status = Status::Fatal;

@@ -204,9 +204,8 @@ StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
 StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
   const Index N = m_system.dofs();
   HOOKE_ASSERT(s0.x.size() == N && s0.v.size() == N, "state size mismatch");
-  const Vec& free_inv = m_system.free_inverse_mass();
-  // Pinned particles never move: their velocity is taken as zero throughout.
-  m_v0 = s0.v.cwiseProduct((free_inv.array() > 0.0).cast<double>().matrix());
+  // Pinned particles never move (their velocity is taken as zero throughout) unless scripted.
+  m_v0 = s0.v.cwiseProduct(m_system.moving());
   // One-leg coefficients: M (v1 - vb) = hf f(xa + bx v1, va + cv v1), x1 = xe + ex v1.
   const OneLeg c = set_up(s0, h);
 
@@ -216,6 +215,14 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
   lin.max_iterations = m_options.max_linear_iterations;
   lin.warm_start = true;
   m_v1 = m_v0;  // initial guess
+  // A scripted pin's v1 puts it on its path at t + h: x1 = xe + ex v1 = x_p(t + h). Its rows stay
+  // Dirichlet rows (delta = 0); the first linearisation's K dx carries its motion to the free
+  // particles' right-hand side.
+  const PinMotion& pins = m_system.pin_motion();
+  for (size_t k = 0; k < pins.particles().size(); ++k) {
+    const Index p = pins.particles()[k];
+    m_v1.segment<3>(3 * p) = (pins.position(k, s0.t + h) - m_xe.segment<3>(3 * p)) / c.ex;
+  }
   m_xlin = s0.x;
   m_vlin = m_v0;
   double delta_norm = 0.0;

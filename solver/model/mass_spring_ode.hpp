@@ -5,7 +5,8 @@
 namespace hooke {
 
 /// A mass-spring system seen as the first-order ODE X = [x; v], X' = [v; M^-1 f(x, v)], partitioned
-/// with q = x. Pinned particles have zero velocity derivative and zero acceleration.
+/// with q = x. Pinned particles have zero velocity derivative and zero acceleration; scripted pins
+/// move with their velocity and have their prescribed acceleration (PinMotion).
 /// Holds a reference to the system, which must outlive it, and its own force scratch.
 class MassSpringOde final : public OdeSystem {
  public:
@@ -18,8 +19,7 @@ class MassSpringOde final : public OdeSystem {
 
  private:
   const MassSpringSystem& m_system;
-  Vec m_free;  // 3n mask: 1 for free DOFs, 0 for pinned
-  Vec m_f;     // 3n force scratch
+  Vec m_f;  // 3n force scratch
 };
 
 }  // namespace hooke

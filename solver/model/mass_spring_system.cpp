@@ -12,11 +12,23 @@ MassSpringSystem::MassSpringSystem(Vec masses, std::vector<char> pinned)
                "pinned has " << m_pinned.size() << " flags for " << n << " particles");
   m_mass_diag.resize(3 * n);
   m_free_inv_mass.resize(3 * n);
+  m_moving.resize(3 * n);
   for (Index i = 0; i < n; ++i) {
     HOOKE_ASSERT(m_masses[i] > 0.0, "mass of particle " << i << " is " << m_masses[i]);
     m_mass_diag.segment<3>(3 * i).setConstant(m_masses[i]);
     m_free_inv_mass.segment<3>(3 * i).setConstant(m_pinned[i] ? 0.0 : 1.0 / m_masses[i]);
+    m_moving.segment<3>(3 * i).setConstant(m_pinned[i] ? 0.0 : 1.0);
   }
+}
+
+void MassSpringSystem::set_pin_motion(PinMotion motion) {
+  HOOKE_ASSERT(!m_finalized, "set_pin_motion after finalize");
+  for (const Index i : motion.particles()) {
+    HOOKE_ASSERT(i >= 0 && i < num_particles() && m_pinned[size_t(i)],
+                 "scripted pin " << i << " is not a pinned particle");
+    m_moving.segment<3>(3 * i).setOnes();
+  }
+  m_pin_motion = std::move(motion);
 }
 
 void MassSpringSystem::add_force(std::unique_ptr<Force> force) {

@@ -3,6 +3,7 @@
 #include <vector>
 
 #include "hooke/constraints/constraint.hpp"
+#include "hooke/constraints/pin_motion.hpp"
 #include "hooke/forces/force.hpp"
 #include "hooke/model/state.hpp"
 #include "hooke/sparse/block_pattern.hpp"
@@ -27,7 +28,10 @@ struct Jacobians {
 ///
 /// Pinned particles keep their position: their acceleration is zero, and constraints never move
 /// them. Forces on them are still computed (and appear in K and D); implicit solvers remove their
-/// rows and columns.
+/// rows and columns. Scripted pins (set_pin_motion) are pinned particles that follow a prescribed
+/// rigid motion instead: the state carries their prescribed velocity, their acceleration is the
+/// prescribed one, and Simulation places them exactly on their path after every step. Only the
+/// explicit and implicit steppers follow them (method_unsupported() refuses the others).
 class MassSpringSystem {
  public:
   /// masses: n vector of positive masses (kg); pinned: n flags (nonzero = pinned).
@@ -36,6 +40,9 @@ class MassSpringSystem {
   /// Adds a force or constraint (before finalize only).
   void add_force(std::unique_ptr<Force> force);
   void add_constraint(std::unique_ptr<Constraint> constraint);
+  /// Gives pinned particles a prescribed motion (before finalize only; every particle of `motion`
+  /// must be pinned).
+  void set_pin_motion(PinMotion motion);
   /// Builds the Jacobian block pattern and binds the forces to it. Call once, after all forces.
   void finalize();
 
@@ -50,6 +57,12 @@ class MassSpringSystem {
   const Vec& free_inverse_mass() const { return m_free_inv_mass; }
   const std::vector<char>& pinned() const { return m_pinned; }
   Index num_pinned() const;
+  /// The scripted pins (empty if none).
+  const PinMotion& pin_motion() const { return m_pin_motion; }
+  bool has_pin_motion() const { return !m_pin_motion.empty(); }
+  /// 3n mask: 1 for the DOFs that move with the state's velocity (free particles and scripted
+  /// pins), 0 for pins that stay still.
+  const Vec& moving() const { return m_moving; }
   const std::vector<std::unique_ptr<Force>>& forces() const { return m_forces; }
   const std::vector<std::unique_ptr<Constraint>>& constraints() const { return m_constraints; }
   const BlockPattern& pattern() const { return m_pattern; }
@@ -87,8 +100,9 @@ class MassSpringSystem {
   void apply_constraints(ConstRef x0, double h, VecRef x1, VecRef v1) const;
 
  private:
-  Vec m_masses, m_mass_diag, m_free_inv_mass;
+  Vec m_masses, m_mass_diag, m_free_inv_mass, m_moving;
   std::vector<char> m_pinned;
+  PinMotion m_pin_motion;
   std::vector<std::unique_ptr<Force>> m_forces;
   std::vector<std::unique_ptr<Constraint>> m_constraints;
   BlockPattern m_pattern;

@@ -767,5 +767,40 @@ TEST(SceneTwoParticle, DampedExactSolutionLosesEnergy) {
   EXPECT_LT(previous, 0.5 * 500.0 * 0.01 * 0.5);
 }
 
+// [[pin_motion]]: the box picks the pins, the initial state carries their velocity, and the
+// methods that cannot follow them refuse the scene.
+const char* kPulledGrid =
+    "[mesh]\ntype = 'grid'\nnx = 4\nny = 4\n"  // pins at (0, 0, 0) and (1, 0, 0)
+    "[[pin_motion]]\nbox = [[0.9, -0.1, -0.1], [1.1, 0.1, 0.1]]\nvelocity = [0.5, 0, 0]\n";
+
+TEST(ScenePinMotion, TheBoxPicksThePinsAndTheInitialStateMovesThem) {
+  const Scene s =
+      load_scene_from_string(std::string(kPulledGrid) + "start = 0\nstop = 0.4\n", "pulled.toml");
+  const PinMotion& pm = s.system->pin_motion();
+  ASSERT_EQ(pm.particles(), std::vector<Index>{3});
+  EXPECT_EQ(Vec3(s.initial.v.segment<3>(9)), Vec3(0.5, 0, 0));
+  EXPECT_EQ(Vec3(s.initial.v.segment<3>(0)), Vec3::Zero());
+  EXPECT_EQ(pm.position(0, 1.0), Vec3(1.2, 0, 0));  // stopped at t = 0.4
+  EXPECT_TRUE(s.resolved["pin_motion"].is_array_of_tables());
+}
+
+TEST(ScenePinMotion, MistakesAreRefusedAtTheirKey) {
+  const std::string grid = "[mesh]\ntype = 'grid'\nnx = 4\nny = 4\n";
+  InputError e = load_error(grid + "[pin_motion]\nbox = [[5, 5, 5], [6, 6, 6]]\n");
+  EXPECT_EQ(e.key(), "pin_motion.box");
+  expect_contains(e.reason(),
+                  "selects no pinned particle; the pinned particles lie in (0, 0, 0) .. (1, 0, 0)");
+  e = load_error(
+      grid +
+      "[[pin_motion]]\nvelocity = [1, 0, 0]\n[[pin_motion]]\nbox = [[0.9, -1, -1], [2, 1, 1]]\n");
+  EXPECT_EQ(e.key(), "pin_motion[1].box");
+  expect_contains(e.reason(), "already follows pin_motion[0]");
+  e = load_error(grid + "[pin_motion]\nstart = 1\nstop = 0.5\n");
+  EXPECT_EQ(e.key(), "pin_motion.stop");
+  e = load_error(std::string(kPulledGrid) + "[integrator]\nmethod = 'xpbd'\n");
+  EXPECT_EQ(e.key(), "integrator.method");
+  expect_contains(e.reason(), "cannot follow scripted pins");
+}
+
 }  // namespace
 }  // namespace hooke
