@@ -21,6 +21,8 @@ packages=(
   libtomlplusplus-dev               # scene files
   libspectra-dev                    # largest natural frequency (hooke info, stability limits)
   python3-matplotlib python3-numpy  # plots (run with /usr/bin/python3)
+  python3-dev pybind11-dev          # the Python module (python/)
+  python3-scipy python3-pytest      # its sparse Jacobians and its tests
 )
 if [ "${1:-}" = "--paper" ]; then
   packages+=(pandoc)                # paper/paper.md -> out/paper/paper.html

@@ -57,7 +57,13 @@ StepSummary Simulation::advance_once(double h) {
     s.message = std::string(m_stepper->name()) + ": state became non-finite";
     return s;
   }
-  std::swap(m_state, m_next);
+  if (m_stable_buffers) {
+    m_state.x = m_next.x;  // same sizes: Eigen copies into the existing storage
+    m_state.v = m_next.v;
+    m_state.t = m_next.t;
+  } else {
+    std::swap(m_state, m_next);
+  }
   return s;
 }
 

@@ -42,6 +42,15 @@ class Simulation {
   /// state stays unchanged, so the caller may retry with a smaller h or stop).
   void set_accept_not_converged(bool accept) { m_accept_not_converged = accept; }
   const State& state() const { return m_state; }
+  /// The current state for editing between steps (e.g. a user moving a particle). A stepper that
+  /// caches anything derived from the state (a factorization, BDF2's history) sees the edit only
+  /// through the next step's start state.
+  State& mutable_state() { return m_state; }
+  /// true: a step copies its result into the current state's buffers instead of swapping them
+  /// with the scratch state, so that pointers into state().x and state().v (numpy views in the
+  /// Python module) keep showing the current state. Costs one copy of x and v per step; the
+  /// values are the same bits either way. Default false.
+  void set_stable_buffers(bool stable) { m_stable_buffers = stable; }
   const MassSpringSystem& system() const { return m_system; }
   Stepper& stepper() { return *m_stepper; }
 
@@ -64,6 +73,7 @@ class Simulation {
   RetryObserver m_on_retry;
   double m_failed_t = 0.0, m_failed_h = 0.0;
   long long m_halved_steps = 0;
+  bool m_stable_buffers = false;
 };
 
 }  // namespace hooke

@@ -1,0 +1,180 @@
+"""The Python module against the library it binds and against independent checks: the views follow
+the state, Simulation.run() gives `hooke run`'s final state bit for bit, the Jacobians match
+finite differences of the forces, every registered method steps, bad input raises InputError with
+hooke's message, a failed step raises StepError, Ctrl-C stops a long run between steps, and memory
+stays flat over 10^4 steps.
+
+Run by CTest (Python.pytest) with PYTHONPATH=build/python, HOOKE_BIN (the hooke command) and
+HOOKE_SCENES (problems/scenes); by hand: PYTHONPATH=build/python /usr/bin/python3 -m pytest
+tests/python.
+"""
+import csv
+import os
+import signal
+import subprocess
+
+import numpy as np
+import pytest
+
+import hooke
+
+SCENES = os.environ.get("HOOKE_SCENES", os.path.join(os.path.dirname(__file__), "..", "..",
+                                                     "problems", "scenes"))
+CLOTH = os.path.join(SCENES, "hanging_cloth_16.toml")
+
+
+def cloth(**overrides):
+    sets = {"time.duration": 0.01}
+    sets.update(overrides)
+    return hooke.load_scene(CLOTH, sets)
+
+
+def test_views_follow_the_state_after_every_step():
+    sim = hooke.Simulation(cloth(**{"integrator.method": "symplectic-euler"}))
+    x, v = sim.x, sim.v
+    assert x.shape == (256, 3) and x.dtype == np.float64
+    before = x.copy()
+    for _ in range(3):  # an odd and an even number of steps: no double buffer shows through
+        sim.step()
+        assert np.shares_memory(x, sim.x) and np.shares_memory(v, sim.v)
+        assert np.array_equal(x, sim.x)
+    assert not np.array_equal(x, before)
+    assert sim.t == pytest.approx(3 * 5e-4)
+
+
+def test_writing_a_view_moves_the_particle():
+    sim = hooke.Simulation(cloth(**{"integrator.method": "symplectic-euler"}))
+    sim.v[100] = [0.0, 1.0, 0.0]
+    y = sim.x[100, 1]
+    sim.step(5e-4)
+    assert sim.x[100, 1] > y + 4e-4
+
+
+def read_final(path):
+    with open(path, newline="") as f:
+        rows = list(csv.DictReader(f))
+    x = np.array([[float(r["x"]), float(r["y"]), float(r["z"])] for r in rows])
+    v = np.array([[float(r["vx"]), float(r["vy"]), float(r["vz"])] for r in rows])
+    return x, v
+
+
+@pytest.mark.parametrize("method", ["symplectic-euler", "rk4", "implicit", "bdf2"])
+def test_run_gives_the_final_state_of_hooke_run_bit_for_bit(tmp_path, method):
+    sets = {"time.duration": 0.0123, "time.dt": 1e-3, "integrator.method": method}
+    sim = hooke.Simulation(hooke.load_scene(CLOTH, sets))
+    sim.run()
+    assert sim.t == 0.0123 and sim.steps_taken == 13  # the last step shortened, as hooke run does
+    cmd = [os.environ["HOOKE_BIN"], "run", CLOTH, "--out", str(tmp_path), "--no-progress",
+           "--set", "output.vtk=false", "--set", "output.png=false"]
+    for k, val in sets.items():
+        cmd += ["--set", f"{k}={val}"]
+    subprocess.run(cmd, check=True, capture_output=True)
+    x, v = read_final(tmp_path / "final.csv")
+    assert np.array_equal(sim.x, x) and np.array_equal(sim.v, v)
+
+
+def test_jacobians_match_central_differences_of_the_forces():
+    # A damped cloth, perturbed so that springs are stretched and compressed.
+    scene = hooke.load_scene(CLOTH, {"mesh.nx": 4, "mesh.ny": 4, "springs.damping": 0.7})
+    system = hooke.Simulation(scene).system
+    rng = np.random.default_rng(7)
+    x = hooke.Simulation(scene).x + 0.05 * rng.standard_normal((16, 3))
+    v = rng.standard_normal((16, 3))
+    K = system.stiffness(x, v).toarray()
+    D = system.damping(x, v).toarray()
+    eps = 1e-6
+    for j in range(48):
+        dx = np.zeros(48)
+        dx[j] = eps
+        dx = dx.reshape(16, 3)
+        fd_x = (system.forces(x + dx, v) - system.forces(x - dx, v)).ravel() / (2 * eps)
+        fd_v = (system.forces(x, v + dx) - system.forces(x, v - dx)).ravel() / (2 * eps)
+        assert np.allclose(K[:, j], fd_x, rtol=1e-6, atol=1e-6 * np.abs(K).max()), j
+        assert np.allclose(D[:, j], fd_v, rtol=1e-6, atol=1e-6 * np.abs(D).max()), j
+    # The potential's gradient is minus the conservative force (drag and dampers off at v = 0).
+    zero = np.zeros((16, 3))
+    g = np.array([(system.energy(x + e) - system.energy(x - e)) / (2 * eps)
+                  for e in (np.eye(48)[j].reshape(16, 3) * eps for j in range(48))])
+    assert np.allclose(-g, system.forces(x, zero).ravel(), rtol=1e-5, atol=1e-6)
+
+
+def test_every_registered_method_steps():
+    names = [m["name"] for m in hooke.methods()]
+    assert {"rk4", "implicit", "symplectic-euler"} <= set(names)
+    assert all(m["description"] for m in hooke.methods())
+    for name in names:
+        sim = hooke.Simulation(cloth(**{"integrator.method": name, "time.dt": 1e-3}))
+        summary = sim.step()
+        assert summary["status"] in ("converged", "not-converged"), (name, summary)
+        assert np.all(np.isfinite(sim.x)) and sim.t == 1e-3
+    assert "cholmod" in [s["name"] for s in hooke.linear_solvers()] or hooke.linear_solvers()
+
+
+def test_bad_input_raises_input_error_with_hookes_message():
+    with pytest.raises(hooke.InputError) as e:
+        hooke.load_scene(CLOTH, {"mesh.nxx": 4})
+    assert e.value.key == "mesh.nxx" and e.value.file == CLOTH
+    assert str(e.value).startswith(CLOTH + ": mesh.nxx: unknown key")
+    with pytest.raises(hooke.InputError) as e:
+        hooke.Scene.from_toml("[mesh]\ntype = 'grid'\nnx = 1\n", "inline.toml")
+    assert e.value.key == "mesh.nx" and "must be in [2, 1000000000], got 1" in e.value.reason
+    with pytest.raises(hooke.InputError) as e:
+        hooke.Scene.from_dict({"mesh": {"type": "grid"}, "time": {"dt": -1.0}})
+    assert e.value.key == "time.dt"
+
+
+def test_a_dict_and_toml_text_give_the_same_scene():
+    d = hooke.Scene.from_dict({"mesh": {"type": "grid", "nx": 5, "ny": 4},
+                               "collision": {"sphere": [{"center": [0.5, -1.0, 0.5],
+                                                         "radius": 0.3}]},
+                               "forces": {"gravity": np.array([0.0, -9.81, 0.0])}})
+    t = hooke.Scene.from_toml("[mesh]\ntype = 'grid'\nnx = 5\nny = 4\n"
+                              "[[collision.sphere]]\ncenter = [0.5, -1.0, 0.5]\nradius = 0.3\n"
+                              "[forces]\ngravity = [0.0, -9.81, 0.0]\n")
+    a, b = hooke.Simulation(d), hooke.Simulation(t)
+    for _ in range(20):
+        a.step()
+        b.step()
+    assert np.array_equal(a.x, b.x) and d.num_particles == 20
+
+
+def test_a_failed_step_raises_step_error_and_keeps_the_state():
+    sim = hooke.Simulation(cloth(**{"integrator.method": "rk4", "time.dt": 0.05,
+                                     "time.duration": 10.0}))
+    with pytest.raises(hooke.StepError):
+        for _ in range(2000):
+            sim.step()
+            if not np.all(np.isfinite(sim.x)):
+                break
+    assert np.all(np.isfinite(sim.x))
+
+
+def test_ctrl_c_stops_a_long_run_between_steps():
+    sim = hooke.Simulation(cloth(**{"time.duration": 1e4, "integrator.method": "symplectic-euler"}))
+    signal.setitimer(signal.ITIMER_REAL, 0.3)
+    old = signal.signal(signal.SIGALRM, lambda *_: os.kill(os.getpid(), signal.SIGINT))
+    try:
+        with pytest.raises(KeyboardInterrupt):
+            sim.run()
+    finally:
+        signal.setitimer(signal.ITIMER_REAL, 0)
+        signal.signal(signal.SIGALRM, old)
+    assert 0 < sim.t < 1e4 and np.all(np.isfinite(sim.x))
+
+
+def resident_bytes():
+    with open("/proc/self/statm") as f:
+        return int(f.read().split()[1]) * os.sysconf("SC_PAGE_SIZE")
+
+
+def test_memory_stays_flat_over_ten_thousand_steps():
+    sim = hooke.Simulation(cloth(**{"integrator.method": "implicit", "time.dt": 1e-3,
+                                     "time.duration": 100.0, "mesh.nx": 8, "mesh.ny": 8}))
+    for _ in range(200):
+        sim.step()
+        sim.x.sum()
+    start = resident_bytes()
+    for _ in range(10_000):
+        sim.step()
+        sim.x.sum()  # a view per step, as a user's loop makes
+    assert resident_bytes() - start < 2 << 20
