@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "experiments/output/vtk_writer.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
@@ -232,6 +233,7 @@ class PySimulation {
     m_sim = std::make_unique<Simulation>(*m_scene->system, std::move(stepper), m_scene->initial);
     m_sim->set_accept_not_converged(m_scene->run.allow_not_converged);
     m_sim->set_max_step_halvings(m_scene->run.max_step_halvings);
+    m_method = m_scene->integrator.method;
   }
 
   double t() const { return m_sim->state().t; }
@@ -290,7 +292,32 @@ class PySimulation {
     d["total_seconds"] = s.total_seconds;
     return d;
   }
-  std::string method() const { return m_scene->integrator.method; }
+  std::string method() const { return m_method; }
+  /// Continues from the current state with another method; the scene's [integrator] options
+  /// carry over where that method takes them (options_for), as `hooke crosscheck` passes them.
+  void set_method(const std::string& name) {
+    try {
+      method_info(name);
+    } catch (const UnknownName& e) {
+      throw InputError("<set_method>", "integrator.method", e.what());
+    }
+    if (const std::string why = method_unsupported(name, *m_scene->system); !why.empty())
+      throw InputError(m_scene->file, "integrator.method", why);
+    try {
+      m_sim->set_stepper(
+          make_stepper(name, *m_scene->system, options_for(name, m_scene->integrator.options)));
+    } catch (const SetupError& e) {
+      throw InputError(m_scene->file, "integrator.method", e.what());
+    }
+    m_method = name;
+  }
+  /// The current state as a VTK frame (the format of hooke run's frames).
+  void write_vtk(const std::string& path) const {
+    const Scene& s = *m_scene;
+    write_vtk_frame(
+        path, m_sim->state(), t(),
+        FrameMesh{s.edges, s.edge_rest, s.triangles, s.system->pinned(), s.system->masses()});
+  }
 
  private:
   py::dict advance_by(double h) {
@@ -319,6 +346,7 @@ class PySimulation {
   std::shared_ptr<Scene> m_scene;
   std::unique_ptr<Simulation> m_sim;
   long long m_steps = 0;
+  std::string m_method;
   /// Views of x and v alive in Python. While there is one, a step copies its result into the
   /// state's buffers (Simulation::set_stable_buffers) so that the views follow it; without one, it
   /// swaps them as hooke run does, which saves that copy (about 8% of an explicit step of a 10k-
@@ -437,7 +465,12 @@ PYBIND11_MODULE(_hooke, m) {
           "velocities (n, 3), a view of the solver's state (writable)")
       .def_property_readonly("kinetic_energy", &PySimulation::kinetic_energy)
       .def_property_readonly("potential_energy", &PySimulation::potential_energy)
-      .def("stats", &PySimulation::stats, "the stepper's statistics");
+      .def("stats", &PySimulation::stats, "the stepper's statistics")
+      .def("set_method", &PySimulation::set_method, py::arg("method"),
+           "continue from the current state with another method (the scene's options carry over "
+           "where it takes them)")
+      .def("write_vtk", &PySimulation::write_vtk, py::arg("path"),
+           "the current state as a legacy VTK frame, as hooke run writes them");
 
   m.def(
       "system", [](std::shared_ptr<Scene> s) { return System(std::move(s)); }, py::arg("scene"),

@@ -178,3 +178,39 @@ def test_memory_stays_flat_over_ten_thousand_steps():
         sim.step()
         sim.x.sum()  # a view per step, as a user's loop makes
     assert resident_bytes() - start < 2 << 20
+
+
+def test_set_method_continues_from_the_current_state():
+    # Half the run by symplectic Euler, half by RK4, equals the two halves run separately.
+    sets = {"integrator.method": "symplectic-euler", "time.dt": 1e-3}
+    a = hooke.Simulation(cloth(**sets))
+    for _ in range(5):
+        a.step()
+    a.set_method("rk4")
+    assert a.method == "rk4"
+    for _ in range(5):
+        a.step()
+    b = hooke.Simulation(cloth(**sets))
+    for _ in range(5):
+        b.step()
+    c = hooke.Simulation(cloth(**{"integrator.method": "rk4", "time.dt": 1e-3}))
+    c.x[:] = b.x
+    c.v[:] = b.v
+    for _ in range(5):
+        c.step()
+    assert np.array_equal(a.x, c.x) and np.array_equal(a.v, c.v)
+    with pytest.raises(hooke.InputError) as e:
+        a.set_method("rk5")
+    assert e.value.key == "integrator.method"
+
+
+def test_write_vtk_writes_the_current_state(tmp_path):
+    sim = hooke.Simulation(cloth())
+    sim.step()
+    path = tmp_path / "state.vtk"
+    sim.write_vtk(str(path))
+    data = path.read_bytes()
+    assert data.startswith(b"# vtk DataFile Version 3.0\n") and b"POINTS 256 double\n" in data
+    start = data.index(b"POINTS 256 double\n") + len(b"POINTS 256 double\n")
+    points = np.frombuffer(data, dtype=">f8", count=768, offset=start).reshape(256, 3)
+    assert np.array_equal(points, sim.x)
