@@ -2,8 +2,8 @@
 // share: hanging_cloth_16.toml at 42 x 42 particles (10,166 springs), symplectic Euler and the
 // linearised backward-Euler step (its default linear solver), with Simulation's swapped state
 // buffers (hooke run, and the Python module while no numpy view of the state is alive) and with
-// the stable buffers that live views need (one copy of x and v per step). bench/python_overhead.py runs this binary and the same steps from Python
-// in one go and prints the ratio.
+// the stable buffers that live views need (one copy of x and v per step). bench/python_overhead.py
+// runs this binary and the same steps from Python in one go and prints the ratio.
 //   build/bench/hooke_bench_simulation
 #include <benchmark/benchmark.h>
 
