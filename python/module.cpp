@@ -12,10 +12,13 @@
 #include <string>
 #include <vector>
 
+#include "experiments/checkpoint.hpp"
 #include "experiments/output/vtk_writer.hpp"
+#include "experiments/run_output.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
+#include "hooke_config.hpp"
 #include "problems/input_error.hpp"
 #include "problems/scene.hpp"
 #include "problems/scene_keys.hpp"
@@ -311,6 +314,45 @@ class PySimulation {
     }
     m_method = name;
   }
+  /// The state, the stepper's history and the step count, in hooke run's checkpoint format.
+  void save_checkpoint(const std::string& path) {
+    Checkpoint c;
+    c.version = HOOKE_VERSION;
+    c.scene = resolved_scene_text(*m_scene);
+    c.initial_hash = initial_state_hash(m_scene->initial, m_scene->system->pinned());
+    c.method = m_method;
+    c.step = m_steps;
+    c.state = m_sim->state();
+    c.history = m_sim->stepper().history();
+    write_checkpoint(path, c);
+  }
+  /// Continues from a checkpoint of this scene and method (save_checkpoint, or hooke run's
+  /// DIR/checkpoint.bin): refused, as hooke resume refuses it, when either differs.
+  void load_checkpoint(const std::string& path) {
+    const Checkpoint c = read_checkpoint(path, m_scene->system->dofs());
+    if (c.version != HOOKE_VERSION)
+      throw InputError(path, "checkpoint",
+                       "was written by hooke " + c.version + "; this is hooke " HOOKE_VERSION);
+    if (const std::string changes = scene_changes(c.scene, resolved_scene_text(*m_scene));
+        !changes.empty())
+      throw InputError(path, "scene", "was written for another scene (" + changes + ")");
+    if (c.initial_hash != initial_state_hash(m_scene->initial, m_scene->system->pinned()))
+      throw InputError(path, "mesh", "was written for another initial state");
+    if (c.method != m_method)
+      throw InputError(path, "checkpoint",
+                       "was written by method '" + c.method + "', this simulation steps with '" +
+                           m_method + "' (set_method first)");
+    try {
+      m_sim->stepper().restore_history(c.history);
+    } catch (const InternalError& e) {
+      throw InputError(path, "checkpoint", std::string("stepper history: ") + e.what());
+    }
+    State& s = m_sim->mutable_state();
+    s.x = c.state.x;  // into the existing buffers: live views see the restored state
+    s.v = c.state.v;
+    s.t = c.state.t;
+    m_steps = c.step;
+  }
   /// The current state as a VTK frame (the format of hooke run's frames).
   void write_vtk(const std::string& path) const {
     const Scene& s = *m_scene;
@@ -469,6 +511,10 @@ PYBIND11_MODULE(_hooke, m) {
       .def("set_method", &PySimulation::set_method, py::arg("method"),
            "continue from the current state with another method (the scene's options carry over "
            "where it takes them)")
+      .def("save_checkpoint", &PySimulation::save_checkpoint, py::arg("path"),
+           "state, stepper history and step count, in hooke run's checkpoint format")
+      .def("load_checkpoint", &PySimulation::load_checkpoint, py::arg("path"),
+           "continue from a checkpoint of this scene and method (hooke run's checkpoint.bin too)")
       .def("write_vtk", &PySimulation::write_vtk, py::arg("path"),
            "the current state as a legacy VTK frame, as hooke run writes them");
 

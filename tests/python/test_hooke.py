@@ -214,3 +214,24 @@ def test_write_vtk_writes_the_current_state(tmp_path):
     start = data.index(b"POINTS 256 double\n") + len(b"POINTS 256 double\n")
     points = np.frombuffer(data, dtype=">f8", count=768, offset=start).reshape(256, 3)
     assert np.array_equal(points, sim.x)
+
+
+@pytest.mark.parametrize("method", ["bdf2", "rk4"])
+def test_a_checkpoint_continues_bit_for_bit(tmp_path, method):
+    sets = {"integrator.method": method, "time.dt": 1e-3, "time.duration": 0.02}
+    whole = hooke.Simulation(cloth(**sets))
+    whole.run()
+    first = hooke.Simulation(cloth(**sets))
+    for _ in range(7):
+        first.step()
+    first.save_checkpoint(str(tmp_path / "c.bin"))
+    second = hooke.Simulation(cloth(**sets))
+    x = second.x
+    second.load_checkpoint(str(tmp_path / "c.bin"))
+    assert second.steps_taken == 7 and np.array_equal(x, first.x)
+    second.run()
+    assert np.array_equal(second.x, whole.x) and np.array_equal(second.v, whole.v)
+    other = hooke.Simulation(cloth(**{"integrator.method": method, "time.dt": 2e-3}))
+    with pytest.raises(hooke.InputError) as e:
+        other.load_checkpoint(str(tmp_path / "c.bin"))
+    assert "time.dt" in e.value.reason
