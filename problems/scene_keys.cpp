@@ -79,12 +79,12 @@ const std::vector<std::string> kLines = {"chain", "hair"};
 const std::vector<std::string> kImplicit = {"implicit", "implicit-midpoint", "bdf2"};
 const std::vector<std::string> kSundials = {"cvode", "ida"};
 
-std::vector<SceneKey> make_table() {
-  std::vector<SceneKey> t;
-  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
-  const std::string spread = "mass spread evenly over the particles; give this or mesh.mass";
-  const std::string each = "mass of each particle; give this or mesh.total_mass";
+const std::string kSpread = "mass spread evenly over the particles; give this or mesh.mass";
+const std::string kEach = "mass of each particle; give this or mesh.total_mass";
 
+/// Adds the [mesh] type and the keys of grid and cantilever.
+void add_mesh_lattice_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   // [mesh]: one builder per type (problems/builders/).
   add(K("mesh.type", T::String)
           .choices({"grid", "cantilever", "chain", "hair", "damped-springs", "two-particle",
@@ -162,6 +162,11 @@ std::vector<SceneKey> make_table() {
             .def("true")
             .meaning(std::string("add the ") + kind + " springs, " + what));
   }
+}
+
+/// Adds the [mesh] keys of chain, hair and the masses of the lattices and lines.
+void add_mesh_line_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   add(K("mesh.n", T::Integer)
           .in(kLines)
           .def("20")
@@ -197,20 +202,30 @@ std::vector<SceneKey> make_table() {
           .def("0")
           .non_negative()
           .meaning("turns of the helix over the strand's length (0: straight)"));
-  add(K("mesh.total_mass", T::Number).in(kLattices).unit("kg").def("1").positive().meaning(spread));
+  add(K("mesh.total_mass", T::Number)
+          .in(kLattices)
+          .unit("kg")
+          .def("1")
+          .positive()
+          .meaning(kSpread));
   add(K("mesh.total_mass", T::Number)
           .in(kLines)
           .unit("kg")
           .computed("0.1 * mesh.n")
           .positive()
-          .meaning(spread));
+          .meaning(kSpread));
   add(K("mesh.mass", T::Number)
           .in({"grid", "cantilever", "chain", "hair", "obj"})
           .unit("kg")
           .computed("mesh.total_mass / particles")
           .positive()
           .example("0.01")
-          .meaning(each));
+          .meaning(kEach));
+}
+
+/// Adds the [mesh] keys of obj, the oscillators and particles.
+void add_mesh_other_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   // obj: a Wavefront file.
   add(K("mesh.file", T::String)
           .in({"obj"})
@@ -226,7 +241,7 @@ std::vector<SceneKey> make_table() {
           .unit("m")
           .def("[0, 0, 0]")
           .meaning("shift added after scaling"));
-  add(K("mesh.total_mass", T::Number).in({"obj"}).unit("kg").def("1").positive().meaning(spread));
+  add(K("mesh.total_mass", T::Number).in({"obj"}).unit("kg").def("1").positive().meaning(kSpread));
   add(K("mesh.pins", T::Integers)
           .in({"obj", "particles"})
           .def("[]")
@@ -299,7 +314,11 @@ std::vector<SceneKey> make_table() {
           .meaning("springs [i, j, k] | [i, j, k, L] | [i, j, k, L, c]: ids, stiffness (N/m), rest "
                    "length (m; default: the initial distance), damping (N s/m; default: "
                    "springs.damping)"));
+}
 
+/// Adds [springs].
+void add_springs_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   // [springs]: stiffness and damping of the springs each mesh type builds.
   add(K("springs.stiffness", T::Number)
           .in({"grid"})
@@ -386,7 +405,11 @@ std::vector<SceneKey> make_table() {
           .def("0")
           .non_negative()
           .meaning("damping of the mesh.springs rows that give none"));
+}
 
+/// Adds [forces], [collision.*], [[pin_motion]], [strain_limit] and [ode].
+void add_scene_part_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   // [forces]: each present only when given.
   add(K("forces.gravity", T::Vector3)
           .unit("m/s^2")
@@ -485,7 +508,11 @@ std::vector<SceneKey> make_table() {
           .meaning("decay rate (negative: growth)"));
   add(K("ode.x0", T::Number).in({"decay"}).def("1").meaning("initial value"));
   add(K("ode.x0", T::Numbers).in({"circle"}).def("[1, 0]").meaning("initial point [x, y]"));
+}
 
+/// Adds integrator.method and the keys of the implicit family.
+void add_implicit_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   // [integrator]: the method, then the keys of the chosen method.
   add(K("integrator.method", T::String)
           .def("'symplectic-euler'")
@@ -552,7 +579,11 @@ std::vector<SceneKey> make_table() {
           .def("true")
           .meaning(
               "drop the indefinite part of compressed springs' stiffness, keeping the matrix SPD"));
+}
 
+/// Adds the keys of CVODE and IDA.
+void add_sundials_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   add(K("integrator.rtol", T::Number)
           .in(kSundials)
           .def("1e-08")
@@ -624,7 +655,11 @@ std::vector<SceneKey> make_table() {
           .between(1, 5)
           .build("SUNDIALS")
           .meaning("largest BDF order"));
+}
 
+/// Adds the keys of ceres-implicit.
+void add_ceres_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   add(K("integrator.formulation", T::String)
           .in({"ceres-implicit"})
           .def("'residual'")
@@ -663,7 +698,11 @@ std::vector<SceneKey> make_table() {
           .int_from(1)
           .build("Ceres")
           .meaning("threads Ceres uses"));
+}
 
+/// Adds the keys of local/global (fast-mass-spring) and XPBD.
+void add_local_global_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   add(K("integrator.iterations", T::Integer)
           .in({"fast-mass-spring"})
           .def("10")
@@ -728,7 +767,11 @@ std::vector<SceneKey> make_table() {
           .def("1")
           .int_from(1)
           .meaning("constraint sweeps per substep"));
+}
 
+/// Adds [time], [output] and [run].
+void add_run_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   // [time], [output], [run]: every scene has them.
   add(K("time.dt", T::Number).unit("s").def("0.001").positive().meaning("time step"));
   add(K("time.duration", T::Number)
@@ -781,6 +824,14 @@ std::vector<SceneKey> make_table() {
           .def("300")
           .positive()
           .meaning("write checkpoint.bin when this much wall time has passed since the last"));
+}
+
+std::vector<SceneKey> make_table() {
+  std::vector<SceneKey> t;
+  for (auto section : {add_mesh_lattice_keys, add_mesh_line_keys, add_mesh_other_keys,
+                       add_springs_keys, add_scene_part_keys, add_implicit_keys, add_sundials_keys,
+                       add_ceres_keys, add_local_global_keys, add_run_keys})
+    section(t);
   return t;
 }
 
