@@ -6,6 +6,8 @@
 #include <pybind11/pybind11.h>
 #include <pybind11/stl.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -250,12 +252,14 @@ class PySimulation {
   }
   /// Steps of dt until time t, the last one shortened to land on t exactly.
   void advance(double t_end) {
-    const double dt = m_scene->time.dt;
-    while (t() < t_end) {
+    const double dt = m_scene->time.dt, left = t_end - t();
+    // Nothing to do when t_end is here already, to round-off (a time reached by steps of dt).
+    if (!(left > 1e-12 * std::max(dt, std::abs(t_end)))) return;
+    // As TimeSettings::steps(): the last step is shortened, never a sliver after a full one.
+    const long long n = static_cast<long long>(std::ceil(left / dt * (1.0 - 1e-12)));
+    for (long long k = 1; k <= n; ++k) {
       if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between steps
-      const double left = t_end - t();
-      // A step that would leave less than a millionth of dt is stretched to end on t_end.
-      advance_by(left <= dt * (1.0 + 1e-6) ? left : dt);
+      advance_by(k == n ? t_end - t() : dt);
     }
   }
   /// To the scene's duration, with the step sizes of `hooke run` (the last one shortened).

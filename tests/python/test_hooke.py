@@ -235,3 +235,13 @@ def test_a_checkpoint_continues_bit_for_bit(tmp_path, method):
     with pytest.raises(hooke.InputError) as e:
         other.load_checkpoint(str(tmp_path / "c.bin"))
     assert "time.dt" in e.value.reason
+
+
+def test_advance_lands_on_the_time_without_a_sliver_step():
+    sim = hooke.Simulation(cloth(**{"integrator.method": "symplectic-euler", "time.dt": 5e-3}))
+    sim.advance(0.25)  # 50 steps of 5 ms: their sum is not exactly 0.25
+    assert sim.t == 0.25 and sim.steps_taken == 50
+    sim.advance(0.25)
+    assert sim.steps_taken == 50
+    sim.advance(0.2512)  # one shortened step
+    assert sim.t == 0.2512 and sim.steps_taken == 51
