@@ -27,8 +27,67 @@ class StepError(RuntimeError):
     stays at the last accepted step."""
 
 
+import csv  # noqa: E402
+import os  # noqa: E402
+import tempfile  # noqa: E402
+
+from . import _hooke  # noqa: E402
 from ._hooke import (Scene, Simulation, System, linear_solvers, load_scene,  # noqa: E402,F401
                      methods, system)
 
 __all__ = ["InputError", "StepError", "Scene", "Simulation", "System", "load_scene", "methods",
-           "linear_solvers", "system"]
+           "linear_solvers", "system", "crosscheck", "stability", "workprecision",
+           "step_convergence"]
+
+
+def _value(text):
+    """A CSV field as a float where it is a number ('inf', 'nan' included), else the text."""
+    try:
+        return float(text)
+    except ValueError:
+        return text
+
+
+def _table(path):
+    with open(path, newline="") as f:
+        return [{k: _value(v) for k, v in row.items()} for row in csv.DictReader(f)]
+
+
+def _study(run, out, tables):
+    """Runs a study driver into `out` (a temporary folder if None) and returns its CSV tables as
+    lists of dicts (numbers as floats); raises StepError if the study reports a failed run."""
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = out if out is not None else tmp
+        code = run(folder)
+        if code != 0:
+            raise StepError(f"the study stopped with exit code {code} (see its messages above)")
+        result = [_table(os.path.join(folder, t)) for t in tables]
+    return result[0] if len(result) == 1 else tuple(result)
+
+
+def crosscheck(scene, methods=(), reference_rtol=1e-10, out=None):
+    """`hooke crosscheck`: each method at the scene's dt against a CVODE reference; the rows of
+    crosscheck.csv. `out` keeps the files (crosscheck.csv, crosscheck.md) there."""
+    return _study(lambda d: _hooke._crosscheck(scene, list(methods), reference_rtol, d), out,
+                  ["crosscheck.csv"])
+
+
+def stability(cases=(), methods=(), k=(), full=False, plot=False, out=None):
+    """`hooke stability`: the largest stable step per case, method and stiffness; the rows of
+    stability.csv."""
+    return _study(lambda d: _hooke._stability(list(cases), list(methods), list(k), full, plot, d),
+                  out, ["stability.csv"])
+
+
+def workprecision(cases=(), methods=(), repeat=3, full=False, plot=False, out=None):
+    """`hooke workprecision`: error against wall time per case and method; the rows of
+    workprecision.csv and of reference.csv."""
+    return _study(lambda d: _hooke._workprecision(list(cases), list(methods), repeat, full, plot,
+                                                  d), out, ["workprecision.csv", "reference.csv"])
+
+
+def step_convergence(scene_path, full=False, out=None):
+    """`hooke step-convergence`: iterations and errors of the whole-step methods per k and h; the
+    rows of step_convergence.csv."""
+    return _study(lambda d: _hooke._step_convergence(scene_path, full, d), out,
+                  ["step_convergence.csv"])

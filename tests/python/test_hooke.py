@@ -245,3 +245,14 @@ def test_advance_lands_on_the_time_without_a_sliver_step():
     assert sim.steps_taken == 50
     sim.advance(0.2512)  # one shortened step
     assert sim.t == 0.2512 and sim.steps_taken == 51
+
+
+def test_the_studies_return_their_tables():
+    rows = hooke.stability(cases=["two_particle"], methods=["symplectic-euler", "rk4"], k=[1e4])
+    assert [r["method"] for r in rows] == ["symplectic-euler", "rk4"]
+    for r in rows:  # bracketed within the bisection's 7% of the theory y / omega_max
+        assert r["bound"] == "bracketed" and abs(r["h_stable"] / r["h_theory"] - 1) < 0.08, r
+    table = hooke.crosscheck(cloth(**{"time.duration": 0.02}), methods=["rk4", "implicit"])
+    assert {r["method"] for r in table} >= {"rk4", "implicit"}
+    rk4 = next(r for r in table if r["method"] == "rk4")
+    assert rk4["rms_err_final"] < 1e-6
