@@ -383,6 +383,7 @@ int MassSpringRun::finish() {
                  m_worst_strain_step, m_strain_limit->passes());
   const std::string summary = strprintf("%lld steps of %s to t = %.6g in %.3f s", m_steps,
                                         m_scene.integrator.method.c_str(), m_sim.state().t, m_wall);
+  if (m_options.on_finished) m_options.on_finished(m_sim.state(), m_sim.stepper());
   const std::vector<std::string> written = m_out->finish(m_sim.state(), summary);
   if (const std::string r = m_sim.stepper().report(); !r.empty())
     std::printf("%s: %s\n", m_scene.integrator.method.c_str(), r.c_str());

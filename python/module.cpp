@@ -18,6 +18,7 @@
 #include "experiments/cli.hpp"
 #include "experiments/crosscheck_command.hpp"
 #include "experiments/output/vtk_writer.hpp"
+#include "experiments/run_command.hpp"
 #include "experiments/run_output.hpp"
 #include "experiments/stability_map.hpp"
 #include "experiments/step_convergence_command.hpp"
@@ -267,8 +268,11 @@ class PySimulation {
       advance_by(k == n ? t_end - t() : dt);
     }
   }
-  /// To the scene's duration, with the step sizes of `hooke run` (the last one shortened).
-  void run() {
+  /// To the scene's duration, with the step sizes of `hooke run` (the last one shortened). With
+  /// `out`, it is `hooke run` itself (run_scene: the same files, messages and exit rules) from
+  /// t = 0, and the simulation continues from where that run ended.
+  void run(std::optional<std::string> out, bool force) {
+    if (out) return run_with_files(*out, force);
     const long long total = m_scene->time.steps();
     while (m_steps < total) {
       if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between steps
@@ -277,6 +281,37 @@ class PySimulation {
   }
 
   const std::shared_ptr<Scene>& scene() const { return m_scene; }
+
+  void run_with_files(const std::string& out, bool force) {
+    if (m_steps != 0)
+      throw py::value_error("run(out=...) is hooke run from t = 0 and this simulation has taken " +
+                            std::to_string(m_steps) +
+                            " steps: use a new Simulation (or save_checkpoint)");
+    RunOptions o;
+    o.out_dir = out;
+    o.progress = false;
+    o.force = force;
+    o.on_finished = [this](const State& s, const Stepper& stepper) {
+      State& mine = m_sim->mutable_state();
+      mine.x = s.x;  // into the existing buffers: live views see the final state
+      mine.v = s.v;
+      mine.t = s.t;
+      m_sim->stepper().restore_history(stepper.history());
+      m_steps = m_scene->time.steps();
+    };
+    int code;
+    {
+      py::gil_scoped_release release;
+      code = run_scene(*m_scene, o);
+    }
+    if (code == 130 || code == 143) {  // stopped by a signal, after writing its checkpoint
+      PyErr_SetNone(PyExc_KeyboardInterrupt);
+      throw py::error_already_set();
+    }
+    if (code != 0)
+      throw StepFailed(m_scene->file + ": the run stopped (exit " + std::to_string(code) +
+                       ", message above); " + out + " keeps what it wrote");
+  }
 
   py::array_t<double> x(py::handle self) {
     return view(m_sim->mutable_state().x.data(), m_scene->system->num_particles(), self,
@@ -504,7 +539,9 @@ PYBIND11_MODULE(_hooke, m) {
            "one step (the scene's dt unless h is given); returns its summary")
       .def("advance", &PySimulation::advance, py::arg("t"),
            "steps of dt until time t, the last one shortened to land on t")
-      .def("run", &PySimulation::run, "to the scene's duration, as hooke run steps it")
+      .def("run", &PySimulation::run, py::arg("out") = py::none(), py::arg("force") = false,
+           "to the scene's duration, as hooke run steps it; with out=DIR, hooke run itself (from "
+           "t = 0, writing DIR's files), and the simulation continues from its end")
       .def_property_readonly("t", &PySimulation::t)
       .def_property_readonly("steps_taken", &PySimulation::steps_taken)
       .def_property_readonly("method", &PySimulation::method)

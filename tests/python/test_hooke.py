@@ -256,3 +256,21 @@ def test_the_studies_return_their_tables():
     assert {r["method"] for r in table} >= {"rk4", "implicit"}
     rk4 = next(r for r in table if r["method"] == "rk4")
     assert rk4["rms_err_final"] < 1e-6
+
+
+def test_run_with_out_is_hooke_run_and_the_simulation_continues(tmp_path):
+    sets = {"integrator.method": "bdf2", "time.dt": 1e-3, "time.duration": 0.01}
+    sim = hooke.Simulation(cloth(**sets))
+    x = sim.x
+    sim.run(out=str(tmp_path))
+    for name in ("scene.toml", "log.csv", "final.csv", "status.txt"):
+        assert (tmp_path / name).exists(), name
+    fx, fv = read_final(tmp_path / "final.csv")
+    assert np.array_equal(x, fx) and np.array_equal(sim.v, fv) and sim.t == 0.01
+    sim.step()  # continues with BDF2's history from the run
+    plain = hooke.Simulation(cloth(**sets))
+    plain.run()
+    plain.step()
+    assert np.array_equal(sim.x, plain.x)
+    with pytest.raises(ValueError):
+        sim.run(out=str(tmp_path / "again"))
