@@ -12,3 +12,8 @@ run(${CMAKE_COMMAND} -S ${CONSUMER_SRC} -B ${CONSUMER_BUILD} -DCMAKE_PREFIX_PATH
 run(${CMAKE_COMMAND} --build ${CONSUMER_BUILD})
 run(${CONSUMER_BUILD}/consumer)
 message(STATUS "${out}")
+if(NOT EXISTS ${CONSUMER_BUILD}/scene_consumer)
+  message(FATAL_ERROR "the installed package has no hooke::problems: scene_consumer was not built")
+endif()
+run(${CONSUMER_BUILD}/scene_consumer)
+message(STATUS "${out}")
