@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <memory>
 #include <sstream>
 #include <stdexcept>
@@ -91,15 +92,19 @@ toml::table to_table(const py::dict& d, const std::string& where) {
 /// TOML text of a Python value, for a "section.key=value" override.
 std::string toml_value(py::handle v, const std::string& key) {
   if (py::isinstance<py::bool_>(v)) return v.cast<bool>() ? "true" : "false";
-  if (py::isinstance<py::str>(v)) {
+  if (py::isinstance<py::str>(v)) {  // a TOML basic string on one line: controls escaped
     std::string out = "\"";
-    for (const char c : v.cast<std::string>()) {
-      if (c == '"' || c == '\\') out += '\\';
-      if (c == '\n') {
-        out += "\\n";
-        continue;
+    for (const unsigned char c : v.cast<std::string>()) {
+      if (c == '"' || c == '\\') {
+        out += '\\';
+        out += char(c);
+      } else if (c < 0x20 || c == 0x7f) {
+        char code[8];
+        std::snprintf(code, sizeof code, "\\u%04x", c);
+        out += code;
+      } else {
+        out += char(c);
       }
-      out += c;
     }
     return out + "\"";
   }

@@ -274,3 +274,9 @@ def test_run_with_out_is_hooke_run_and_the_simulation_continues(tmp_path):
     assert np.array_equal(sim.x, plain.x)
     with pytest.raises(ValueError):
         sim.run(out=str(tmp_path / "again"))
+
+
+def test_string_overrides_are_quoted_whatever_they_hold():
+    with pytest.raises(hooke.InputError) as e:
+        hooke.load_scene(CLOTH, {"integrator.method": 'rk"4\n'})
+    assert e.value.key == "integrator.method" and 'rk"4' in e.value.reason
