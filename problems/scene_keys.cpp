@@ -407,7 +407,7 @@ void add_springs_keys(std::vector<SceneKey>& t) {
           .meaning("damping of the mesh.springs rows that give none"));
 }
 
-/// Adds [forces], [collision.*], [[pin_motion]], [strain_limit] and [ode].
+/// Adds [forces] and [collision.*].
 void add_scene_part_keys(std::vector<SceneKey>& t) {
   auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   // [forces]: each present only when given.
@@ -452,7 +452,11 @@ void add_scene_part_keys(std::vector<SceneKey>& t) {
           .def("0")
           .non_negative()
           .meaning("Coulomb friction coefficient of the contact"));
+}
 
+/// Adds [[pin_motion]], [strain_limit] and [ode].
+void add_pin_strain_ode_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   // [[pin_motion]]: scripted pins, one table (or array element) per rigid motion.
   add(K("pin_motion.box", T::Rows)
           .unit("m")
@@ -828,9 +832,10 @@ void add_run_keys(std::vector<SceneKey>& t) {
 
 std::vector<SceneKey> make_table() {
   std::vector<SceneKey> t;
-  for (auto section : {add_mesh_lattice_keys, add_mesh_line_keys, add_mesh_other_keys,
-                       add_springs_keys, add_scene_part_keys, add_implicit_keys, add_sundials_keys,
-                       add_ceres_keys, add_local_global_keys, add_run_keys})
+  for (auto section :
+       {add_mesh_lattice_keys, add_mesh_line_keys, add_mesh_other_keys, add_springs_keys,
+        add_scene_part_keys, add_pin_strain_ode_keys, add_implicit_keys, add_sundials_keys,
+        add_ceres_keys, add_local_global_keys, add_run_keys})
     section(t);
   return t;
 }
