@@ -21,7 +21,7 @@
 #include <iostream>
 
 #include "experiments/cli.hpp"
-#include "hooke_config.hpp"
+#include "hooke/config.hpp"
 #include "problems/input_error.hpp"
 
 namespace hooke::cli {

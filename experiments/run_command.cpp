@@ -14,11 +14,11 @@
 #include "experiments/divergence.hpp"
 #include "experiments/run_output.hpp"
 #include "experiments/stop_signals.hpp"
+#include "hooke/config.hpp"
 #include "hooke/constraints/strain_limit.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
-#include "hooke_config.hpp"
 
 namespace hooke {
 

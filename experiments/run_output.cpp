@@ -8,7 +8,7 @@
 #include "experiments/output/png_writer.hpp"
 #include "experiments/output/vtk_writer.hpp"
 #include "experiments/plot_script.hpp"
-#include "hooke_config.hpp"
+#include "hooke/config.hpp"
 
 namespace hooke {
 

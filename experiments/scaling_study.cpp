@@ -46,12 +46,12 @@
 #include "experiments/plot_script.hpp"
 #include "experiments/study_methods.hpp"
 #include "experiments/study_output.hpp"
+#include "hooke/config.hpp"
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/linear/conjugate_gradient.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
-#include "hooke_config.hpp"
 #include "problems/scene.hpp"
 
 namespace hooke {

@@ -34,9 +34,9 @@
 #include "experiments/plot_script.hpp"
 #include "experiments/study_output.hpp"
 #include "experiments/trajectory.hpp"
+#include "hooke/config.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
-#include "hooke_config.hpp"
 #include "problems/scene.hpp"
 
 namespace hooke {

@@ -1,7 +1,7 @@
 #include "problems/method_readers.hpp"
 
+#include "hooke/config.hpp"
 #include "hooke/linear/linear_registry.hpp"
-#include "hooke_config.hpp"
 
 namespace hooke {
 

@@ -2,9 +2,9 @@
 
 #include <functional>
 
+#include "hooke/config.hpp"
 #include "hooke/integrators/explicit_mass_spring_stepper.hpp"
 #include "hooke/linear/linear_registry.hpp"
-#include "hooke_config.hpp"
 #if HOOKE_WITH_SUNDIALS
 #include "hooke/whole_step/cvode_stepper.hpp"
 #include "hooke/whole_step/ida_stepper.hpp"

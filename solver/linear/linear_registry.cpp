@@ -2,10 +2,10 @@
 
 #include <functional>
 
+#include "hooke/config.hpp"
 #include "hooke/linear/conjugate_gradient.hpp"
 #include "hooke/linear/diagonal_preconditioners.hpp"
 #include "hooke/linear/stationary.hpp"
-#include "hooke_config.hpp"
 #if HOOKE_WITH_CHOLMOD
 #include "hooke/linear/cholmod_solver.hpp"
 #include "hooke/linear/nodal_preconditioner.hpp"

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 
+#include "hooke/config.hpp"
 #include "hooke/core.hpp"
-#include "hooke_config.hpp"
 
 // The AVX2 copy of the kernels needs an x86 target (the ISA, __builtin_cpu_supports("avx2")) and
 // GCC's `#pragma GCC target`, which clang ignores (it would compile a second baseline copy and

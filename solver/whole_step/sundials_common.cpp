@@ -5,8 +5,8 @@
 #include <cstdio>
 #include <sstream>
 
+#include "hooke/config.hpp"
 #include "hooke/linear/linear_registry.hpp"
-#include "hooke_config.hpp"
 
 namespace hooke {
 

@@ -25,9 +25,9 @@
 #include <unsupported/Eigen/KroneckerProduct>
 #include <vector>
 
+#include "hooke/config.hpp"
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/linear/conjugate_gradient.hpp"
-#include "hooke_config.hpp"
 #if HOOKE_WITH_CHOLMOD
 #include "hooke/linear/cholmod_solver.hpp"
 #endif

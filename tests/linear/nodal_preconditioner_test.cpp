@@ -8,7 +8,7 @@
 // included, also runs the shared conformance test in linear_solver_test.cpp.)
 #include <gtest/gtest.h>
 
-#include "hooke_config.hpp"
+#include "hooke/config.hpp"
 
 #if HOOKE_WITH_CHOLMOD
 #include <Eigen/Dense>

@@ -11,10 +11,10 @@
 #include <cstdlib>
 #include <string>
 
+#include "hooke/config.hpp"
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/simulation.hpp"
-#include "hooke_config.hpp"
 #include "support/backend_scenes.hpp"
 #include "support/registry.hpp"
 

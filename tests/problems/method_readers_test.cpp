@@ -7,8 +7,8 @@
 #include <sstream>
 #include <string>
 
+#include "hooke/config.hpp"
 #include "hooke/linear/linear_registry.hpp"
-#include "hooke_config.hpp"
 #include "problems/scene.hpp"
 
 namespace hooke {

@@ -4,7 +4,7 @@
 // beta = 1 step and satisfies M (v1 - v0) = h f(x1, v1) to round-off; the energy formulation's
 // Gauss-Newton stall is reported, not returned as a converged step; unsupported forces are named,
 // bad options rejected, and numerical failures come back as a status.
-#include "hooke_config.hpp"
+#include "hooke/config.hpp"
 
 #if HOOKE_WITH_CERES
 

@@ -11,7 +11,7 @@
 //  - bad options are rejected with a message naming the field; a too-small max_steps returns
 //    NotConverged naming CV_TOO_MUCH_WORK (no exception).
 // CVODE-vs-IDA agreement on the cloth is claimed in ida_stepper_test.cpp.
-#include "hooke_config.hpp"
+#include "hooke/config.hpp"
 
 #if HOOKE_WITH_SUNDIALS  // the whole file tests a backend this build may lack
 

@@ -5,7 +5,7 @@
 // the matrix is refactored when h or the stiffness changes and not otherwise; pinned particles move
 // with their velocity; the tolerance stop reports convergence or its failure; unsupported forces
 // and bad options are refused with a message.
-#include "hooke_config.hpp"
+#include "hooke/config.hpp"
 
 #if HOOKE_WITH_CHOLMOD
 

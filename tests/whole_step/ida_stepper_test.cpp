@@ -10,7 +10,7 @@
 //    exactly like a fresh stepper;
 //  - bad options are rejected with a message naming the field; a too-small max_steps returns
 //    NotConverged naming IDA_TOO_MUCH_WORK (no exception).
-#include "hooke_config.hpp"
+#include "hooke/config.hpp"
 
 #if HOOKE_WITH_SUNDIALS  // the whole file tests a backend this build may lack
 

@@ -9,7 +9,7 @@
 //  - hooke's RK4 at dt = 1e-4 agrees with CVODE to a stated tolerance, and converges to CVODE's
 //    trajectory at fourth order.
 // The single-backend claims are in cvode_stepper_test.cpp and ceres_implicit_stepper_test.cpp.
-#include "hooke_config.hpp"
+#include "hooke/config.hpp"
 
 #if HOOKE_WITH_SUNDIALS && HOOKE_WITH_CERES  // both reference backends must be built
 

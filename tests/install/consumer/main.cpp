@@ -2,6 +2,7 @@
 // relative coordinate matches the exact cosine after one period.
 #include <cmath>
 #include <cstdio>
+#include <hooke/config.hpp>
 #include <hooke/forces/hooke_spring.hpp>
 #include <hooke/registry.hpp>
 #include <hooke/simulation.hpp>
@@ -21,6 +22,7 @@ int main() {
   const int steps = 1000;
   for (int k = 0; k < steps; ++k) sim.advance(period / steps);
   const double r = sim.state().x[3] - sim.state().x[0];
-  std::printf("relative coordinate after one period: %.12f (exact 1.1)\n", r);
+  std::printf("hooke %s: relative coordinate after one period: %.12f (exact 1.1)\n", HOOKE_VERSION,
+              r);
   return std::abs(r - 1.1) < 1e-9 ? 0 : 1;
 }
