@@ -520,10 +520,10 @@ void add_implicit_keys(std::vector<SceneKey>& t) {
   // [integrator]: the method, then the keys of the chosen method.
   add(K("integrator.method", T::String)
           .def("'symplectic-euler'")
-          .choices({"forward-euler", "symplectic-euler", "midpoint", "trapezoid", "rk4", "implicit",
-                    "implicit-midpoint", "bdf2", "cvode", "ida", "ceres-implicit",
-                    "fast-mass-spring", "xpbd"})
-          .meaning("the time stepper; explicit methods (the first five) take no other keys"));
+          .choices({"forward-euler", "symplectic-euler", "midpoint", "trapezoid", "rk4", "dopri5",
+                    "bs32", "implicit", "implicit-midpoint", "bdf2", "cvode", "ida",
+                    "ceres-implicit", "fast-mass-spring", "xpbd"})
+          .meaning("the time stepper; explicit methods (the first seven) take no other keys"));
   add(K("integrator.beta", T::Number)
           .in({"implicit"})
           .def("1")

@@ -3,11 +3,28 @@
 namespace hooke {
 
 ExplicitRungeKutta::ExplicitRungeKutta(const char* name, std::vector<std::vector<double>> a,
-                                       std::vector<double> b, std::vector<double> c)
-    : m_name(name), m_a(std::move(a)), m_b(std::move(b)), m_c(std::move(c)) {
-  HOOKE_ASSERT(m_a.size() == m_b.size() && m_c.size() == m_b.size(), "tableau sizes differ");
-  for (size_t s = 0; s < m_a.size(); ++s)
+                                       std::vector<double> b, std::vector<double> c,
+                                       std::vector<double> b_hat, int estimate_order)
+    : m_name(name),
+      m_a(std::move(a)),
+      m_b(std::move(b)),
+      m_c(std::move(c)),
+      m_estimate_order(estimate_order) {
+  const size_t S = m_b.size();
+  HOOKE_ASSERT(S > 0 && m_a.size() == S && m_c.size() == S, "tableau sizes differ");
+  for (size_t s = 0; s < S; ++s)
     HOOKE_ASSERT(m_a[s].size() == s, "tableau row " << s << " must have " << s << " entries");
+  if (!b_hat.empty()) {
+    HOOKE_ASSERT(b_hat.size() == S,
+                 "embedded weights: " << b_hat.size() << " for " << S << " stages");
+    for (size_t s = 0; s < S; ++s) m_e.push_back(m_b[s] - b_hat[s]);
+  }
+  HOOKE_ASSERT(
+      b_hat.empty() == (estimate_order == 0),
+      name << ": an embedded pair needs the order of its estimate, and only a pair has one");
+  // First same as last: the last stage is evaluated at X1 (its row is b, b_last = 0, c_last = 1).
+  m_fsal = S > 1 && m_b[S - 1] == 0.0 && m_c[S - 1] == 1.0;
+  for (size_t j = 0; m_fsal && j + 1 < S; ++j) m_fsal = m_a[S - 1][j] == m_b[j];
 }
 
 std::unique_ptr<ExplicitRungeKutta> ExplicitRungeKutta::forward_euler() {
@@ -34,9 +51,43 @@ std::unique_ptr<ExplicitRungeKutta> ExplicitRungeKutta::rk4() {
       std::vector<double>{0.0, 0.5, 0.5, 1.0});
 }
 
+// Dormand, J. R. and Prince, P. J. (1980), "A family of embedded Runge-Kutta formulae",
+// J. Comput. Appl. Math. 6(1), 19-26: the coefficients of their RK5(4)7M.
+std::unique_ptr<ExplicitRungeKutta> ExplicitRungeKutta::dopri5() {
+  return std::make_unique<ExplicitRungeKutta>(
+      "dopri5",
+      std::vector<std::vector<double>>{
+          {},
+          {1.0 / 5.0},
+          {3.0 / 40.0, 9.0 / 40.0},
+          {44.0 / 45.0, -56.0 / 15.0, 32.0 / 9.0},
+          {19372.0 / 6561.0, -25360.0 / 2187.0, 64448.0 / 6561.0, -212.0 / 729.0},
+          {9017.0 / 3168.0, -355.0 / 33.0, 46732.0 / 5247.0, 49.0 / 176.0, -5103.0 / 18656.0},
+          {35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0, 11.0 / 84.0}},
+      std::vector<double>{35.0 / 384.0, 0.0, 500.0 / 1113.0, 125.0 / 192.0, -2187.0 / 6784.0,
+                          11.0 / 84.0, 0.0},
+      std::vector<double>{0.0, 1.0 / 5.0, 3.0 / 10.0, 4.0 / 5.0, 8.0 / 9.0, 1.0, 1.0},
+      std::vector<double>{5179.0 / 57600.0, 0.0, 7571.0 / 16695.0, 393.0 / 640.0,
+                          -92097.0 / 339200.0, 187.0 / 2100.0, 1.0 / 40.0},
+      4);
+}
+
+// Bogacki, P. and Shampine, L. F. (1989), "A 3(2) pair of Runge-Kutta formulas", Appl. Math.
+// Lett. 2(4), 321-325.
+std::unique_ptr<ExplicitRungeKutta> ExplicitRungeKutta::bs32() {
+  return std::make_unique<ExplicitRungeKutta>(
+      "bs32",
+      std::vector<std::vector<double>>{
+          {}, {1.0 / 2.0}, {0.0, 3.0 / 4.0}, {2.0 / 9.0, 1.0 / 3.0, 4.0 / 9.0}},
+      std::vector<double>{2.0 / 9.0, 1.0 / 3.0, 4.0 / 9.0, 0.0},
+      std::vector<double>{0.0, 1.0 / 2.0, 3.0 / 4.0, 1.0},
+      std::vector<double>{7.0 / 24.0, 1.0 / 4.0, 1.0 / 3.0, 1.0 / 8.0}, 2);
+}
+
 void ExplicitRungeKutta::resize(Index dim) {
   m_k.assign(m_b.size(), Vec::Zero(dim));
   m_stage.setZero(dim);
+  m_last_valid = false;
 }
 
 void ExplicitRungeKutta::step(OdeSystem& ode, double t, double h, ConstRef X0, VecRef X1) {
@@ -45,19 +96,47 @@ void ExplicitRungeKutta::step(OdeSystem& ode, double t, double h, ConstRef X0, V
                                                          << ": state sizes " << X0.size() << ", "
                                                          << X1.size() << " for dimension " << dim);
   if (m_stage.size() != dim) resize(dim);
-  for (size_t s = 0; s < m_b.size(); ++s) {
-    if (s == 0) {
-      ode.rhs(t + m_c[0] * h, X0, m_k[0]);
-      continue;
-    }
+  const size_t S = m_b.size();
+  // The first stage is the last step's last one when this step starts where that one ended
+  // (same time, same bits: nothing moved the state in between).
+  if (m_fsal && m_last_valid && t == m_last_t1 && X0 == m_stage) {
+    std::swap(m_k[0], m_k[S - 1]);
+  } else {
+    ode.rhs(t + m_c[0] * h, X0, m_k[0]);
+    ++m_evaluations;
+  }
+  m_last_valid = false;
+  for (size_t s = 1; s < S; ++s) {
     m_stage = X0;
     for (size_t j = 0; j < s; ++j)
       if (m_a[s][j] != 0.0) m_stage.noalias() += (h * m_a[s][j]) * m_k[j];
     ode.rhs(t + m_c[s] * h, m_stage, m_k[s]);
+    ++m_evaluations;
+  }
+  m_last_h = h;
+  if (m_fsal) {
+    // The last stage's argument is X1, summed in the same order as below would.
+    X1 = m_stage;
+    m_last_t1 = t + m_c[S - 1] * h;
+    m_last_valid = true;
+    return;
   }
   X1 = X0;
-  for (size_t s = 0; s < m_b.size(); ++s)
+  for (size_t s = 0; s < S; ++s)
     if (m_b[s] != 0.0) X1.noalias() += (h * m_b[s]) * m_k[s];
+}
+
+void ExplicitStepper::error_estimate(VecRef) const {
+  HOOKE_ASSERT(false, name() << " has no embedded error estimate");
+}
+
+void ExplicitRungeKutta::error_estimate(VecRef err) const {
+  HOOKE_ASSERT(embedded(), name() << " has no embedded error estimate");
+  HOOKE_ASSERT(err.size() == m_stage.size(),
+               "error estimate of size " << err.size() << " for " << m_stage.size());
+  err.setZero();
+  for (size_t s = 0; s < m_e.size(); ++s)
+    if (m_e[s] != 0.0) err.noalias() += (m_last_h * m_e[s]) * m_k[s];
 }
 
 void SymplecticEuler::resize(Index dim) {

@@ -43,7 +43,8 @@ constexpr double kSpringStiffness = 1.0;
 /// Expected order of each explicit method; a registered method missing here fails the sweep.
 const std::map<std::string, int>& expected_orders() {
   static const std::map<std::string, int> m = {
-      {"forward-euler", 1}, {"symplectic-euler", 1}, {"midpoint", 2}, {"trapezoid", 2}, {"rk4", 4}};
+      {"forward-euler", 1}, {"symplectic-euler", 1}, {"midpoint", 2}, {"trapezoid", 2},
+      {"rk4", 4},           {"dopri5", 5},           {"bs32", 3}};
   return m;
 }
 
@@ -89,9 +90,15 @@ void check_order(const std::string& method, const char* problem, double T, int N
                  ErrorOf error_of) {
   const auto it = expected_orders().find(method);
   ASSERT_NE(it, expected_orders().end()) << "no expected order listed for method " << method;
-  const int N0 = it->second >= 3 ? N0_high : N0_low;
-  const hooke::test::OrderMeasurement m =
-      hooke::test::measure_order(method + " " + problem, T, N0, error_of);
+  // Fifth order: errors fall 32x per halving, so three halvings, down to a floor of 1e-12 (still
+  // some 300x above the round-off of the finest run's 32 to 64 steps); a coarser start would leave
+  // the asymptotic range.
+  const int order = it->second;
+  const int N0 = order >= 3 ? N0_high : N0_low;
+  const bool fifth = order >= 5;
+  const hooke::test::OrderMeasurement m = hooke::test::measure_order(
+      method + " " + problem, T, N0, error_of, fifth ? 3 : hooke::test::kHalvings,
+      fifth ? 1e-12 : hooke::test::kRoundoffFloor);
   if (!m.complete) return;
   std::printf("[  order   ] %-16s %-20s measured %.3f (expected %d); errors", method.c_str(),
               problem, m.order, it->second);
@@ -218,3 +225,87 @@ TEST(ExplicitStepperEnergy, SymplecticEulerIsForwardEulerWhenUnpartitioned) {
   const Vec b = integrate("forward-euler", ode, Vec::Ones(1), 1.0, 17);
   EXPECT_EQ(a, b);
 }
+
+namespace {
+
+/// x' = x^2 (nonlinear, so no coefficient of the error expansion vanishes as it can for a linear
+/// problem); exact x(t) = x0 / (1 - x0 t).
+class Quadratic final : public hooke::OdeSystem {
+ public:
+  hooke::Index dimension() const override { return 1; }
+  void rhs(double, hooke::ConstRef X, hooke::VecRef dXdt) override { dXdt[0] = X[0] * X[0]; }
+};
+
+/// The order q of the embedded member of each pair (its local error is O(h^(q+1))).
+const std::map<std::string, int>& embedded_orders() {
+  static const std::map<std::string, int> m = {{"dopri5", 4}, {"bs32", 2}};
+  return m;
+}
+
+}  // namespace
+
+class EmbeddedPair : public ::testing::TestWithParam<std::string> {};
+
+// err = X1 - X1_hat estimates the local error of the embedded solution: against the exact local
+// error of X1_hat (one step from the exact solution), the ratio tends to 1 as h -> 0 (the
+// higher-order X1 is O(h) more accurate relative to it), and |err| falls as h^(q+1).
+TEST_P(EmbeddedPair, ErrorEstimateIsTheLocalErrorOfTheEmbeddedSolution) {
+  const std::string method = GetParam();
+  const int q = embedded_orders().at(method);
+  auto rk = hooke::make_explicit_stepper(method);
+  auto* pair = dynamic_cast<hooke::ExplicitRungeKutta*>(rk.get());
+  ASSERT_NE(pair, nullptr);
+  ASSERT_TRUE(pair->embedded());
+  Quadratic ode;
+  const double t0 = 0.2, x0 = 1.0 / (1.0 - t0);
+  Vec X0 = Vec::Constant(1, x0), X1(1), err(1);
+  std::vector<double> hs, estimates, ratio_misses;
+  for (double h = 0.1; h > 0.1 / 9.0; h /= 2.0) {  // estimates well above round-off
+    pair->step(ode, t0, h, X0, X1);
+    pair->error_estimate(err);
+    const double exact = 1.0 / (1.0 - (t0 + h));
+    const double hat_error = exact - (X1[0] - err[0]);  // exact local error of X1_hat
+    hs.push_back(h);
+    estimates.push_back(std::abs(err[0]));
+    ratio_misses.push_back(std::abs(err[0] / hat_error - 1.0));
+    std::printf("[  pair    ] %-7s h %.4f estimate %.3e true local error of X1_hat %.3e\n",
+                method.c_str(), h, err[0], hat_error);
+  }
+  EXPECT_NEAR(hooke::test::fitted_order(hs, estimates), q + 1, kOrderMargin) << method;
+  // The miss of the ratio shrinks like h: halving h three times divides it by about 8.
+  EXPECT_LT(ratio_misses.back(), 0.2);
+  EXPECT_LT(ratio_misses.back(), ratio_misses.front() / 4.0);
+}
+
+// With the first stage taken from the last step, a run is bit-identical to one that evaluates
+// every stage afresh, and saves one evaluation per step; a step from any other state (here a
+// nudged one) evaluates its first stage again.
+TEST_P(EmbeddedPair, ReusesItsLastStageOnlyWhereTheNextStepStarts) {
+  const std::string method = GetParam();
+  auto rk = hooke::make_explicit_stepper(method);
+  auto* pair = dynamic_cast<hooke::ExplicitRungeKutta*>(rk.get());
+  ASSERT_NE(pair, nullptr);
+  ASSERT_TRUE(pair->first_same_as_last());
+  const int S = pair->stages();
+  CircleField ode;
+  const double h = 0.1;
+  double t = 0.0;  // accumulated as a simulation's clock is: the reuse needs the same time bits
+  Vec X = Vec::Unit(2, 0), Y = X, X1(2), Y1(2);
+  for (int n = 0; n < 10; ++n, t += h) {
+    pair->step(ode, t, h, X, X1);
+    auto fresh = hooke::make_explicit_stepper(method);
+    fresh->step(ode, t, h, Y, Y1);
+    ASSERT_EQ(X1, Y1) << "step " << n;
+    X = X1;
+    Y = Y1;
+  }
+  EXPECT_EQ(pair->evaluations(), S + 9 * (S - 1));
+  X[0] += 1e-3;  // moved between steps (as a collider would)
+  pair->step(ode, t, h, X, X1);
+  EXPECT_EQ(pair->evaluations(), S + 9 * (S - 1) + S);
+}
+
+INSTANTIATE_TEST_SUITE_P(, EmbeddedPair, ::testing::Values("dopri5", "bs32"),
+                         [](const ::testing::TestParamInfo<std::string>& info) {
+                           return hooke::test::pascal_case(info.param);
+                         });
