@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <sstream>
 #include <utility>
 
 namespace hooke {
@@ -38,17 +39,25 @@ StepSummary Simulation::advance_halving(double h, int depth) {
 }
 
 StepSummary Simulation::advance_once(double h) {
+  StepSummary s = attempt(h);
+  if (!accepted(s)) return s;
+  return commit(std::move(s), h);
+}
+
+StepSummary Simulation::attempt(double h) {
   StepSummary s = m_stepper->step(m_state, h, m_next);
-  if (s.status != Status::Converged && s.status != Status::NotConverged) return s;
-  if (s.status == Status::NotConverged && !m_accept_not_converged) return s;
+  if (!accepted(s)) return s;
   // Whole-step backends may stop short of t + h (e.g. CVODE's too-much-work): such a step cannot
   // be accepted as a step of size h.
   if (std::abs(m_next.t - (m_state.t + h)) > 1e-12 * std::max(std::abs(m_state.t) + h, 1.0)) {
     s.status = Status::Fatal;
     s.message = std::string(m_stepper->name()) + ": stopped at t = " + std::to_string(m_next.t) +
                 " short of t + h = " + std::to_string(m_state.t + h) + ": " + s.message;
-    return s;
   }
+  return s;
+}
+
+StepSummary Simulation::commit(StepSummary s, double h) {
   // Scripted pins end the step exactly on their path, whatever the stepper's round-off or order.
   if (m_system.has_pin_motion()) m_system.pin_motion().place(m_next.t, m_next.x, m_next.v);
   m_system.apply_constraints(m_state.x, h, m_next.x, m_next.v);
@@ -65,6 +74,86 @@ StepSummary Simulation::advance_once(double h) {
     std::swap(m_state, m_next);
   }
   return s;
+}
+
+void Simulation::set_error_control(const ErrorControl& control, double first_step) {
+  const OptionError e = control.validate();
+  HOOKE_ASSERT(e.ok(), "error control: " << e.message);
+  const int q = m_stepper->error_estimate_order();
+  HOOKE_ASSERT(q > 0, m_stepper->name() << " makes no local error estimate for error control");
+  HOOKE_ASSERT(first_step > 0.0 && std::isfinite(first_step), "first step " << first_step);
+  m_control = control;
+  m_controller = std::make_unique<StepController>(q, control);
+  m_h_next = first_step;
+}
+
+void Simulation::restore_adaptive(long long accepted, long long rejected, double next_step,
+                                  double previous_error, bool last_rejected) {
+  HOOKE_ASSERT(m_controller, "restore_adaptive without set_error_control");
+  HOOKE_ASSERT(next_step > 0.0 && std::isfinite(next_step), "next step " << next_step);
+  m_accepted = accepted;
+  m_rejected = rejected;
+  m_h_next = next_step;
+  m_controller->restore(previous_error, last_rejected);
+}
+
+StepSummary Simulation::advance_adaptive(double t_end) {
+  HOOKE_ASSERT(m_controller, "advance_adaptive without set_error_control");
+  const double t = m_state.t;
+  HOOKE_ASSERT(t_end > t, "advance_adaptive to t_end = " << t_end << " from t = " << t);
+  const double h_min =
+      m_control.min_dt > 0.0 ? m_control.min_dt : std::max(1e-14, 1e-12 * std::abs(t));
+  int iterations = 0, newton = 0;
+  double h = m_h_next;
+  for (;;) {
+    if (m_control.max_dt > 0.0) h = std::min(h, m_control.max_dt);
+    const bool lands = t + 1.01 * h >= t_end;
+    if (lands) h = t_end - t;
+    if (h < h_min && !lands) {
+      StepSummary f;
+      f.status = Status::Fatal;
+      std::ostringstream os;
+      os << m_stepper->name() << ": error control needs a step of " << h << " s at t = " << t
+         << ", below the smallest allowed (" << h_min
+         << " s): the tolerance cannot be met here (rtol = " << m_control.rtol
+         << ", atol = " << m_control.atol << ")";
+      f.message = os.str();
+      m_failed_t = t;
+      m_failed_h = h;
+      return f;
+    }
+    StepSummary s = attempt(h);
+    iterations += s.iterations;
+    newton += s.newton_iterations;
+    if (!accepted(s)) {  // the stepper failed: a much smaller step, as CVODE does
+      ++m_rejected;
+      m_failed_t = t;
+      m_failed_h = h;
+      h *= 0.25;
+      continue;
+    }
+    const double err = m_stepper->error_norm(m_control.rtol, m_control.atol);
+    const double h_new = m_controller->next(h, err);
+    if (!(err <= 1.0)) {
+      ++m_rejected;
+      h = h_new;
+      continue;
+    }
+    if (lands) m_next.t = t_end;  // exactly, whatever t + (t_end - t) rounds to
+    s = commit(std::move(s), h);
+    if (s.status == Status::Fatal) {  // non-finite after constraints: retry smaller
+      ++m_rejected;
+      m_failed_t = t;
+      m_failed_h = h;
+      h *= 0.25;
+      continue;
+    }
+    ++m_accepted;
+    m_h_next = h_new;
+    s.iterations = iterations;
+    s.newton_iterations = newton;
+    return s;
+  }
 }
 
 }  // namespace hooke

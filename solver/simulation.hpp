@@ -2,6 +2,7 @@
 #include <functional>
 #include <memory>
 
+#include "hooke/integrators/step_controller.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 
@@ -27,6 +28,26 @@ class Simulation {
   /// is the failed substep's, the state stays where the last successful substep left it, and
   /// failed_t() / failed_h() say which substep failed.
   StepSummary advance(double h);
+  /// Error control for advance_adaptive(): the tolerances, and the size of the first step to
+  /// try. The stepper must make a local error estimate (Stepper::error_estimate_order() > 0);
+  /// the options must be valid (ErrorControl::validate()).
+  void set_error_control(const ErrorControl& control, double first_step);
+  /// One accepted step under error control, ending at most at t_end (s). Tries the controller's
+  /// step (capped by max_dt; stretched or shortened to land on t_end when it would end within
+  /// 1% of a step of it), and while the step's local error estimate exceeds the tolerance, or the
+  /// stepper fails, tries again with a smaller step (each attempt counts as rejected). The
+  /// summary of the accepted attempt has the iterations of all attempts summed. Fails (state
+  /// unchanged, Status::Fatal) when the step would fall below ErrorControl::min_dt.
+  StepSummary advance_adaptive(double t_end);
+  /// Steps accepted and attempts rejected by advance_adaptive(); the step it tries next (s).
+  long long accepted_steps() const { return m_accepted; }
+  long long rejected_steps() const { return m_rejected; }
+  double next_step() const { return m_h_next; }
+  /// What advance_adaptive() continues from, as a checkpoint holds it: the counts, the next
+  /// step and the controller's memory (StepController::previous_error(), last_rejected()).
+  void restore_adaptive(long long accepted, long long rejected, double next_step,
+                        double previous_error, bool last_rejected);
+  const StepController* controller() const { return m_controller.get(); }
   /// How often a failed step is halved (0, the default: never).
   void set_max_step_halvings(int max_halvings) { m_max_halvings = max_halvings; }
   /// Called before each retry (e.g. to report it); empty = nobody is told.
@@ -59,6 +80,11 @@ class Simulation {
  private:
   /// One attempt at a step of size h, without retries.
   StepSummary advance_once(double h);
+  /// The stepper's step of size h into m_next, failed if it was not accepted or stopped short.
+  StepSummary attempt(double h);
+  /// Completes an attempt that succeeded: scripted pins, constraints, the finiteness check, and
+  /// m_next becomes the current state. Fails (state unchanged) if the state is not finite.
+  StepSummary commit(StepSummary s, double h);
   /// advance_once, retried as two half steps while depth < m_max_halvings.
   StepSummary advance_halving(double h, int depth);
   /// True if the step advanced the state.
@@ -76,6 +102,11 @@ class Simulation {
   double m_failed_t = 0.0, m_failed_h = 0.0;
   long long m_halved_steps = 0;
   bool m_stable_buffers = false;
+  // Error control (advance_adaptive).
+  ErrorControl m_control;
+  std::unique_ptr<StepController> m_controller;
+  double m_h_next = 0.0;
+  long long m_accepted = 0, m_rejected = 0;
 };
 
 }  // namespace hooke

@@ -1,5 +1,7 @@
 #include "hooke/integrators/explicit_mass_spring_stepper.hpp"
 
+#include "hooke/integrators/step_controller.hpp"
+
 namespace hooke {
 
 ExplicitMassSpringStepper::ExplicitMassSpringStepper(const MassSpringSystem& system,
@@ -8,6 +10,7 @@ ExplicitMassSpringStepper::ExplicitMassSpringStepper(const MassSpringSystem& sys
   m_X0.setZero(m_ode.dimension());
   m_X1.setZero(m_ode.dimension());
   m_method->resize(m_ode.dimension());
+  if (m_method->error_estimate_order() > 0) m_err.setZero(m_ode.dimension());
 }
 
 StepSummary ExplicitMassSpringStepper::step(const State& s0, double h, State& s1) {
@@ -21,6 +24,12 @@ StepSummary ExplicitMassSpringStepper::step(const State& s0, double h, State& s1
   s1.v = m_X1.tail(n3);
   s1.t = s0.t + h;
   return {};
+}
+
+double ExplicitMassSpringStepper::error_norm(double rtol, double atol) {
+  HOOKE_ASSERT(m_err.size() == m_X0.size(), name() << " makes no local error estimate");
+  m_method->error_estimate(m_err);
+  return wrms_norm(m_err, m_X0, m_X1, rtol, atol);
 }
 
 }  // namespace hooke

@@ -15,11 +15,14 @@ class ExplicitMassSpringStepper final : public Stepper {
                             std::unique_ptr<ExplicitStepper> method);
   const char* name() const override { return m_method->name(); }
   StepSummary step(const State& s0, double h, State& s1) override;
+  int error_estimate_order() const override { return m_method->error_estimate_order(); }
+  double error_norm(double rtol, double atol) override;
 
  private:
   MassSpringOde m_ode;
   std::unique_ptr<ExplicitStepper> m_method;
   Vec m_X0, m_X1;
+  Vec m_err;  // the embedded pair's error estimate (sized once, for methods that have one)
 };
 
 }  // namespace hooke

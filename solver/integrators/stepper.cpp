@@ -4,6 +4,11 @@
 
 namespace hooke {
 
+double Stepper::error_norm(double, double) {
+  HOOKE_ASSERT(false, name() << " makes no local error estimate");
+  return 0.0;
+}
+
 std::string format_stats(const StepperStats& s) {
   std::ostringstream os;
   os << s.steps << " steps";

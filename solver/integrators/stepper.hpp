@@ -53,6 +53,13 @@ class Stepper {
   virtual const char* name() const = 0;
   /// s1 = one step of size h from s0. s1 may not alias s0; its vectors are resized if needed.
   virtual StepSummary step(const State& s0, double h, State& s1) = 0;
+  /// Order q of the local error estimate this method makes of each step (its error O(h^(q+1)));
+  /// 0: none, so the method cannot run under error control (Simulation::advance_adaptive).
+  virtual int error_estimate_order() const { return 0; }
+  /// The local error estimate of the last step() in the weighted norm of the error control
+  /// (wrms_norm in step_controller.hpp, between that step's start and its result before
+  /// constraints). Only for methods with error_estimate_order() > 0.
+  virtual double error_norm(double rtol, double atol);
   /// Work and time over all steps so far (fields the method has no use for stay 0).
   virtual StepperStats stats() const { return {}; }
   /// One line of counters accumulated over all steps so far, for logs: format_stats(stats()) by

@@ -1,14 +1,20 @@
 // Tests of solver/simulation.*: a failed step leaves the state unchanged, and with
 // set_max_step_halvings(M) it is retried as two half steps (recursively, down to h / 2^M) that end
 // exactly at t + h, each retry reported to the observer, iterations summed, and the count of
-// retried steps kept.
+// retried steps kept. Under error control (advance_adaptive) with the embedded pairs, the achieved
+// error follows the tolerance, the steps land on the end time, and rejected attempts are counted.
 #include "hooke/simulation.hpp"
 
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <memory>
+#include <string>
 #include <vector>
 
+#include "hooke/forces/gravity.hpp"
+#include "hooke/forces/hooke_spring.hpp"
+#include "hooke/registry.hpp"
 #include "support/systems.hpp"
 
 namespace hooke {
@@ -92,6 +98,139 @@ TEST(Simulation, FailedStepIsRetriedAsHalvesThatLandOnTPlusH) {
   EXPECT_EQ(short_of.failed_h(), 0.0025);
   EXPECT_EQ(short_of.failed_t(), 0.0);
   EXPECT_EQ(short_of.halved_steps(), 1);
+}
+
+/// A spring pendulum: particle 0 pinned at the origin, particle 1 (1 kg) on a spring (k = 50 N/m,
+/// rest length 1 m) released stretched and sideways under gravity: a nonlinear swinging and
+/// bouncing motion with no closed form.
+struct SpringPendulum {
+  std::unique_ptr<MassSpringSystem> system;
+  SpringPendulum() {
+    system = std::make_unique<MassSpringSystem>(Vec::Ones(2), std::vector<char>{1, 0});
+    auto spring = std::make_unique<HookeSpring>();
+    spring->add(0, 1, 50.0, 1.0);
+    system->add_force(std::move(spring));
+    system->add_force(std::make_unique<Gravity>(Vec::Ones(2), Vec3(0, -9.81, 0)));
+    system->finalize();
+  }
+  State initial() const {
+    State s(2);
+    s.x.segment<3>(3) = Vec3(1.2, -0.3, 0.0);
+    return s;
+  }
+};
+
+/// Runs method under error control from s0 to T; returns the final state and the counts.
+struct AdaptiveRun {
+  State state;
+  long long accepted = 0, rejected = 0;
+};
+AdaptiveRun run_adaptive(const std::string& method, const MassSpringSystem& sys, const State& s0,
+                         double T, const ErrorControl& c, double first_step) {
+  Simulation sim(sys, make_stepper(method, sys), s0);
+  sim.set_error_control(c, first_step);
+  while (sim.state().t < T) {
+    const StepSummary s = sim.advance_adaptive(T);
+    EXPECT_EQ(s.status, Status::Converged) << method << ": " << s.message;
+    if (s.status != Status::Converged) break;
+  }
+  return {sim.state(), sim.accepted_steps(), sim.rejected_steps()};
+}
+
+/// The same run with fixed steps of the method: the reference (dopri5 at T / N is far more
+/// accurate than any tolerance tested here).
+State run_fixed(const std::string& method, const MassSpringSystem& sys, const State& s0, double T,
+                int N) {
+  Simulation sim(sys, make_stepper(method, sys), s0);
+  for (int n = 0; n < N; ++n) sim.advance(n + 1 == N ? T - sim.state().t : T / N);
+  return sim.state();
+}
+
+// Achieved error against the requested tolerance (issue 21, acceptance 1, on small systems): the
+// largest position error at T is within 10x of rtol max|x| + atol for rtol 1e-3 ... 1e-7, and
+// the accepted steps fall as rtol loosens. The pendulum's reference is an independent
+// fixed-step run.
+TEST(SimulationAdaptive, AchievedErrorFollowsTheToleranceForTheEmbeddedPairs) {
+  test::TwoParticleSpring sp(100.0);
+  const double A = 0.2, T_spring = 1.0;
+  SpringPendulum pend;
+  const double T_pend = 2.0;
+  const State pend_ref = run_fixed("dopri5", *pend.system, pend.initial(), T_pend, 200000);
+  for (const std::string method : {"dopri5", "bs32"}) {
+    long long last_accepted[2] = {0, 0};
+    for (double rtol : {1e-7, 1e-6, 1e-5, 1e-4, 1e-3}) {
+      ErrorControl c;
+      c.rtol = rtol;
+      c.atol = 1e-3 * rtol;
+      for (int problem = 0; problem < 2; ++problem) {
+        AdaptiveRun r;
+        Vec exact_x;
+        if (problem == 0) {
+          r = run_adaptive(method, *sp.system, sp.initial(A), T_spring, c, 1e-4);
+          exact_x = sp.exact_xv(A, T_spring).head(6);
+          EXPECT_EQ(r.state.t, T_spring);
+        } else {
+          r = run_adaptive(method, *pend.system, pend.initial(), T_pend, c, 1e-4);
+          exact_x = pend_ref.x;
+          EXPECT_EQ(r.state.t, T_pend);
+        }
+        const double err = (r.state.x - exact_x).cwiseAbs().maxCoeff();
+        const double allowed = rtol * exact_x.cwiseAbs().maxCoeff() + c.atol;
+        std::printf(
+            "[ adaptive ] %-7s %-9s rtol %.0e: error %.3e (%.2f of rtol max|x| + atol), "
+            "%lld accepted, %lld rejected\n",
+            method.c_str(), problem == 0 ? "spring" : "pendulum", rtol, err, err / allowed,
+            r.accepted, r.rejected);
+        EXPECT_LE(err, 10.0 * allowed) << method << " problem " << problem << " rtol " << rtol;
+        if (last_accepted[problem] > 0) {
+          EXPECT_LT(r.accepted, last_accepted[problem])
+              << method << " problem " << problem << " rtol " << rtol;
+        }
+        last_accepted[problem] = r.accepted;
+      }
+    }
+  }
+}
+
+// A first step far too large is rejected and counted, and the run still meets its tolerance;
+// max_dt caps every step.
+TEST(SimulationAdaptive, RejectsAFirstStepThatIsTooLargeAndHonoursMaxDt) {
+  test::TwoParticleSpring sp(100.0);
+  ErrorControl c;
+  c.rtol = 1e-6;
+  c.atol = 1e-9;
+  const AdaptiveRun r = run_adaptive("dopri5", *sp.system, sp.initial(0.2), 0.5, c, 0.5);
+  EXPECT_GE(r.rejected, 1);
+  c.max_dt = 1e-3;
+  Simulation sim(*sp.system, make_stepper("dopri5", *sp.system), sp.initial(0.2));
+  sim.set_error_control(c, 0.5);
+  double t = 0.0;
+  while (sim.state().t < 0.5) {
+    ASSERT_EQ(sim.advance_adaptive(0.5).status, Status::Converged);
+    EXPECT_LE(sim.state().t - t, 1e-3 * (1 + 1e-12));
+    t = sim.state().t;
+  }
+  EXPECT_GE(sim.accepted_steps(), 500);
+}
+
+// A tolerance the method cannot meet above the smallest allowed step (a spring so stiff that
+// every step of at least min_dt is unstable) stops with a message and leaves the state where it
+// was.
+TEST(SimulationAdaptive, GivesUpBelowTheSmallestStepWithTheStateUnchanged) {
+  test::TwoParticleSpring sp(1e12);
+  Simulation sim(*sp.system, make_stepper("bs32", *sp.system), sp.initial(0.1));
+  ErrorControl c;
+  c.rtol = 1e-6;
+  c.atol = 1e-9;
+  c.min_dt = 1e-3;
+  sim.set_error_control(c, 1e-2);
+  const State before = sim.state();
+  const StepSummary s = sim.advance_adaptive(1.0);
+  EXPECT_EQ(s.status, Status::Fatal);
+  EXPECT_NE(s.message.find("below the smallest allowed"), std::string::npos) << s.message;
+  EXPECT_EQ(sim.state(), before);
+  EXPECT_GE(sim.rejected_steps(), 1);
+  EXPECT_EQ(sim.accepted_steps(), 0);
 }
 
 }  // namespace
