@@ -2,6 +2,7 @@
 
 #include <toml++/toml.h>
 
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
@@ -265,6 +266,32 @@ std::string scene_changes(const std::string& checkpointed_scene, const std::stri
   std::string s;
   for (const std::string& c : changes) s += (s.empty() ? "" : "; ") + c;
   return s;
+}
+
+namespace {
+constexpr size_t kControlNumbers = 5;
+}
+
+void append_error_control(const Simulation& sim, std::vector<double>& history) {
+  const StepController* ctl = sim.controller();
+  HOOKE_ASSERT(ctl, "append_error_control on a run without error control");
+  history.insert(history.end(),
+                 {double(sim.accepted_steps()), double(sim.rejected_steps()), sim.next_step(),
+                  ctl->previous_error(), ctl->last_rejected() ? 1.0 : 0.0});
+}
+
+void restore_error_control(std::vector<double>& history, Simulation& sim) {
+  const size_t n = history.size();
+  if (n < kControlNumbers) throw InternalError("no error-control state at its end");
+  const double* a = history.data() + n - kControlNumbers;
+  const bool counts = a[0] >= 0 && a[1] >= 0 && a[0] == std::floor(a[0]) &&
+                      a[1] == std::floor(a[1]) && a[0] < 9e15 && a[1] < 9e15;
+  if (!counts || !(a[2] > 0.0 && std::isfinite(a[2])) || !(a[3] >= 0.0 && std::isfinite(a[3])) ||
+      !(a[4] == 0.0 || a[4] == 1.0))
+    throw InternalError("its error-control state is not one a run can have written");
+  sim.restore_adaptive(static_cast<long long>(a[0]), static_cast<long long>(a[1]), a[2], a[3],
+                       a[4] != 0.0);
+  history.resize(n - kControlNumbers);
 }
 
 }  // namespace hooke

@@ -5,6 +5,7 @@
 #include <vector>
 
 #include "hooke/model/state.hpp"
+#include "hooke/simulation.hpp"
 
 namespace hooke {
 
@@ -42,6 +43,14 @@ void write_checkpoint(const std::string& path, const Checkpoint& c);
 /// InputError (path, "checkpoint", reason) for a missing, truncated, corrupt, foreign-sized or
 /// older-format file.
 Checkpoint read_checkpoint(const std::string& path, long long dofs);
+
+/// An error-controlled run (integrator.adaptive) appends its controller's state to the
+/// checkpoint's history, after the stepper's: accepted and rejected counts, the next step, the
+/// controller's last accepted error and whether it rejected last.
+void append_error_control(const Simulation& sim, std::vector<double>& history);
+/// Takes the numbers append_error_control() added off the end of history and restores them into
+/// sim (which has its error control set). Throws InternalError if history cannot end with them.
+void restore_error_control(std::vector<double>& history, Simulation& sim);
 
 /// A hash of x, v and the pinned flags of a scene's initial state: a checkpoint records it so
 /// that a resume notices a changed mesh file (which the scene text alone would not show).

@@ -44,17 +44,26 @@ std::string strprintf(const char* format, ...) {
 /// A one-line progress display on a terminal, refreshed at most 4 times a second.
 class Progress {
  public:
-  Progress(bool enabled, long long total)
-      : m_on(enabled && isatty(STDERR_FILENO)), m_total(total) {}
+  /// total: the run's step count, or -1 when error control chooses the steps (the fraction
+  /// done is then t / duration).
+  Progress(bool enabled, long long total, double duration)
+      : m_on(enabled && isatty(STDERR_FILENO)), m_total(total), m_duration(duration) {}
   void update(long long step, double t) {
     if (!m_on) return;
     const auto now = Clock::now();
-    if (step != m_total && now - m_last < std::chrono::milliseconds(250)) return;
+    const bool last = m_total < 0 ? t >= m_duration : step == m_total;
+    if (!last && now - m_last < std::chrono::milliseconds(250)) return;
     m_last = now;
     const double el = std::chrono::duration<double>(now - m_start).count();
-    const double frac = m_total ? double(step) / double(m_total) : 1.0;
-    std::fprintf(stderr, "\rstep %lld/%lld  t = %.6g  %5.1f%%  %.1f s elapsed, %.1f s left   ",
-                 step, m_total, t, 100.0 * frac, el, frac > 0 ? el * (1 - frac) / frac : 0.0);
+    const double frac = m_total < 0 ? (m_duration > 0 ? t / m_duration : 1.0)
+                        : m_total   ? double(step) / double(m_total)
+                                    : 1.0;
+    if (m_total < 0)
+      std::fprintf(stderr, "\rstep %lld  t = %.6g  %5.1f%%  %.1f s elapsed, %.1f s left   ", step,
+                   t, 100.0 * frac, el, frac > 0 ? el * (1 - frac) / frac : 0.0);
+    else
+      std::fprintf(stderr, "\rstep %lld/%lld  t = %.6g  %5.1f%%  %.1f s elapsed, %.1f s left   ",
+                   step, m_total, t, 100.0 * frac, el, frac > 0 ? el * (1 - frac) / frac : 0.0);
     std::fflush(stderr);
   }
   void done() {
@@ -64,6 +73,7 @@ class Progress {
  private:
   bool m_on;
   long long m_total;
+  double m_duration;
   Clock::time_point m_start = Clock::now(), m_last = Clock::now() - std::chrono::seconds(1);
 };
 
@@ -101,6 +111,15 @@ class MassSpringRun {
 
  private:
   int run_steps();
+  /// One step: of the scene's fixed size, or under error control (ending at most at the next
+  /// frame time or the duration).
+  StepSummary take_step(long long step);
+  /// True after the run's last step.
+  bool done(long long step) const {
+    return m_adaptive ? m_sim.state().t >= m_scene.time.duration : step >= m_steps;
+  }
+  /// " of N" for a run of N fixed steps, "" under error control (for messages).
+  std::string of_steps() const { return m_adaptive ? "" : " of " + std::to_string(m_steps); }
   static std::unique_ptr<Stepper> make_scene_stepper(const Scene& scene);
   void restore(const Checkpoint& c);
   /// After a successful step: log row, divergence check, frame, progress, stop request and
@@ -120,7 +139,8 @@ class MassSpringRun {
   const RunOptions& m_options;
   const std::string m_dir;
   const std::string m_label;  // backend_label(scene)
-  const long long m_steps;
+  const bool m_adaptive;      // integrator.adaptive: steps chosen by error control
+  const long long m_steps;    // the fixed steps' count; -1 under error control
   Simulation m_sim;
   long long m_first_step = 1, m_not_converged = 0;
   long long m_step = 0;  // the step being taken (for messages)
@@ -130,6 +150,7 @@ class MassSpringRun {
   double m_worst_strain = 0.0;
   long long m_next_frame = 1;  // [output] interval: the next frame is at m_next_frame * interval
   double m_wall = 0.0;
+  double m_last_h = 0.0;  // size of the last step (s): a log column under error control
   std::unique_ptr<RunOutput> m_out;
   double m_E0 = 0.0, m_scale = 0.0, m_E_limit = 0.0;
   Progress m_progress;
@@ -153,9 +174,11 @@ MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const R
       m_options(options),
       m_dir(dir),
       m_label(backend_label(scene)),
-      m_steps(scene.time.steps()),
+      m_adaptive(scene.integrator.adaptive),
+      m_steps(m_adaptive ? -1 : scene.time.steps()),
       m_sim(m_sys, make_scene_stepper(scene), resume ? resume->state : scene.initial),
-      m_progress(options.progress, m_steps) {
+      m_progress(options.progress, m_steps, scene.time.duration) {
+  if (m_adaptive) m_sim.set_error_control(scene.integrator.error_control, scene.time.dt);
   m_sim.set_accept_not_converged(scene.run.allow_not_converged);
   m_sim.set_max_step_halvings(scene.run.max_step_halvings);
   m_sim.set_retry_observer([this](double t, double h, int depth, const StepSummary& s) {
@@ -204,11 +227,13 @@ void MassSpringRun::restore(const Checkpoint& c) {
                      "holds " + std::to_string(c.state.x.size() / 3) + " particles; " + m_dir +
                          "/scene.toml has " + std::to_string(m_sys.num_particles()));
   try {
-    m_sim.stepper().restore_history(c.history);
+    std::vector<double> history = c.history;
+    if (m_adaptive) restore_error_control(history, m_sim);  // off the history's end
+    m_sim.stepper().restore_history(history);
   } catch (const InternalError& e) {
     throw InputError(path, "checkpoint", std::string("stepper history: ") + e.what());
   }
-  if (c.step > m_steps)
+  if (!m_adaptive && c.step > m_steps)
     throw InputError(path, "checkpoint",
                      "is at step " + std::to_string(c.step) + " but the scene has only " +
                          std::to_string(m_steps) + " steps");
@@ -232,24 +257,26 @@ int MassSpringRun::run() {
     m_progress.done();
     const bool marked = m_out->failed(e.what());
     throw std::runtime_error(
-        std::string(e.what()) + "\n  the run stopped at step " + std::to_string(m_step) + " of " +
-        std::to_string(m_steps) + "; there is no final.csv, log.csv holds complete rows only, " +
-        m_dir + "/status.txt " + (marked ? "says failed" : "could not be updated (says running)"));
+        std::string(e.what()) + "\n  the run stopped at step " + std::to_string(m_step) +
+        of_steps() + "; there is no final.csv, log.csv holds complete rows only, " + m_dir +
+        "/status.txt " + (marked ? "says failed" : "could not be updated (says running)"));
   }
 }
 
 int MassSpringRun::run_steps() {
   if (m_first_step == 1) {
-    m_out->log_row(0, m_sim.state(), 0, 0.0, m_wall);
+    const RunOutput::ControlColumns start;
+    m_out->log_row(0, m_sim.state(), 0, 0.0, m_wall, m_adaptive ? &start : nullptr);
     m_out->frame(0, m_sim.state());
   }
   const StopSignals stop_signals;
-  for (long long step = m_first_step; step <= m_steps; ++step) {
+  for (long long step = m_first_step; !done(step - 1); ++step) {
     m_step = step;
     const double t_start = m_sim.state().t;
     const auto t0 = Clock::now();
-    const StepSummary sum = m_sim.advance(m_scene.time.step_size(step, t_start));
+    const StepSummary sum = take_step(step);
     m_wall += seconds_since(t0);
+    m_last_h = m_sim.state().t - t_start;
     const bool accepted = sum.status == Status::Converged ||
                           (sum.status == Status::NotConverged && m_scene.run.allow_not_converged);
     if (!accepted) return report_failure(step, sum);
@@ -265,6 +292,12 @@ int MassSpringRun::run_steps() {
   return finish();
 }
 
+StepSummary MassSpringRun::take_step(long long step) {
+  if (!m_adaptive) return m_sim.advance(m_scene.time.step_size(step, m_sim.state().t));
+  // Land on every frame time, so that frames show the state at their time.
+  return m_sim.advance_adaptive(m_scene.next_stop(m_sim.state().t));
+}
+
 bool MassSpringRun::interval_frame_due(double t) {
   const double dt = m_scene.output.interval;
   if (dt <= 0.0) return false;
@@ -275,10 +308,13 @@ bool MassSpringRun::interval_frame_due(double t) {
 }
 
 int MassSpringRun::after_step(long long step, const StepSummary& sum) {
-  const bool last = step == m_steps;
+  const bool last = done(step);
   const State& s = m_sim.state();
   if (step % m_scene.output.log_every == 0 || last) {
-    const double E = m_out->log_row(step, s, sum.iterations, sum.residual, m_wall);
+    RunOutput::ControlColumns control;
+    if (m_adaptive) control = {m_last_h, m_sim.accepted_steps(), m_sim.rejected_steps()};
+    const double E = m_out->log_row(step, s, sum.iterations, sum.residual, m_wall,
+                                    m_adaptive ? &control : nullptr);
     if (!(E <= m_E_limit)) return report_divergence(step, E);
     if (m_strain_limit) {
       const double e = m_strain_limit->worst_strain(s.x);
@@ -343,11 +379,11 @@ int MassSpringRun::stop(long long step, int sig) {
   m_progress.done();
   const std::string how =
       sig ? std::string("interrupted by ") + signal_name(sig) : "stopped (--stop-after)";
-  m_out->stopped(strprintf("%s at step %lld of %lld (t = %.9g); continue with: hooke resume %s",
-                           how.c_str(), step, m_steps, m_sim.state().t, m_dir.c_str()));
-  std::fprintf(
-      stderr, "%s at step %lld of %lld (t = %.9g): wrote %s; continue with: hooke resume %s\n",
-      how.c_str(), step, m_steps, m_sim.state().t, m_out->checkpoint_path().c_str(), m_dir.c_str());
+  m_out->stopped(strprintf("%s at step %lld%s (t = %.9g); continue with: hooke resume %s",
+                           how.c_str(), step, of_steps().c_str(), m_sim.state().t, m_dir.c_str()));
+  std::fprintf(stderr, "%s at step %lld%s (t = %.9g): wrote %s; continue with: hooke resume %s\n",
+               how.c_str(), step, of_steps().c_str(), m_sim.state().t,
+               m_out->checkpoint_path().c_str(), m_dir.c_str());
   return sig ? exit_code_for_signal(sig) : kExitInterrupted;
 }
 
@@ -360,20 +396,23 @@ void MassSpringRun::checkpoint(long long step) {
   c.wall = m_wall;
   c.state = m_sim.state();
   c.history = m_sim.stepper().history();
+  if (m_adaptive) append_error_control(m_sim, c.history);  // restore() takes it back off
   m_out->checkpoint(std::move(c));
 }
 
 int MassSpringRun::finish() {
-  if (m_steps == 0) m_progress.update(0, 0.0);
+  // Steps taken in all: the fixed count, or the accepted steps of error control.
+  const long long steps = m_adaptive ? m_sim.accepted_steps() : m_steps;
+  if (steps == 0) m_progress.update(0, 0.0);
   m_progress.done();
   const std::string& file = m_scene.file;
   if (m_not_converged > 0)
     std::fprintf(stderr,
                  "warning: %s: %lld of %lld steps did not converge to the requested tolerance\n",
-                 file.c_str(), m_not_converged, m_steps);
+                 file.c_str(), m_not_converged, steps);
   if (m_sim.halved_steps() > 0)
     std::fprintf(stderr, "note: %s: %lld of %lld steps were retried with a smaller h\n",
-                 file.c_str(), m_sim.halved_steps(), m_steps);
+                 file.c_str(), m_sim.halved_steps(), steps);
   if (m_strain_exceeded > 0)
     std::fprintf(stderr,
                  "note: %s: %lld logged steps (of this invocation) ended with a limited spring "
@@ -381,10 +420,16 @@ int MassSpringRun::finish() {
                  "(strain_limit.passes) ran out first\n",
                  file.c_str(), m_strain_exceeded, m_strain_limit->max_strain(), m_worst_strain,
                  m_worst_strain_step, m_strain_limit->passes());
-  const std::string summary = strprintf("%lld steps of %s to t = %.6g in %.3f s", m_steps,
+  const std::string summary = strprintf("%lld steps of %s to t = %.6g in %.3f s", steps,
                                         m_scene.integrator.method.c_str(), m_sim.state().t, m_wall);
-  if (m_options.on_finished) m_options.on_finished(m_sim.state(), m_sim.stepper());
+  if (m_options.on_finished) m_options.on_finished(m_sim);
   const std::vector<std::string> written = m_out->finish(m_sim.state(), summary);
+  if (m_adaptive) {  // in CVODE's style: what the error control did
+    const ErrorControl& c = m_scene.integrator.error_control;
+    std::printf("%s: steps %lld, rejected %lld, next h %.3e (rtol %g, atol %g)\n",
+                m_scene.integrator.method.c_str(), m_sim.accepted_steps(), m_sim.rejected_steps(),
+                m_sim.next_step(), c.rtol, c.atol);
+  }
   if (const std::string r = m_sim.stepper().report(); !r.empty())
     std::printf("%s: %s\n", m_scene.integrator.method.c_str(), r.c_str());
   std::string files;
@@ -422,7 +467,7 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
     for (Index k = 0; k < d; ++k) log.print(",X%lld", (long long)k);
     log.print(",exact_error\n");
     row(0);
-    Progress progress(options.progress, N);
+    Progress progress(options.progress, N, scene.time.duration);
     for (long long step = 1; step <= N; ++step) {
       const double t_next = t + scene.time.step_size(step, t);
       method->step(ode, t, t_next - t, X, X1);
@@ -503,8 +548,12 @@ int resume_run(const std::string& dir, const RunOptions& options) {
                      "ODE scenes write no checkpoints (they run in seconds): run them again");
   const Checkpoint c = read_checkpoint(dir + "/checkpoint.bin", scene.system->dofs());
   MassSpringRun run(scene, dir, options, &c, std::move(locked));  // checks c against the scene
-  std::fprintf(stderr, "resuming %s at step %lld of %lld (t = %.9g)\n", dir.c_str(), c.step,
-               scene.time.steps(), c.state.t);
+  if (scene.integrator.adaptive)
+    std::fprintf(stderr, "resuming %s at step %lld (t = %.9g of %.9g)\n", dir.c_str(), c.step,
+                 c.state.t, scene.time.duration);
+  else
+    std::fprintf(stderr, "resuming %s at step %lld of %lld (t = %.9g)\n", dir.c_str(), c.step,
+                 scene.time.steps(), c.state.t);
   return run.run();
 }
 

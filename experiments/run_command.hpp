@@ -3,6 +3,7 @@
 #include <string>
 
 #include "experiments/stop_signals.hpp"
+#include "hooke/simulation.hpp"
 #include "problems/scene.hpp"
 
 namespace hooke {
@@ -16,9 +17,10 @@ struct RunOptions {
   long long stop_after = -1;
   /// `hooke run --force`: start over a folder that holds a resumable checkpoint (deleting it).
   bool force = false;
-  /// Called with the final state and the stepper of a mass-spring run that finished, before its
-  /// final files are written (the Python module continues from them). Empty: nobody is told.
-  std::function<void(const State&, const Stepper&)> on_finished;
+  /// Called with the simulation of a mass-spring run that finished (its final state, stepper and
+  /// error control), before its final files are written (the Python module continues from
+  /// them). Empty: nobody is told.
+  std::function<void(const Simulation&)> on_finished;
 };
 
 /// Runs a loaded scene and writes scene.toml, log.csv, final.csv, frames/ and final.png into the

@@ -89,8 +89,9 @@ void RunOutput::start_fresh(bool force) {
   m_dir->set_status("running");
   write_resolved_scene(m_scene, m_dir->file("scene.toml"));
   m_log = std::make_unique<OutputFile>(OutputFile::stream(m_dir->file("log.csv")));
-  m_log->print("step,t,kinetic,potential,total,max_strain,iterations,residual,wall_time%s\n",
-               m_scene.exact ? ",error" : "");
+  m_log->print("step,t,kinetic,potential,total,max_strain,iterations,residual,wall_time%s%s\n",
+               m_scene.exact ? ",error" : "",
+               m_scene.integrator.adaptive ? ",h,accepted,rejected" : "");
 }
 
 void RunOutput::prepare_frames(const Checkpoint* resume) {
@@ -115,7 +116,9 @@ void RunOutput::prepare_frames(const Checkpoint* resume) {
 }
 
 double RunOutput::log_row(long long step, const State& s, int iterations, double residual,
-                          double wall) {
+                          double wall, const ControlColumns* control) {
+  HOOKE_ASSERT((control != nullptr) == m_scene.integrator.adaptive,
+               "error-control columns exactly for adaptive scenes");
   const MassSpringSystem& sys = *m_scene.system;
   const double K = sys.kinetic_energy(s.v), U = sys.potential_energy(s.x);
   m_log->print("%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%.6g,%.6g", step, s.t, K, U, K + U,
@@ -124,6 +127,7 @@ double RunOutput::log_row(long long step, const State& s, int iterations, double
     m_scene.exact(s.t, m_exact);
     m_log->print(",%.17g", (s.x - m_exact.x).lpNorm<Eigen::Infinity>());
   }
+  if (control) m_log->print(",%.17g,%lld,%lld", control->h, control->accepted, control->rejected);
   m_log->print("\n");
   return K + U;
 }
@@ -132,8 +136,9 @@ void RunOutput::frame(long long step, const State& s) {
   if (!m_scene.output.vtk) return;
   char name[64];
   std::snprintf(name, sizeof name, "frame_%08lld.vtk", step);
-  // Frames carry the step's nominal time (0.1, not a sum of steps 0.10000000000000002).
-  const double t = m_scene.time.time_at(step);
+  // Frames of fixed steps carry the step's nominal time (0.1, not a sum of steps
+  // 0.10000000000000002); error control lands on its frame times exactly.
+  const double t = m_scene.integrator.adaptive ? s.t : m_scene.time.time_at(step);
   write_vtk_frame(m_frames_dir + "/" + name, s, t,
                   FrameMesh{m_scene.edges, m_scene.edge_rest, m_scene.triangles,
                             m_scene.system->pinned(), m_scene.system->masses()});

@@ -45,8 +45,17 @@ class RunOutput {
   /// Frames written so far: (t, path relative to dir).
   const std::vector<std::pair<double, std::string>>& frames() const { return m_frames; }
 
-  /// Appends the log row of `step` at state s; returns the total energy (J) it logged.
-  double log_row(long long step, const State& s, int iterations, double residual, double wall);
+  /// What an error-controlled run (integrator.adaptive) adds to each log.csv row, in columns h,
+  /// accepted, rejected: the last step's size (s) and the cumulative counts of accepted steps and
+  /// rejected attempts.
+  struct ControlColumns {
+    double h = 0.0;
+    long long accepted = 0, rejected = 0;
+  };
+  /// Appends the log row of `step` at state s; returns the total energy (J) it logged. control:
+  /// the error control's columns, given exactly for adaptive scenes.
+  double log_row(long long step, const State& s, int iterations, double residual, double wall,
+                 const ControlColumns* control = nullptr);
   /// Writes frame `step` (if [output] vtk) and rewrites frames.pvd.
   void frame(long long step, const State& s);
   /// Makes log.csv durable and writes DIR/checkpoint.bin from c, with the log position, frames

@@ -256,6 +256,34 @@ const std::vector<ReaderEntry>& readers() {
 
 }  // namespace
 
+bool read_error_control(TableReader& r, const std::string& method, ErrorControl& c) {
+  const MethodInfo& info = method_info(method);
+  if (info.kind == MethodKind::WholeStep) return false;
+  const bool adaptive = r.boolean("adaptive", false);
+  if (!adaptive) {
+    const Governing off{
+        "adaptive", std::string("adaptive = false") + (r.has("adaptive") ? "" : " (the default)")};
+    for (const char* key : {"rtol", "atol", "max_dt"})
+      refuse_ignored(r, key, off, "the steps are fixed (time.dt) without error control",
+                     "set adaptive = true");
+    return false;
+  }
+  if (info.error_estimate_order == 0) {
+    std::string with;
+    for (const MethodInfo& m : methods())
+      if (m.error_estimate_order > 0) with += (with.empty() ? "" : ", ") + std::string(m.name);
+    r.fail("adaptive", "method '" + method +
+                           "' makes no local error estimate to choose its steps by; methods that "
+                           "do: " +
+                           with + " (cvode and ida control their error always)");
+  }
+  c.rtol = r.number("rtol", c.rtol);
+  c.atol = r.number("atol", c.atol);
+  c.max_dt = r.number("max_dt", c.max_dt);
+  r.check(c.validate());
+  return true;
+}
+
 MethodOptions read_method_options(TableReader& integrator, const std::string& method) {
   // A method chosen with --set leaves the file's keys of its own method without effect: they are
   // dropped with a warning (the command line cannot remove them), as refuse_ignored() does.
@@ -271,7 +299,9 @@ MethodOptions read_method_options(TableReader& integrator, const std::string& me
       return o;
     }
   drop_if_switched();
-  integrator.finish("method '" + method + "' takes no options (explicit methods have none)");
+  integrator.finish("method '" + method +
+                    "' takes no options (explicit methods take only adaptive, and rtol, atol and "
+                    "max_dt with it)");
   return {};
 }
 

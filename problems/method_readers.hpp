@@ -1,6 +1,7 @@
 #pragma once
 #include <string>
 
+#include "hooke/integrators/step_controller.hpp"
 #include "hooke/registry.hpp"
 #include "problems/table_reader.hpp"
 
@@ -14,5 +15,12 @@ namespace hooke {
 /// recorded in the resolved scene. One reader per method (problems/method_readers.cpp); explicit
 /// methods take no keys and return empty options.
 MethodOptions read_method_options(TableReader& integrator, const std::string& method);
+
+/// Reads integrator.adaptive and, when it is true, the error control's rtol, atol and max_dt
+/// into `control`; returns adaptive. Refuses adaptive = true for a method without a local error
+/// estimate (MethodInfo::error_estimate_order), and the tolerances without adaptive. Whole-step
+/// methods do not take these keys (CVODE and IDA read rtol and atol as their own): nothing is
+/// read for them. Call before read_method_options.
+bool read_error_control(TableReader& integrator, const std::string& method, ErrorControl& control);
 
 }  // namespace hooke

@@ -24,6 +24,14 @@ long long TimeSettings::steps() const {
   return static_cast<long long>(std::ceil(duration / dt * (1.0 - 1e-12)));
 }
 
+double Scene::next_stop(double t) const {
+  const double dt = output.interval;
+  if (!(dt > 0.0)) return time.duration;
+  const double slack = 1e-9 * std::max(dt, time.dt);
+  const double k = std::floor((t + slack) / dt) + 1.0;
+  return std::min(time.duration, k * dt);
+}
+
 namespace {
 
 /// A mesh type: its name in [mesh] type and its builder (base_dir: the scene file's folder).
@@ -344,6 +352,11 @@ void read_run_settings(TableReader& root, Scene& scene) {
     }
     scene.integrator.method = method;
     r.set_variant(method);
+    scene.integrator.adaptive = read_error_control(r, method, scene.integrator.error_control);
+    if (scene.integrator.adaptive && scene.ode)
+      r.fail("adaptive",
+             "[ode] scenes take fixed steps (time.dt); error control runs on particle "
+             "scenes");
     scene.integrator.options = read_method_options(r, method);
   }
   {
@@ -381,6 +394,14 @@ void read_run_settings(TableReader& root, Scene& scene) {
         r.fail("interval", "interval = " + std::to_string(scene.output.interval) +
                                " s gives more than 1e9 frames");
       scene.output.every = 0;
+    } else if (scene.integrator.adaptive) {
+      // Error-controlled steps vary in size: frames follow simulated time, 50 by default.
+      if (r.has("every"))
+        r.fail("every",
+               "counts steps, whose size error control varies (integrator.adaptive = "
+               "true); give output.interval (s) for the frames instead");
+      scene.output.every = 0;
+      scene.output.interval = scene.time.duration / 50.0;
     } else {
       scene.output.every = r.integer("every", std::max(1LL, steps / 50), 0, 1LL << 62);
     }
@@ -395,7 +416,12 @@ void read_run_settings(TableReader& root, Scene& scene) {
     RunSettings& run = scene.run;
     run.energy_growth_limit = r.positive("energy_growth_limit", 10.0);
     run.allow_not_converged = r.boolean("allow_not_converged", false);
-    run.max_step_halvings = int(r.integer("max_step_halvings", 0, 0, 30));
+    if (!scene.integrator.adaptive)
+      run.max_step_halvings = int(r.integer("max_step_halvings", 0, 0, 30));
+    else if (r.has("max_step_halvings"))
+      r.fail("max_step_halvings",
+             "has no effect with integrator.adaptive = true: error control retries a failed step "
+             "with a smaller one itself; remove it");
     run.checkpoint_every = r.integer("checkpoint_every", 0, 0, 1LL << 62);
     run.checkpoint_seconds = r.positive("checkpoint_seconds", 300.0);
     r.finish();

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "hooke/integrators/step_controller.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/model/ode_system.hpp"
 #include "hooke/model/state.hpp"
@@ -19,6 +20,10 @@ namespace hooke {
 struct IntegratorSettings {
   std::string method = "symplectic-euler";  ///< registry name (hooke::methods())
   MethodOptions options;                    ///< the method's own Options (empty for explicit ones)
+  /// Error-controlled steps (integrator.adaptive): time.dt is then the first step, and
+  /// error_control holds rtol, atol and max_dt.
+  bool adaptive = false;
+  ErrorControl error_control;
 };
 
 /// [time]: step size and simulated duration.
@@ -103,6 +108,11 @@ struct Scene {
   std::vector<std::string> warnings;
 
   bool is_ode() const { return ode != nullptr; }
+  /// Where a step under error control (integrator.adaptive) that starts at t must end at the
+  /// latest: the next frame time (a multiple of output.interval, a time within 1e-9 of an
+  /// interval past t counting as reached) or the duration. `hooke run` and the Python module's
+  /// run() land on the same times, so both take the same steps.
+  double next_stop(double t) const;
 };
 
 /// Loads and validates a scene file, applying "section.key=value" overrides first. Throws

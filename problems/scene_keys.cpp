@@ -78,6 +78,12 @@ const std::vector<std::string> kLattices = {"grid", "cantilever"};
 const std::vector<std::string> kLines = {"chain", "hair"};
 const std::vector<std::string> kImplicit = {"implicit", "implicit-midpoint", "bdf2"};
 const std::vector<std::string> kSundials = {"cvode", "ida"};
+// Methods that read integrator.adaptive (every explicit and implicit one), and those that can run
+// under error control (MethodInfo::error_estimate_order > 0).
+const std::vector<std::string> kFixedStepFamilies = {
+    "forward-euler", "symplectic-euler", "midpoint",          "trapezoid", "rk4", "dopri5",
+    "bs32",          "implicit",         "implicit-midpoint", "bdf2"};
+const std::vector<std::string> kAdaptive = {"dopri5", "bs32"};
 
 const std::string kSpread = "mass spread evenly over the particles; give this or mesh.mass";
 const std::string kEach = "mass of each particle; give this or mesh.total_mass";
@@ -523,7 +529,32 @@ void add_implicit_keys(std::vector<SceneKey>& t) {
           .choices({"forward-euler", "symplectic-euler", "midpoint", "trapezoid", "rk4", "dopri5",
                     "bs32", "implicit", "implicit-midpoint", "bdf2", "cvode", "ida",
                     "ceres-implicit", "fast-mass-spring", "xpbd"})
-          .meaning("the time stepper; explicit methods (the first seven) take no other keys"));
+          .meaning("the time stepper; explicit methods (the first seven) take no other keys "
+                   "but the error control's"));
+  add(K("integrator.adaptive", T::Boolean)
+          .in(kFixedStepFamilies)
+          .def("false")
+          .meaning("error-controlled steps (methods with a local error estimate: dopri5, bs32): "
+                   "time.dt is the first step, rtol and atol bound each step's local error"));
+  add(K("integrator.rtol", T::Number)
+          .in(kAdaptive)
+          .def("1e-08")
+          .range(0, true, 1, true)
+          .needs({"integrator.adaptive=true"})
+          .meaning("relative tolerance of the local error test on [x; v], as CVODE's"));
+  add(K("integrator.atol", T::Number)
+          .in(kAdaptive)
+          .def("1e-10")
+          .positive()
+          .needs({"integrator.adaptive=true"})
+          .meaning("absolute tolerance of the local error test (m for x, m/s for v), as CVODE's"));
+  add(K("integrator.max_dt", T::Number)
+          .in(kAdaptive)
+          .unit("s")
+          .def("0")
+          .non_negative()
+          .needs({"integrator.adaptive=true"})
+          .meaning("largest step under error control; 0: no cap"));
   add(K("integrator.beta", T::Number)
           .in({"implicit"})
           .def("1")

@@ -249,20 +249,39 @@ class PySimulation {
     m_sim = std::make_unique<Simulation>(*m_scene->system, std::move(stepper), m_scene->initial);
     m_sim->set_accept_not_converged(m_scene->run.allow_not_converged);
     m_sim->set_max_step_halvings(m_scene->run.max_step_halvings);
+    if (m_scene->integrator.adaptive)
+      m_sim->set_error_control(m_scene->integrator.error_control, m_scene->time.dt);
     m_method = m_scene->integrator.method;
   }
 
   double t() const { return m_sim->state().t; }
   long long steps_taken() const { return m_steps; }
 
-  /// One step of size h (the scene's dt by default); raises StepError if it fails.
+  /// One step of size h (the scene's dt by default; under error control, the controller's step,
+  /// ending at the scene's duration at the latest while it is ahead); raises StepError if it
+  /// fails.
   py::dict step(std::optional<double> h) {
+    if (!h && adaptive()) {
+      const double end = m_scene->time.duration;
+      return advance_controlled(t() < end ? end : std::numeric_limits<double>::infinity());
+    }
     const double size = h ? *h : m_scene->time.dt;
     if (!(size > 0.0)) throw py::value_error("h must be > 0");
     return advance_by(size);
   }
-  /// Steps of dt until time t, the last one shortened to land on t exactly.
+  /// Steps of dt until time t, the last one shortened to land on t exactly (under error control:
+  /// the controller's steps, the last one landing on t).
   void advance(double t_end) {
+    if (adaptive()) {
+      // Through the frame times hooke run lands on (Scene::next_stop), so that run() takes its
+      // steps.
+      while (t() < t_end) {
+        if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between steps
+        const double stop = m_scene->next_stop(t());  // the duration once past the frames
+        advance_controlled(stop > t() ? std::min(t_end, stop) : t_end);
+      }
+      return;
+    }
     const double dt = m_scene->time.dt, left = t_end - t();
     // Nothing to do when t_end is here already, to round-off (a time reached by steps of dt).
     if (!(left > 1e-12 * std::max(dt, std::abs(t_end)))) return;
@@ -278,6 +297,7 @@ class PySimulation {
   /// t = 0, and the simulation continues from where that run ended.
   void run(std::optional<std::string> out, bool force) {
     if (out) return run_with_files(*out, force);
+    if (adaptive()) return advance(m_scene->time.duration);
     const long long total = m_scene->time.steps();
     while (m_steps < total) {
       if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between steps
@@ -296,13 +316,20 @@ class PySimulation {
     o.out_dir = out;
     o.progress = false;
     o.force = force;
-    o.on_finished = [this](const State& s, const Stepper& stepper) {
+    o.on_finished = [this](const Simulation& run) {
+      const State& s = run.state();
       State& mine = m_sim->mutable_state();
       mine.x = s.x;  // into the existing buffers: live views see the final state
       mine.v = s.v;
       mine.t = s.t;
-      m_sim->stepper().restore_history(stepper.history());
-      m_steps = m_scene->time.steps();
+      // The stepper's history and the error control's state, as a checkpoint carries them.
+      std::vector<double> history = run.stepper().history();
+      if (adaptive()) {
+        append_error_control(run, history);
+        restore_error_control(history, *m_sim);
+      }
+      m_sim->stepper().restore_history(history);
+      m_steps = adaptive() ? run.accepted_steps() : m_scene->time.steps();
     };
     int code;
     {
@@ -342,6 +369,11 @@ class PySimulation {
     d["factor_seconds"] = s.factor_seconds;
     d["solve_seconds"] = s.solve_seconds;
     d["total_seconds"] = s.total_seconds;
+    if (adaptive()) {  // the error control's counts (integrator.adaptive)
+      d["accepted"] = m_sim->accepted_steps();
+      d["rejected"] = m_sim->rejected_steps();
+      d["next_h"] = m_sim->next_step();
+    }
     return d;
   }
   std::string method() const { return m_method; }
@@ -355,12 +387,19 @@ class PySimulation {
     }
     if (const std::string why = method_unsupported(name, *m_scene->system); !why.empty())
       throw InputError(m_scene->file, "integrator.method", why);
+    if (adaptive() && method_info(name).error_estimate_order == 0)
+      throw InputError(m_scene->file, "integrator.method",
+                       "method '" + name +
+                           "' makes no local error estimate, and this scene runs under error "
+                           "control (integrator.adaptive = true)");
     try {
       m_sim->set_stepper(
           make_stepper(name, *m_scene->system, options_for(name, m_scene->integrator.options)));
     } catch (const SetupError& e) {
       throw InputError(m_scene->file, "integrator.method", e.what());
     }
+    // The controller takes the new method's order; the counts and the next step carry on.
+    if (adaptive()) m_sim->set_error_control(m_scene->integrator.error_control, m_sim->next_step());
     m_method = name;
   }
   /// The state, the stepper's history and the step count, in hooke run's checkpoint format.
@@ -373,6 +412,7 @@ class PySimulation {
     c.step = m_steps;
     c.state = m_sim->state();
     c.history = m_sim->stepper().history();
+    if (adaptive()) append_error_control(*m_sim, c.history);
     write_checkpoint(path, c);
   }
   /// Continues from a checkpoint of this scene and method (save_checkpoint, or hooke run's
@@ -392,7 +432,9 @@ class PySimulation {
                        "was written by method '" + c.method + "', this simulation steps with '" +
                            m_method + "' (set_method first)");
     try {
-      m_sim->stepper().restore_history(c.history);
+      std::vector<double> history = c.history;
+      if (adaptive()) restore_error_control(history, *m_sim);
+      m_sim->stepper().restore_history(history);
     } catch (const InternalError& e) {
       throw InputError(path, "checkpoint", std::string("stepper history: ") + e.what());
     }
@@ -411,19 +453,31 @@ class PySimulation {
   }
 
  private:
+  bool adaptive() const { return m_scene->integrator.adaptive; }
   py::dict advance_by(double h) {
+    return finish_step([this, h] { return m_sim->advance(h); });
+  }
+  /// One step under the scene's error control, ending at t_end at the latest.
+  py::dict advance_controlled(double t_end) {
+    return finish_step([this, t_end] { return m_sim->advance_adaptive(t_end); });
+  }
+  /// Takes a step with `take` (GIL released); raises StepError if it failed, else returns its
+  /// summary.
+  template <class Take>
+  py::dict finish_step(Take take) {
     StepSummary s;
     m_sim->set_stable_buffers(m_live_views > 0);
     {
       py::gil_scoped_release release;
-      s = m_sim->advance(h);
+      s = take();
     }
     const bool ok = s.status == Status::Converged ||
                     (s.status == Status::NotConverged && m_scene->run.allow_not_converged);
     if (!ok)
       throw StepFailed(m_scene->file + ": step " + std::to_string(m_steps + 1) +
-                       " (t = " + shortest_number(t()) + ", h = " + shortest_number(h) +
-                       "): " + to_string(s.status) + ": " + s.message);
+                       " (t = " + shortest_number(m_sim->failed_t()) +
+                       ", h = " + shortest_number(m_sim->failed_h()) + "): " + to_string(s.status) +
+                       ": " + s.message);
     ++m_steps;
     py::dict d;
     d["status"] = to_string(s.status);

@@ -37,11 +37,13 @@ const std::vector<ExplicitEntry>& explicit_table() {
       {{"rk4", MethodKind::Explicit, "classical Runge-Kutta, order 4"},
        [] { return ExplicitRungeKutta::rk4(); }},
       {{"dopri5", MethodKind::Explicit,
-        "Dormand-Prince 5(4) embedded pair (ode45, RK45), order 5 with an order-4 error estimate"},
+        "Dormand-Prince 5(4) embedded pair (ode45, RK45), order 5 with an order-4 error estimate",
+        4},
        [] { return ExplicitRungeKutta::dopri5(); }},
       {{"bs32", MethodKind::Explicit,
         "Bogacki-Shampine 3(2) embedded pair (ode23, RK23), order 3 with an order-2 error "
-        "estimate"},
+        "estimate",
+        2},
        [] { return ExplicitRungeKutta::bs32(); }},
   };
   return table;

@@ -77,6 +77,10 @@ struct MethodInfo {
   const char* name;  ///< registry name, as in scene files ("rk4")
   MethodKind kind;
   const char* description;  ///< one line for --help and error messages
+  /// Order q of the local error estimate the method makes for error control
+  /// (Simulation::advance_adaptive; its error O(h^(q+1))); 0: it takes fixed steps only. CVODE
+  /// and IDA control their error themselves and have 0 here.
+  int error_estimate_order = 0;
 };
 
 /// Thrown when a method name is not in the table (see UnknownName).

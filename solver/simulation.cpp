@@ -108,6 +108,11 @@ StepSummary Simulation::advance_adaptive(double t_end) {
   for (;;) {
     if (m_control.max_dt > 0.0) h = std::min(h, m_control.max_dt);
     const bool lands = t + 1.01 * h >= t_end;
+    // A step shortened to land on t_end says little about the steps after it: the controller
+    // proposes from it but keeps its memory, and the next step is at least the one shortened.
+    const double unshortened = h;
+    const double err_prev = m_controller->previous_error();
+    const bool rejected_prev = m_controller->last_rejected();
     if (lands) h = t_end - t;
     if (h < h_min && !lands) {
       StepSummary f;
@@ -133,11 +138,15 @@ StepSummary Simulation::advance_adaptive(double t_end) {
       continue;
     }
     const double err = m_stepper->error_norm(m_control.rtol, m_control.atol);
-    const double h_new = m_controller->next(h, err);
+    double h_new = m_controller->next(h, err);
     if (!(err <= 1.0)) {
       ++m_rejected;
       h = h_new;
       continue;
+    }
+    if (lands && h < unshortened) {
+      m_controller->restore(err_prev, rejected_prev);
+      h_new = std::max(h_new, unshortened);
     }
     if (lands) m_next.t = t_end;  // exactly, whatever t + (t_end - t) rounds to
     s = commit(std::move(s), h);

@@ -74,6 +74,7 @@ class Simulation {
   void set_stable_buffers(bool stable) { m_stable_buffers = stable; }
   const MassSpringSystem& system() const { return m_system; }
   Stepper& stepper() { return *m_stepper; }
+  const Stepper& stepper() const { return *m_stepper; }
   /// Continues with another stepper (for the same system) from the current state.
   void set_stepper(std::unique_ptr<Stepper> stepper) { m_stepper = std::move(stepper); }
 

@@ -4,8 +4,8 @@
 #include <string>
 
 #include "hooke/core.hpp"
-#include "hooke/options.hpp"
 #include "hooke/model/state.hpp"
+#include "hooke/options.hpp"
 
 namespace hooke {
 
@@ -14,8 +14,8 @@ namespace hooke {
 /// satisfies ||e||_wrms <= 1 with weights 1 / (rtol max(|y0_i|, |y1_i|) + atol) on each of the 6n
 /// components of y = [x; v] (x in m, v in m/s).
 struct ErrorControl {
-  double rtol = 1e-6;
-  double atol = 1e-9;
+  double rtol = 1e-8;   ///< as SundialsOptions::rtol
+  double atol = 1e-10;  ///< as SundialsOptions::atol
   /// Largest step (s); 0: no cap beyond the end time.
   double max_dt = 0.0;
   /// Smallest step (s) before the run gives up; 0: 1e-12 of the time span so far (and at least

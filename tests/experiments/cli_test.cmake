@@ -18,6 +18,8 @@
 #   workprecision  `hooke workprecision` on the chain with three methods: workprecision.csv and
 #               reference.csv have their headers, rk4's smallest step has a finite error; the PNG.
 #   resolution  `hooke resolution` at n = 4, 6: one row per variant and size with a finite sag.
+#   adaptive    error-controlled dopri5: log columns, frames at their times, the end line, a
+#               resume that ends on the same bits, and the refusals of the error-control keys.
 #   final_picture  final.png by matplotlib (axes, colour bar, colliders) and, without the plot
 #               script, by the built-in renderer with a warning.
 foreach(var CASE HOOKE SCENES_DIR OUT)
@@ -431,6 +433,54 @@ elseif(CASE STREQUAL "output_interval")
   hooke_exec(run "${OUT}/both.toml" --out "${OUT}/both" --no-progress)
   expect_rc(2)
   expect_contains("${err}" "output.every: give every (steps) or interval (seconds)" "stderr")
+
+elseif(CASE STREQUAL "adaptive")
+  # integrator.adaptive: dopri5 under error control lands on every frame time, logs the step size
+  # and the cumulative accepted and rejected counts, ends with its counts in CVODE's style, and a
+  # run stopped and resumed ends on the same bits as one that was not. Methods without an error
+  # estimate, tolerances without adaptive, and step-counted frames are refused at their key.
+  set(args "${SCENES_DIR}/hanging_cloth_16.toml" --set integrator.method=dopri5
+      --set integrator.adaptive=true --set integrator.rtol=1e-6 --set integrator.atol=1e-8
+      --set output.interval=0.1 --no-progress)
+  hooke_exec(run ${args} --out "${OUT}/whole")
+  expect_rc(0)
+  expect_contains("${out}" "dopri5: steps " "stdout")
+  expect_contains("${out}" ", rejected " "stdout")
+  file(STRINGS "${OUT}/whole/log.csv" header LIMIT_COUNT 1)
+  if(NOT header MATCHES ",wall_time,h,accepted,rejected$")
+    message(FATAL_ERROR "log.csv header '${header}' lacks h,accepted,rejected${report}")
+  endif()
+  file(STRINGS "${OUT}/whole/log.csv" rows)
+  list(GET rows -1 last)
+  if(NOT last MATCHES "^[0-9]+,0.5,")
+    message(FATAL_ERROR "the last log row does not end at t = 0.5: '${last}'${report}")
+  endif()
+  file(GLOB frames "${OUT}/whole/frames/*.vtk")
+  list(LENGTH frames nframes)
+  if(NOT nframes EQUAL 6)
+    message(FATAL_ERROR "${nframes} frames, expected 6 (t = 0, 0.1, ..., 0.5)${report}")
+  endif()
+  hooke_exec(run ${args} --out "${OUT}/parts" --stop-after 100)
+  expect_rc(130)
+  hooke_exec(resume "${OUT}/parts" --no-progress)
+  expect_rc(0)
+  file(SHA256 "${OUT}/whole/final.csv" whole)
+  file(SHA256 "${OUT}/parts/final.csv" parts)
+  if(NOT whole STREQUAL parts)
+    message(FATAL_ERROR "a stopped and resumed adaptive run ends elsewhere than a whole one${report}")
+  endif()
+  hooke_exec(run "${SCENES_DIR}/hanging_cloth_16.toml" --set integrator.adaptive=true
+             --out "${OUT}/rk4" --no-progress)
+  expect_rc(2)
+  expect_contains("${err}" "integrator.adaptive: method 'rk4' makes no local error estimate" "stderr")
+  hooke_exec(run "${SCENES_DIR}/hanging_cloth_16.toml" --set integrator.method=bs32
+             --set integrator.rtol=1e-4 --out "${OUT}/fixed" --no-progress)
+  expect_rc(2)
+  expect_contains("${err}" "integrator.rtol: has no effect with adaptive = false" "stderr")
+  hooke_exec(run "${SCENES_DIR}/hanging_cloth_16.toml" --set integrator.method=bs32
+             --set integrator.adaptive=true --set output.every=10 --out "${OUT}/every" --no-progress)
+  expect_rc(2)
+  expect_contains("${err}" "output.every: counts steps" "stderr")
 
 elseif(CASE STREQUAL "stability")
   hooke_exec(stability --cases two_particle --methods symplectic-euler,implicit-b1 --k 1e4

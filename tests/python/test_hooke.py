@@ -282,3 +282,73 @@ def test_string_overrides_are_quoted_whatever_they_hold():
     with pytest.raises(hooke.InputError) as e:
         hooke.load_scene(CLOTH, {"integrator.method": 'rk"4\n'})
     assert e.value.key == "integrator.method" and 'rk"4' in e.value.reason
+
+
+def adaptive_cloth(method="dopri5", **overrides):
+    sets = {"time.duration": 0.1, "integrator.method": method, "integrator.adaptive": True,
+            "integrator.rtol": 1e-6, "integrator.atol": 1e-8}
+    sets.update(overrides)
+    return hooke.load_scene(CLOTH, sets)
+
+
+def test_an_adaptive_run_is_hooke_runs_bit_for_bit_and_continues(tmp_path):
+    sets = {"integrator.method": "bs32", "integrator.adaptive": True, "integrator.rtol": 1e-5,
+            "integrator.atol": 1e-8, "time.duration": 0.1, "output.interval": 0.03}
+    sim = hooke.Simulation(hooke.load_scene(CLOTH, sets))
+    sim.run()
+    assert sim.t == 0.1
+    stats = sim.stats()
+    assert stats["accepted"] == sim.steps_taken > 0 and stats["rejected"] >= 0
+    cmd = [os.environ["HOOKE_BIN"], "run", CLOTH, "--out", str(tmp_path / "cli"), "--no-progress",
+           "--set", "output.png=false"]
+    for k, val in sets.items():
+        cmd += ["--set", f"{k}={str(val).lower() if isinstance(val, bool) else val}"]
+    out = subprocess.run(cmd, check=True, capture_output=True, text=True).stdout
+    assert f"bs32: steps {sim.steps_taken}, rejected {stats['rejected']}," in out
+    x, v = read_final(tmp_path / "cli" / "final.csv")
+    assert np.array_equal(sim.x, x) and np.array_equal(sim.v, v)
+    # A checkpoint carries the error control: two halves give the whole run's bits.
+    half = hooke.Simulation(hooke.load_scene(CLOTH, sets))
+    half.advance(0.06)  # a frame time (2 x 0.03), where the whole run lands too
+    half.save_checkpoint(str(tmp_path / "half.bin"))
+    rest = hooke.Simulation(hooke.load_scene(CLOTH, sets))
+    rest.load_checkpoint(str(tmp_path / "half.bin"))
+    rest.run()
+    assert np.array_equal(rest.x, sim.x) and rest.stats()["accepted"] == stats["accepted"]
+
+
+def test_an_adaptive_step_count_is_within_5x_of_scipys_for_the_same_pair():
+    """The controller against a textbook one of the same order (issue 21, acceptance 1): scipy's
+    RK45 and RK23 on the same ODE, the same rtol and atol, and the achieved errors of both
+    against a DOP853 reference at rtol 1e-12."""
+    integrate = pytest.importorskip("scipy.integrate")
+    for method, scipy_method in (("dopri5", "RK45"), ("bs32", "RK23")):
+        for rtol in (1e-4, 1e-6):
+            scene = adaptive_cloth(method, **{"mesh.nx": 6, "mesh.ny": 6, "time.duration": 0.5,
+                                              "integrator.rtol": rtol, "integrator.atol": 1e-3 * rtol})
+            sim = hooke.Simulation(scene)
+            system = sim.system
+            m = np.repeat(system.masses, 3)
+            free = np.repeat(~system.pinned, 3)
+            x0, v0 = sim.x.ravel().copy(), sim.v.ravel().copy()
+            n3 = x0.size
+
+            def rhs(_, y):
+                x, v = y[:n3], y[n3:]
+                a = np.where(free, system.forces(x.reshape(-1, 3), v.reshape(-1, 3)).ravel() / m, 0.0)
+                return np.concatenate([np.where(free, v, 0.0), a])
+
+            y0 = np.concatenate([x0, v0])
+            ref = integrate.solve_ivp(rhs, (0, 0.5), y0, method="DOP853", rtol=1e-12, atol=1e-14)
+            theirs = integrate.solve_ivp(rhs, (0, 0.5), y0, method=scipy_method, rtol=rtol,
+                                         atol=1e-3 * rtol, first_step=scene.dt)
+            sim.run()
+            x_ref = ref.y[:n3, -1]
+            ours_err = np.abs(sim.x.ravel() - x_ref).max()
+            theirs_err = np.abs(theirs.y[:n3, -1] - x_ref).max()
+            allowed = rtol * np.abs(x_ref).max() + 1e-3 * rtol
+            ours_steps, their_steps = sim.steps_taken, theirs.t.size - 1
+            print(f"{method} rtol {rtol:g}: {ours_steps} steps (error {ours_err:.2e}), scipy "
+                  f"{scipy_method} {their_steps} steps (error {theirs_err:.2e}); allowed {allowed:.2e}")
+            assert ours_err <= 10 * allowed
+            assert their_steps / 5 <= ours_steps <= 5 * their_steps
