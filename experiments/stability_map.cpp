@@ -144,8 +144,12 @@ int run_stability(const StabilityOptions& options, const std::string& scenes_dir
   const auto start = Clock::now();
   const std::vector<StabilityCase> cases =
       select_cases(stability_cases(options.full, scenes_dir), options.cases);
-  const std::vector<StudyMethod> study =
+  std::vector<StudyMethod> study =
       available_study_methods(study_methods(), options.methods, std::cerr);
+  if (options.methods.empty())
+    study.erase(std::remove_if(study.begin(), study.end(),
+                               [](const StudyMethod& m) { return !m.in_stability_map; }),
+                study.end());
   std::vector<double> ks = options.k;
   if (ks.empty())
     for (int e = 2; e <= 14; e += options.full ? 1 : 2) ks.push_back(std::pow(10.0, 0.5 * e));

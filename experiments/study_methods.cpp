@@ -12,6 +12,14 @@ std::vector<StudyMethod> study_methods() {
   std::vector<StudyMethod> out;
   for (const auto& m : methods())
     if (m.kind == MethodKind::Explicit) out.push_back({m.name, m.name, {}});
+  // Methods with a local error estimate, also under error control (swept over rtol, as CVODE).
+  for (const auto& m : methods())
+    if (m.error_estimate_order > 0)
+      out.push_back({std::string(m.name) + "-adaptive",
+                     m.name,
+                     {"integrator.adaptive=true"},
+                     Sweep::Tolerance,
+                     /*in_stability_map=*/false});
   for (const char* beta : {"0", "0.25", "0.5", "0.75", "1"})
     out.push_back({std::string("implicit-b") + beta,
                    "implicit",

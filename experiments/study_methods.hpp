@@ -20,6 +20,9 @@ struct StudyMethod {
   std::string method;             ///< registry name (hooke::methods())
   std::vector<std::string> sets;  ///< "section.key=value" overrides that configure it
   Sweep sweep = Sweep::StepSize;
+  /// false: left out of the stability map unless --methods names it (hooke's error-controlled
+  /// methods shrink their steps to meet the tolerance: there is no step size to find a limit of).
+  bool in_stability_map = true;
 };
 
 /// The study's method list: every explicit method of the registry; `implicit` with beta in

@@ -29,6 +29,9 @@ Trajectory run_trajectory(const Scene& scene, const std::string& method,
     return tr;
   }
   Simulation sim(sys, std::move(stepper), scene.initial);
+  // Error-controlled scenes (integrator.adaptive) step to each sample time under their control.
+  const bool adaptive = scene.integrator.adaptive;
+  if (adaptive) sim.set_error_control(scene.integrator.error_control, scene.time.dt);
   const long long N = scene.time.steps();
   auto time_of = [&](long long step) {
     return step == N ? scene.time.duration : double(step) * scene.time.dt;
@@ -62,18 +65,25 @@ Trajectory run_trajectory(const Scene& scene, const std::string& method,
   long long not_converged = 0, step = 0;
   for (long long target : sample_steps) {
     while (step < target) {
-      const long long next = step_between_samples ? target : step + 1;
+      const long long next = step_between_samples || adaptive ? target : step + 1;
       const double t = sim.state().t;
-      const StepSummary s =
-          sim.advance(step_between_samples ? time_of(next) - t : scene.time.step_size(next, t));
+      const StepSummary s = adaptive               ? sim.advance_adaptive(time_of(next))
+                            : step_between_samples ? sim.advance(time_of(next) - t)
+                                                   : sim.advance(scene.time.step_size(next, t));
       if (s.status == Status::BrokeDown || s.status == Status::Fatal) {
         std::ostringstream os;
         os << "failed at t = " << sim.state().t << ": " << s.message;
         return stop(os.str());
       }
       not_converged += s.status == Status::NotConverged;
+      if (adaptive && sim.state().t < time_of(next)) {  // an accepted step short of the sample
+        tr.steps = sim.accepted_steps();
+        if (limits.check_every > 0 && tr.steps % limits.check_every == 0)
+          if (std::string why = check(sim.state()); !why.empty()) return stop(why);
+        continue;
+      }
       step = next;
-      tr.steps = step;
+      tr.steps = adaptive ? sim.accepted_steps() : step;
       if (limits.check_every > 0 && step % limits.check_every == 0 && step != target)
         if (std::string why = check(sim.state()); !why.empty()) return stop(why);
     }
@@ -119,17 +129,21 @@ Errors max_errors(const Errors& a, const Errors& b) {
           mx(a.max_traj, b.max_traj)};
 }
 
+double study_atol(const Scene& scene, double rtol) {
+  double size = 0.0;
+  for (Index i = 0; i < scene.initial.x.size(); ++i)
+    size = std::max(size, std::abs(scene.initial.x[i]));
+  return 1e-3 * rtol * std::max(size, 1.0);
+}
+
 namespace {
 /// The scene's options of `method` (or its defaults) with the reference's tolerances set.
 template <class Options>
 MethodOptions sundials_reference(const Scene& scene, const char* method, double rtol, double atol) {
   MethodOptions m = options_for(method, scene.integrator.options);
   Options& o = m.edit<Options>(method);
-  double size = 0.0;
-  for (Index i = 0; i < scene.initial.x.size(); ++i)
-    size = std::max(size, std::abs(scene.initial.x[i]));
   o.rtol = rtol;
-  o.atol = atol > 0 ? atol : 1e-3 * rtol * std::max(size, 1.0);
+  o.atol = atol > 0 ? atol : study_atol(scene, rtol);
   o.max_steps = 10000000;
   o.linear_solver = SundialsLinearSolver::Klu;
   o.preconditioner.clear();

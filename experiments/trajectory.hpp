@@ -45,6 +45,10 @@ Errors compare(const Trajectory& a, const Trajectory& ref);
 /// Elementwise maximum of two error estimates (NaN-aware: a NaN field stays NaN).
 Errors max_errors(const Errors& a, const Errors& b);
 
+/// The absolute tolerance the studies pair with rtol: 1e-3 * rtol * the scene's size (the
+/// largest |x| of its initial state, at least 1 m).
+double study_atol(const Scene& scene, double rtol);
+
 /// Options of `method` ("cvode" or "ida") at relative tolerance rtol (and atol, or 1e-3 * rtol *
 /// the scene's size if atol <= 0) with KLU, starting from the scene's own options of that method
 /// (options_for) or its defaults.

@@ -2,7 +2,8 @@
 //
 // Question: for each method of the study (experiments/study_methods.hpp), how does the position
 // error at the final time, and over the trajectory, fall with the wall time spent, as the time
-// step h (or, for the adaptive CVODE and IDA, the tolerance rtol) is varied?
+// step h (or, for the adaptive CVODE and IDA and hooke's error-controlled methods, such as
+// dopri5-adaptive, the tolerance rtol) is varied?
 // Scenes (work_precision_cases): the chain (chain.toml: 30 particles, k = 500, pinned at one end),
 // the hanging cloth (hanging_cloth_16 at 8 x 8, 16 x 16 with --full) and the stiff cloth (the same
 // with structural k = 1e6).
@@ -25,7 +26,8 @@
 //         max_err_final,rms_err_traj,max_err_traj,status,repeats,resolved_final,resolved_traj),
 //         DIR/reference.csv (case,rtol,wall_s,
 //         err_rms_final,err_rms_traj,err_max_traj,how) and, through
-//         experiments/plot/work_precision.py, DIR/workprecision_<case>.png and .md.
+//         experiments/plot/work_precision.py, DIR/workprecision_<case>.png and .md, and for the
+//         tolerance sweeps DIR/tolerance_<case>.png (achieved error against requested rtol).
 #include "experiments/work_precision.hpp"
 
 #include <algorithm>
@@ -147,8 +149,10 @@ Trajectory run_method(const Scene& scene, const StudyMethod& m, double rtol, int
   limits.check_every = 10;
   // Adaptive methods: atol follows rtol (1e-3 rtol x the scene's size), as for the reference;
   // a fixed tight atol would hide the rtol sweep.
-  const MethodOptions opts =
-      rtol > 0 ? reference_options(scene, m.method, rtol, 0.0) : scene.integrator.options;
+  // (hooke's error-controlled methods carry theirs in the scene: sweep_method sets them.)
+  const MethodOptions opts = rtol > 0 && !scene.integrator.adaptive
+                                 ? reference_options(scene, m.method, rtol, 0.0)
+                                 : scene.integrator.options;
   return run_trajectory(scene, m.method, opts, samples, m.sweep == Sweep::Tolerance, limits);
 }
 
@@ -168,6 +172,10 @@ void sweep_method(const WorkPrecisionCase& c, const StudyMethod& m,
     if (const std::string why = method_unsupported(m.method, *scene.system); !why.empty()) {
       std::cerr << "skipped " << m.label << " on " << c.name << ": " << why << "\n";
       return;
+    }
+    if (scene.integrator.adaptive) {  // the sweep's tolerances, as CVODE's (run_method)
+      scene.integrator.error_control.rtol = rtol;
+      scene.integrator.error_control.atol = study_atol(scene, rtol);
     }
     Trajectory tr = run_method(scene, m, rtol, S);
     const Errors e = compare(tr, ref.trajectory);
@@ -245,8 +253,9 @@ Command add_workprecision_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "workprecision",
       "Work-precision: error against a CVODE reference versus wall time for every "
-      "method over a range of h (rtol for cvode/ida); writes workprecision.csv, "
-      "reference.csv and workprecision_<case>.png");
+      "method over a range of h (rtol for cvode, ida and the error-controlled *-adaptive "
+      "methods); writes workprecision.csv, reference.csv, workprecision_<case>.png and "
+      "tolerance_<case>.png");
   cmd->add_flag("--full", a->wp.full,
                 "paper size: 16 x 16 cloths, 6 step sizes 1e-2..3e-5, longer runs");
   add_list(cmd, "--cases", a->cases,
@@ -254,7 +263,8 @@ Command add_workprecision_command(CLI::App& app) {
   add_list(cmd, "--methods", a->methods,
            "comma-separated study labels or method names (default: all)");
   add_list(cmd, "--rtols", a->rtols,
-           "comma-separated tolerances of cvode/ida (default 1e-3,1e-5,1e-7)");
+           "comma-separated tolerances of cvode, ida and the *-adaptive methods (default "
+           "1e-3,1e-5,1e-7)");
   cmd->add_option("--reference-rtol", a->wp.reference_rtol, "CVODE reference rtol (default 1e-10)");
   cmd->add_option("--samples", a->wp.samples, "trajectory samples (default 10)");
   cmd->add_option("--repeat", a->wp.repeat,

@@ -9,6 +9,12 @@ the trajectory, so both measures are read at the same point (they were two panel
 the same ranking). Each point is annotated with its h or rtol. The reference's own error estimate
 is a dotted line, and the points below it, which it cannot resolve, are hollow triangles on that
 line rather than values. Wall times are the medians of the `repeats` runs the CSV records.
+
+Per case with tolerance sweeps (CVODE, IDA, hooke's error-controlled methods), also
+OUT_DIR/tolerance_<case>.png: is the error control honest? The largest position error over the
+trajectory against the requested rtol, one line per method, beside the lines error = rtol and
+error = 10 rtol (the cases' sizes are about 1 m, and atol = 1e-3 rtol x size); errors the
+reference cannot resolve are left out.
 """
 import math
 import os
@@ -84,7 +90,34 @@ def main(out_dir):
                                 "max err final (m)", "RMS err traj (m)", "status", "runs (median wall)",
                                 "final error above the reference's"], table)
         write_text(os.path.join(out_dir, f"workprecision_{case}.md"), text)
+        plot_tolerance(out_dir, case, sub, labels)
     print(f"work_precision.py: wrote {out_dir}/workprecision_*.png and workprecision_*.md")
+
+
+def plot_tolerance(out_dir, case, sub, labels):
+    """Achieved error against requested tolerance for the rows of a tolerance sweep."""
+    # Errors below the reference's own (resolved_traj 0) are not values: left out.
+    swept = [r for r in sub if num(r["rtol"]) > 0 and num(r["max_err_traj"]) > 0
+             and r.get("resolved_traj", "1") == "1"]
+    if not swept:
+        return
+    fig, ax = plt.subplots(figsize=(7.5, 5.0))
+    for label in dict.fromkeys(r["label"] for r in swept):
+        mine = sorted((r for r in swept if r["label"] == label), key=lambda r: num(r["rtol"]))
+        ax.plot([num(r["rtol"]) for r in mine], [num(r["max_err_traj"]) for r in mine], "-",
+                lw=1.2, ms=5, label=label, **style(label, labels))
+    rtols = sorted({num(r["rtol"]) for r in swept})
+    ax.plot(rtols, rtols, ls="--", color="k", lw=0.8, label="error = rtol (x 1 m)")
+    ax.plot(rtols, [10 * r for r in rtols], ls=":", color="k", lw=0.8, label="error = 10 rtol")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("requested rtol (atol = 1e-3 rtol x the scene's size)")
+    ax.set_ylabel("largest position error over the trajectory (m)")
+    ax.set_title(f"{case}: achieved error against requested tolerance")
+    ax.legend(loc="upper left", fontsize=7)
+    fig.tight_layout()
+    save_figure(fig, os.path.join(out_dir, f"tolerance_{case}.png"))
+    plt.close(fig)
 
 
 if __name__ == "__main__":

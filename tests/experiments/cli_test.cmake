@@ -501,12 +501,20 @@ elseif(CASE STREQUAL "stability")
 elseif(CASE STREQUAL "workprecision")
   # cvode at rtol 1e-11, tighter than the reference's 1e-10, agrees with it to within the
   # reference's own error: that point must be marked unresolved, not given as a value.
-  hooke_exec(workprecision --cases chain --methods rk4,implicit-b1,cvode --rtols 1e-4,1e-11
-             --samples 2 --repeat 3 --out "${OUT}")
+  hooke_exec(workprecision --cases chain --methods rk4,implicit-b1,cvode,dopri5-adaptive
+             --rtols 1e-4,1e-11 --samples 2 --repeat 3 --out "${OUT}")
   expect_rc(0)
-  # 4 step sizes for rk4 and implicit-b1, two tolerances for cvode, plus the header.
+  # 4 step sizes for rk4 and implicit-b1, two tolerances for cvode and dopri5-adaptive, plus the
+  # header.
   expect_csv("${OUT}/workprecision.csv"
-             "case,label,method,h,rtol,wall_s,steps,rms_err_final,max_err_final,rms_err_traj,max_err_traj,status,repeats,resolved_final,resolved_traj" 11)
+             "case,label,method,h,rtol,wall_s,steps,rms_err_final,max_err_final,rms_err_traj,max_err_traj,status,repeats,resolved_final,resolved_traj" 13)
+  # dopri5 under error control at rtol 1e-4: a resolved error within 10 x rtol x the chain's
+  # size (about 1 m), counted in accepted steps.
+  file(STRINGS "${OUT}/workprecision.csv" ctl REGEX "^chain,dopri5-adaptive,dopri5,[^,]*,0.0001,")
+  if(NOT ctl MATCHES "^chain,dopri5-adaptive,dopri5,[^,]*,0.0001,[^,]*,[1-9][0-9]*,([0-9.]+e-0[5-9]|[0-9.]+e-[1-9][0-9]|0.000[0-9]+),.*,\"ok\",3,1,1$")
+    message(FATAL_ERROR "dopri5-adaptive at rtol 1e-4 has no resolved error below 1e-3 m: '${ctl}'${report}")
+  endif()
+  expect_file("${OUT}/tolerance_chain.png")
   file(STRINGS "${OUT}/workprecision.csv" tight REGEX "^chain,cvode,cvode,[^,]*,1e-11,")
   if(NOT tight MATCHES ",\"ok\",3,0,0$")
     message(FATAL_ERROR "cvode at rtol 1e-11 is not marked below the reference error (3 runs): '${tight}'${report}")
