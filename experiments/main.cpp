@@ -37,6 +37,7 @@ Command add_workprecision_command(CLI::App& app);     // work_precision.cpp
 Command add_resolution_command(CLI::App& app);        // resolution_study.cpp
 Command add_scaling_command(CLI::App& app);           // scaling_study.cpp
 Command add_demo_command(CLI::App& app);              // demo_command.cpp
+Command add_energy_command(CLI::App& app);            // energy_drift.cpp
 }  // namespace hooke::cli
 
 int main(int argc, char** argv) {
@@ -46,10 +47,10 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", HOOKE_VERSION);
   std::vector<Command> commands;
-  for (auto add :
-       {add_run_command, add_resume_command, add_scenes_command, add_info_command, add_keys_command,
-        add_crosscheck_command, add_step_convergence_command, add_stability_command,
-        add_workprecision_command, add_resolution_command, add_scaling_command, add_demo_command})
+  for (auto add : {add_run_command, add_resume_command, add_scenes_command, add_info_command,
+                   add_keys_command, add_crosscheck_command, add_step_convergence_command,
+                   add_stability_command, add_workprecision_command, add_resolution_command,
+                   add_scaling_command, add_energy_command, add_demo_command})
     commands.push_back(add(app));
 
   try {

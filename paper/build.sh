@@ -32,6 +32,7 @@ run stability
 run workprecision
 run resolution
 run step-convergence
+run energy
 # The implicit step's linear backends as the cloth grows (1e4 to 1e6 springs; 6e6 with --full).
 run scaling --methods implicit-pcg,implicit-pcg-nodal,implicit-petsc,implicit-petsc-gamg --threads 2
 

@@ -18,6 +18,8 @@
 #   workprecision  `hooke workprecision` on the chain with three methods: workprecision.csv and
 #               reference.csv have their headers, rk4's smallest step has a finite error; the PNG.
 #   resolution  `hooke resolution` at n = 4, 6: one row per variant and size with a finite sag.
+#   energy      `hooke energy` at 50 periods: its two CSVs, symplectic Euler bounded, backward
+#               Euler dissipating, and the figure.
 #   adaptive    error-controlled dopri5: log columns, frames at their times, the end line, a
 #               resume that ends on the same bits, and the refusals of the error-control keys.
 #   final_picture  final.png by matplotlib (axes, colour bar, colliders) and, without the plot
@@ -481,6 +483,29 @@ elseif(CASE STREQUAL "adaptive")
              --set integrator.adaptive=true --set output.every=10 --out "${OUT}/every" --no-progress)
   expect_rc(2)
   expect_contains("${err}" "output.every: counts steps" "stderr")
+
+elseif(CASE STREQUAL "energy")
+  # hooke energy at a few periods with two methods: both files with their headers, symplectic
+  # Euler's error bounded and small, backward Euler's negative (it dissipates), and the figure.
+  hooke_exec(energy --periods 50 --samples 20 --methods symplectic-euler,implicit-b1
+             --out "${OUT}")
+  expect_rc(0)
+  # 703 steps (50 periods of 14.07 ms at 1 ms) sampled every 35 steps and at the end: 21 rows per
+  # method.
+  expect_csv("${OUT}/energy.csv" "label,method,h,t,relative_energy_error" 43)
+  expect_csv("${OUT}/energy_summary.csv"
+             "label,method,h,periods,final_error,max_abs_error,drift_per_period,wall_s,status" 3)
+  file(STRINGS "${OUT}/energy_summary.csv" se REGEX "^symplectic-euler,")
+  string(REPLACE "," ";" fields "${se}")
+  list(GET fields 5 se_max)  # max_abs_error
+  if(NOT se_max LESS 1e-2)
+    message(FATAL_ERROR "symplectic Euler's energy error is not below 1e-2: '${se}'${report}")
+  endif()
+  file(STRINGS "${OUT}/energy_summary.csv" be REGEX "^implicit-b1,")
+  if(NOT be MATCHES "^implicit-b1,implicit,0.001,[0-9.]+,-")
+    message(FATAL_ERROR "backward Euler does not lose energy: '${be}'${report}")
+  endif()
+  expect_file("${OUT}/energy.png")
 
 elseif(CASE STREQUAL "stability")
   hooke_exec(stability --cases two_particle --methods symplectic-euler,implicit-b1 --k 1e4

@@ -50,12 +50,13 @@ TEST(ErrorControlAccuracy, EmbeddedPairsMeetTheirToleranceOnTheWorkPrecisionCase
                                  << tr.status;
         double err = 0.0;
         for (size_t k = 0; k < tr.samples.size(); ++k)
-          err = std::max(err,
-                         (tr.samples[k].x - ref.trajectory.samples[k].x).cwiseAbs().maxCoeff());
+          err =
+              std::max(err, (tr.samples[k].x - ref.trajectory.samples[k].x).cwiseAbs().maxCoeff());
         const double allowed = rtol * size + scene.integrator.error_control.atol;
-        std::printf("[ tolerance] %-13s %-6s rtol %.0e: max error %.3e = %.3f x (rtol max|x| + "
-                    "atol), %lld steps\n",
-                    c.name.c_str(), method, rtol, err, err / allowed, tr.steps);
+        std::printf(
+            "[ tolerance] %-13s %-6s rtol %.0e: max error %.3e = %.3f x (rtol max|x| + "
+            "atol), %lld steps\n",
+            c.name.c_str(), method, rtol, err, err / allowed, tr.steps);
         EXPECT_LE(err, 10.0 * allowed) << c.name << " " << method << " rtol " << rtol;
         if (last_steps > 0) {
           EXPECT_LT(tr.steps, last_steps) << c.name << " " << method << " rtol " << rtol;
