@@ -21,11 +21,11 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 SCENE = os.path.join(HERE, "..", "problems", "scenes", "hanging_cloth_16.toml")
 
 
-def python_step_us(method, steps):
-    scene = hooke.load_scene(SCENE, {"mesh.nx": 42, "mesh.ny": 42, "integrator.method": method,
-                                     "time.dt": 5e-4})
-    sim = hooke.Simulation(scene)
-    for _ in range(200):
+def median_step_us(overrides, warm, steps):
+    """Median over 5 blocks of `steps` sim.step() calls (us per call) on the cloth scene with
+    `overrides`, after `warm` steps."""
+    sim = hooke.Simulation(hooke.load_scene(SCENE, overrides))
+    for _ in range(warm):
         sim.step()
     blocks = []
     for _ in range(5):
@@ -36,21 +36,16 @@ def python_step_us(method, steps):
     return statistics.median(blocks)
 
 
+def python_step_us(method, steps):
+    return median_step_us({"mesh.nx": 42, "mesh.ny": 42, "integrator.method": method,
+                           "time.dt": 5e-4}, 200, steps)
+
+
 def call_cost_us(calls=20000):
     """Upper bound on the fixed cost of a sim.step() call from Python: the whole call on a 2 x 2
     cloth (4 particles), whose C++ step is a small part of it."""
-    scene = hooke.load_scene(SCENE, {"mesh.nx": 2, "mesh.ny": 2,
-                                     "integrator.method": "symplectic-euler", "time.dt": 1e-5})
-    sim = hooke.Simulation(scene)
-    for _ in range(1000):
-        sim.step()
-    blocks = []
-    for _ in range(5):
-        t0 = time.perf_counter()
-        for _ in range(calls):
-            sim.step()
-        blocks.append((time.perf_counter() - t0) / calls * 1e6)
-    return statistics.median(blocks)
+    return median_step_us({"mesh.nx": 2, "mesh.ny": 2, "integrator.method": "symplectic-euler",
+                           "time.dt": 1e-5}, 1000, calls)
 
 
 def main():
