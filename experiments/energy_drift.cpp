@@ -50,9 +50,16 @@ struct EnergyOptions {
 
 /// The study's methods: the study_methods() labels below, plus the converged midpoint rule.
 std::vector<StudyMethod> energy_methods() {
-  const std::vector<std::string> labels = {
-      "forward-euler",     "symplectic-euler", "rk4",  "dopri5", "implicit-b1", "implicit-b0.5",
-      "implicit-midpoint", "bdf2", "fast-mass-spring-10", "xpbd"};
+  const std::vector<std::string> labels = {"forward-euler",
+                                           "symplectic-euler",
+                                           "rk4",
+                                           "dopri5",
+                                           "implicit-b1",
+                                           "implicit-b0.5",
+                                           "implicit-midpoint",
+                                           "bdf2",
+                                           "fast-mass-spring-10",
+                                           "xpbd"};
   std::vector<StudyMethod> out;
   for (const StudyMethod& m : study_methods())
     if (std::find(labels.begin(), labels.end(), m.label) != labels.end()) out.push_back(m);
@@ -90,8 +97,8 @@ int run_energy(const EnergyOptions& o, const std::string& scenes_dir) {
   std::size_t done = 0;
   for (const StudyMethod& m : study) {
     std::vector<std::string> sets = {"springs.damping=0", "integrator.method=" + m.method,
-                                     "time.dt=" + exact_number(h), "time.duration=" + exact_number(T),
-                                     "output.vtk=false"};
+                                     "time.dt=" + exact_number(h),
+                                     "time.duration=" + exact_number(T), "output.vtk=false"};
     sets.insert(sets.end(), m.sets.begin(), m.sets.end());
     Scene scene;
     try {
@@ -104,7 +111,8 @@ int run_energy(const EnergyOptions& o, const std::string& scenes_dir) {
     const double scale = std::max(divergence_energy_scale(sys, scene.initial), 1e-30);
     const double E0 = sys.kinetic_energy(scene.initial.v) + sys.potential_energy(scene.initial.x);
     RunLimits limits;
-    limits.energy_limit = divergence_energy_limit(sys, scene.initial, scene.run.energy_growth_limit);
+    limits.energy_limit =
+        divergence_energy_limit(sys, scene.initial, scene.run.energy_growth_limit);
     limits.check_every = 100;
     const std::vector<long long> at = sample_steps(steps, S);
     const Trajectory tr =

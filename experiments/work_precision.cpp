@@ -17,7 +17,8 @@
 // rule) or fails is kept in the CSV with its status and no error. A method that cannot load or does
 // not support a case is skipped on it; one whose run takes over 60 s skips the rest of its sweep.
 // Run:    hooke workprecision [--full] [--cases chain,...] [--methods rk4,...] [--rtols 1e-3,...]
-//                             [--reference-rtol R] [--samples S] [--out DIR] [--no-plot]
+//                             [--reference-rtol R] [--samples S] [--duration T] [--out DIR]
+//                             [--no-plot]
 // Wall time: the median of `repeat` runs (default 3; the errors are those of the first, the runs
 // being deterministic). An error below the reference's own error estimate is not resolved by the
 // reference: the resolved_final / resolved_traj columns say 0, and the plot marks such points at
@@ -207,8 +208,10 @@ void sweep_method(const WorkPrecisionCase& c, const StudyMethod& m,
 
 int run_work_precision(const WorkPrecisionOptions& options, const std::string& scenes_dir) {
   const auto start = Clock::now();
-  const std::vector<WorkPrecisionCase> cases =
+  std::vector<WorkPrecisionCase> cases =
       select_cases(work_precision_cases(options.full, scenes_dir), options.cases);
+  if (options.duration > 0.0)
+    for (WorkPrecisionCase& c : cases) c.duration = options.duration;
   const std::vector<StudyMethod> study =
       available_study_methods(study_methods(), options.methods, std::cerr);
   const std::vector<double> rtols = sweep_rtols(options);
@@ -267,6 +270,9 @@ Command add_workprecision_command(CLI::App& app) {
            "1e-3,1e-5,1e-7)");
   cmd->add_option("--reference-rtol", a->wp.reference_rtol, "CVODE reference rtol (default 1e-10)");
   cmd->add_option("--samples", a->wp.samples, "trajectory samples (default 10)");
+  cmd->add_option("--duration", a->wp.duration,
+                  "simulated time of every case, s (default: each case's own, 0.2-1 s)")
+      ->check(CLI::PositiveNumber);
   cmd->add_option("--repeat", a->wp.repeat,
                   "runs per point, the wall time their median (default 3)")
       ->check(CLI::Range(1, 1000));

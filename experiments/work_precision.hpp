@@ -29,6 +29,8 @@ struct WorkPrecisionOptions {
   std::vector<double> rtols;  ///< tolerances of adaptive methods (empty: 1e-3..1e-7, full to 1e-8)
   double reference_rtol = 1e-10;  ///< CVODE reference tolerance
   int samples = 10;               ///< trajectory samples (equally spaced in time)
+  /// Simulated time of every case (s); 0: each case's own (0.5 s, 0.2 s for the stiff cloth).
+  double duration = 0.0;
   /// Runs per point: the wall time is their median (a run that does not complete runs once).
   int repeat = 3;
   bool full = false;

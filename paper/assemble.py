@@ -83,6 +83,26 @@ def work_precision_findings(out):
                                 "wall (s) to reach 1e-3 m", "wall (s) to reach 1e-6 m"], table))
 
 
+def tolerance_findings(out):
+    """Achieved error over requested tolerance for every run swept over rtol, over each case's
+    own time (workprecision/) and over 2 s (tolerance-2s/): the largest position error over the
+    trajectory divided by rtol (the cases' sizes are about 1 m)."""
+    runs = {}
+    for folder, span in (("workprecision", "case's own"), ("tolerance-2s", "2 s")):
+        for r in read_csv(os.path.join(out, folder, "workprecision.csv")):
+            if num(r["rtol"]) > 0:
+                resolved = r.get("resolved_traj", "1") == "1" and num(r["max_err_traj"]) > 0
+                runs[(r["case"], r["label"], r["rtol"], span)] = (
+                    g3(num(r["max_err_traj"]) / num(r["rtol"])) if resolved else "below ref.")
+    table = []
+    for case, label, rtol in dict.fromkeys((c, l, t) for c, l, t, _ in runs):
+        table.append([case, label, rtol, runs.get((case, label, rtol, "case's own"), "-"),
+                      runs.get((case, label, rtol, "2 s"), "-")])
+    with open(os.path.join(out, "findings_tolerance.md"), "w") as f:
+        f.write(markdown_table(["case", "method", "rtol", "max error / rtol, case's own time",
+                                "max error / rtol, 2 s"], table))
+
+
 def resolution_findings(out):
     rows = read_csv(os.path.join(out, "resolution", "resolution.csv"))
     table = []
@@ -110,6 +130,7 @@ def timings(out):
 def main(source, out):
     stability_findings(out)
     work_precision_findings(out)
+    tolerance_findings(out)
     resolution_findings(out)
     timings(out)
     lines = []
