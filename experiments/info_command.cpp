@@ -34,6 +34,9 @@ void print_scene_info(const Scene& scene, std::ostream& out) {
   out << "\nconstraints:";
   for (const auto& c : sys.constraints()) out << " " << c->name();
   if (sys.constraints().empty()) out << " none";
+  if (sys.has_pin_motion())
+    out << "\nscripted:   " << sys.pin_motion().particles().size()
+        << " pinned particles follow [[pin_motion]] paths";
   // Memory of a run: state, scratch and force buffers (~12 vectors of 3n doubles), the Jacobian
   // pattern (K, and D with a velocity-dependent force: 9 scalars per block, 12 bytes each with
   // indices) and spring arrays.
@@ -84,7 +87,16 @@ void print_scene_info(const Scene& scene, std::ostream& out) {
     else
       out << "h < " << y / w << " s (y = " << y << ")\n";
   }
-  out << "scene dt:   " << scene.time.dt << " s (" << scene.integrator.method << ")\n";
+  if (scene.integrator.adaptive) {
+    const ErrorControl& c = scene.integrator.error_control;
+    out << "error control: " << scene.integrator.method << " with rtol = " << c.rtol
+        << ", atol = " << c.atol << "; first step " << scene.time.dt << " s";
+    if (c.max_dt > 0.0) out << ", at most " << c.max_dt << " s";
+    out << " (the step count follows the tolerance; the output estimate above counts steps of "
+           "the first step's size)\n";
+  } else {
+    out << "scene dt:   " << scene.time.dt << " s (" << scene.integrator.method << ")\n";
+  }
 }
 
 }  // namespace hooke

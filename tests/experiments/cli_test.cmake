@@ -471,6 +471,10 @@ elseif(CASE STREQUAL "adaptive")
   if(NOT whole STREQUAL parts)
     message(FATAL_ERROR "a stopped and resumed adaptive run ends elsewhere than a whole one${report}")
   endif()
+  hooke_exec(info "${SCENES_DIR}/hanging_cloth_16.toml" --set integrator.method=dopri5
+             --set integrator.adaptive=true --set integrator.rtol=1e-6)
+  expect_rc(0)
+  expect_contains("${out}" "error control: dopri5 with rtol = 1e-06" "hooke info")
   hooke_exec(run "${SCENES_DIR}/hanging_cloth_16.toml" --set integrator.adaptive=true
              --out "${OUT}/rk4" --no-progress)
   expect_rc(2)
