@@ -21,7 +21,6 @@
 //         (label,method,h,periods,final_error,max_abs_error,drift_per_period,wall_s,status);
 //         experiments/plot/energy_drift.py draws DIR/energy.png and DIR/energy.md.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
@@ -33,7 +32,6 @@
 #include "experiments/study_methods.hpp"
 #include "experiments/study_output.hpp"
 #include "experiments/trajectory.hpp"
-#include "hooke/registry.hpp"
 
 namespace hooke {
 
