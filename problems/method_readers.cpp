@@ -74,7 +74,7 @@ void read_petsc_options(TableReader& r, const std::string& backend, std::string&
 }
 
 MethodOptions read_implicit(TableReader& r, const std::string& method) {
-  ImplicitOptions o;
+  ImplicitOptions o = implicit_defaults(method);
   if (method == "implicit") o.beta = r.number("beta", o.beta);
   o.linear_solver = r.string("linear_solver", default_linear_solver());
   if (const std::string why = linear_solver_unknown(o.linear_solver); !why.empty())
@@ -112,6 +112,15 @@ MethodOptions read_implicit(TableReader& r, const std::string& method) {
     o.max_linear_iterations = r.int_field("max_linear_iterations", o.max_linear_iterations);
   }
   o.clamp_compressed = r.boolean("clamp_compressed", o.clamp_compressed);
+  if (method == "implicit-midpoint") {
+    if (o.newton_iterations == 1)
+      refuse_ignored(r, "discrete_gradient", {"newton_iterations", "newton_iterations = 1"},
+                     "the discrete gradient replaces the force from the second Newton iteration "
+                     "on; one iteration is the linearised step",
+                     "set newton_iterations > 1");
+    else
+      o.discrete_gradient = r.boolean("discrete_gradient", o.discrete_gradient);
+  }
   r.check(o.validate(), {{"newton_tolerance", "tolerance"}});
   return o;
 }

@@ -6,6 +6,8 @@
 #include <mutex>
 #include <sstream>
 
+#include "hooke/integrators/implicit_stepper.hpp"
+
 namespace hooke {
 
 namespace {
@@ -587,16 +589,33 @@ void add_implicit_keys(std::vector<SceneKey>& t) {
           .meaning("PETSc options of the KSP and PC, over hooke's defaults (CG + GAMG) and under "
                    "the environment's PETSC_OPTIONS"));
   add(K("integrator.newton_iterations", T::Integer)
-          .in(kImplicit)
+          .in({"implicit", "bdf2"})
           .def("1")
           .between(1, 100000)
           .meaning("most Newton iterations per step; 1 is the linearised step"));
+  add(K("integrator.newton_iterations", T::Integer)
+          .in({"implicit-midpoint"})
+          .def(std::to_string(ImplicitOptions::kMidpointNewtonIterations))
+          .between(1, 100000)
+          .meaning("most Newton iterations per step; 1 is the linearised step (which gains "
+                   "energy on stiff cloth); Newton stops early when it cannot converge"));
   add(K("integrator.tolerance", T::Number)
-          .in(kImplicit)
+          .in({"implicit", "bdf2"})
           .def("1e-10")
           .positive()
           .needs({"integrator.newton_iterations=2"})
           .meaning("Newton stops when max |dv| <= tolerance * max(|v1|, |v0|) (infinity norms)"));
+  add(K("integrator.tolerance", T::Number)
+          .in({"implicit-midpoint"})
+          .def("1e-08")
+          .positive()
+          .meaning("Newton stops when max |dv| <= tolerance * max(|v1|, |v0|) (infinity norms)"));
+  add(K("integrator.discrete_gradient", T::Boolean)
+          .in({"implicit-midpoint"})
+          .def("true")
+          .meaning("Newton converges to the energy-momentum step (the springs' discrete gradient, "
+                   "Simo and Tarnow 1992), which conserves energy exactly; false: the classical "
+                   "rule, f at the midpoint"));
   add(K("integrator.linear_tolerance", T::Number)
           .in(kImplicit)
           .def("1e-08")

@@ -168,11 +168,19 @@ std::unique_ptr<ExplicitStepper> make_explicit_stepper(const std::string& name) 
 
 std::string default_linear_solver() { return HOOKE_WITH_CHOLMOD ? "cholmod" : "pcg-block"; }
 
+ImplicitOptions implicit_defaults(const std::string& name) {
+  for (const auto& e : implicit_table())
+    if (name == e.info.name) return ImplicitOptions::defaults(e.scheme);
+  method_info(name);  // throws for unknown names
+  throw std::invalid_argument("method '" + name + "' is not an implicit method");
+}
+
 std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringSystem& system,
                                       const MethodOptions& options) {
   for (const auto& e : implicit_table())
     if (name == e.info.name) {
-      ImplicitOptions o = options.as<ImplicitOptions>(e.info.name);
+      ImplicitOptions o = options.empty() ? ImplicitOptions::defaults(e.scheme)
+                                          : options.as<ImplicitOptions>(e.info.name);
       if (const OptionError err = o.validate(); !err.ok()) throw std::invalid_argument(err.message);
       if (o.linear_solver.empty()) o.linear_solver = default_linear_solver();
       auto solver = make_linear_solver(o.linear_solver, o.preconditioner, {o.petsc_options});

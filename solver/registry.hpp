@@ -96,6 +96,10 @@ std::string method_names();
 std::unique_ptr<ExplicitStepper> make_explicit_stepper(const std::string& name);
 /// Name of the default linear backend of implicit methods.
 std::string default_linear_solver();
+
+/// The default options of an implicit method (ImplicitOptions::defaults of its scheme); throws
+/// UnknownMethod for an unknown name and std::invalid_argument for a method that is not implicit.
+ImplicitOptions implicit_defaults(const std::string& name);
 /// "" if the method can run this system, else why not (e.g. ceres-implicit and spring dampers).
 std::string method_unsupported(const std::string& name, const MassSpringSystem& system);
 /// `options` if `name` takes options of their type, else empty (the method's defaults): how one

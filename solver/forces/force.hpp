@@ -31,6 +31,26 @@ class Force {
   virtual const char* name() const = 0;
   /// Adds this force into f (3n vector, newtons).
   virtual void add_forces(ConstRef x, ConstRef v, VecRef f) const = 0;
+  /// Adds into f (3n vector, N) this force's discrete gradient between positions x0 and x1
+  /// (Gonzalez 1996, "Time integration and discrete Hamiltonian systems", J. Nonlinear Sci. 6): a
+  /// force f-bar with f-bar . (x1 - x0) = -(E(x1) - E(x0)) exactly, that tends to f(x0) as x1 ->
+  /// x0. Implicit midpoint with it in place of f((x0 + x1) / 2) conserves energy exactly (Simo and
+  /// Tarnow 1992, the energy-momentum method). xm = (x0 + x1) / 2 and vm are the step's midpoint
+  /// position and velocity. The default is the force at (xm, vm): a discrete gradient for energies
+  /// at most quadratic (gravity), and dissipative for dampers and drag when x1 - x0 = h vm.
+  virtual void add_discrete_gradient(ConstRef /*x0*/, ConstRef /*x1*/, ConstRef xm, ConstRef vm,
+                                     VecRef f) const {
+    add_forces(xm, vm, f);
+  }
+  /// Adds into K and D a symmetric approximation of the discrete gradient's Jacobian with respect
+  /// to x1 (times 2, so that it equals df/dx at x0 = x1) and df/dv at (xm, vm); the same pattern
+  /// and options as add_jacobians. The default is add_jacobians at (xm, vm), exact for the forces
+  /// whose default add_discrete_gradient is their force at the midpoint.
+  virtual void add_discrete_gradient_jacobians(ConstRef /*x0*/, ConstRef /*x1*/, ConstRef xm,
+                                               ConstRef vm, const JacobianOptions& options,
+                                               SparseMatrix& K, SparseMatrix& D) const {
+    add_jacobians(xm, vm, options, K, D);
+  }
   /// Potential energy (J) whose negative gradient is the conservative part of the force;
   /// 0 for purely dissipative or external non-conservative forces.
   virtual double potential_energy(ConstRef /*x*/) const { return 0.0; }

@@ -22,6 +22,31 @@ void HookeSpring::add_forces(ConstRef x, ConstRef /*v*/, VecRef f) const {
   });
 }
 
+void HookeSpring::add_discrete_gradient(ConstRef x0, ConstRef x1, ConstRef /*xm*/, ConstRef /*vm*/,
+                                        VecRef f) const {
+  const SpringSet& s = m_springs;
+  s.for_each([&](size_t n) {
+    const int a = s.i[n], b = s.j[n];
+    const Vec3 fa = hooke_spring_kernel::discrete_gradient(
+        spring_vector(x0, a, b), spring_vector(x1, a, b), s.coeff[n], s.rest_length[n]);
+    f.segment<3>(3 * a) += fa;
+    f.segment<3>(3 * b) -= fa;
+  });
+}
+
+void HookeSpring::add_discrete_gradient_jacobians(ConstRef x0, ConstRef x1, ConstRef /*xm*/,
+                                                  ConstRef /*vm*/, const JacobianOptions& options,
+                                                  SparseMatrix& K, SparseMatrix& /*D*/) const {
+  const SpringSet& s = m_springs;
+  s.for_each([&](size_t n) {
+    const int a = s.i[n], b = s.j[n];
+    const Mat3 B = hooke_spring_kernel::discrete_gradient_dfdx(
+        spring_vector(x0, a, b), spring_vector(x1, a, b), s.coeff[n], s.rest_length[n],
+        options.clamp_compressed);
+    s.add_spring_block(K, n, B);
+  });
+}
+
 double HookeSpring::potential_energy(ConstRef x) const {
   const SpringSet& s = m_springs;
   double E = 0.0;

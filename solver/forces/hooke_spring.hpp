@@ -1,4 +1,6 @@
 #pragma once
+#include <algorithm>
+
 #include "hooke/forces/force.hpp"
 #include "hooke/forces/spring_set.hpp"
 
@@ -17,6 +19,34 @@ inline Vec3 force(const Vec3& d, double k, double L) {
   const double l = d.norm();
   if (l == 0.0) return Vec3::Zero();
   return (-k * (l - L) / l) * d;
+}
+/// The discrete gradient (Gonzalez 1996) of E = k/2 (l - L)^2 between spring vectors d0 and d1:
+/// f_a = -[E(l1) - E(l0)] / [(l1^2 - l0^2) / 2] (d0 + d1) / 2 = -k (1 - 2 L / (l0 + l1)) (d0 + d1)
+/// / 2, so that f_a . (d1 - d0) = -(E(l1) - E(l0)) exactly; force(d) when d0 = d1.
+inline Vec3 discrete_gradient(const Vec3& d0, const Vec3& d1, double k, double L) {
+  const double s = d0.norm() + d1.norm();
+  if (s == 0.0) return Vec3::Zero();
+  return (-0.5 * k * (1.0 - 2.0 * L / s)) * (d0 + d1);
+}
+/// A symmetric stand-in for 2 d(discrete_gradient)/d(d1), the Newton matrix of the discrete-
+/// gradient step. With q = d0 + d1, s = l0 + l1 and w = q / |q|, it is -k [t (I - w w^T) + a w w^T]
+/// with transverse factor t = 1 - 2 L / s and axial factor a = t + 2 L |q|^2 / s^3; the exact
+/// derivative, -k [t I + (2 L / s^2) q u1^T] / 2, is not symmetric. Both equal dfdx(d) / 2 when
+/// d0 = d1 = d. clamp_compressed clamps t and a at 0 (as dfdx clamps its transverse factor), so
+/// the block is then negative semi-definite for every pair.
+inline Mat3 discrete_gradient_dfdx(const Vec3& d0, const Vec3& d1, double k, double L,
+                                   bool clamp_compressed) {
+  const double s = d0.norm() + d1.norm();
+  if (s == 0.0) return -k * Mat3::Identity();
+  const Vec3 q = d0 + d1;
+  const double q2 = q.squaredNorm();
+  double t = 1.0 - 2.0 * L / s, a = t + 2.0 * L * q2 / (s * s * s);
+  if (clamp_compressed) {
+    t = std::max(t, 0.0);
+    a = std::max(a, 0.0);
+  }
+  if (q2 == 0.0) return -k * t * Mat3::Identity();
+  return -k * (t * Mat3::Identity() + ((a - t) / q2) * (q * q.transpose()));
 }
 inline Mat3 dfdx(const Vec3& d, double k, double L, bool clamp_compressed) {
   const double l = d.norm();
@@ -45,6 +75,11 @@ class HookeSpring final : public Force {
 
   const char* name() const override { return "hooke-spring"; }
   void add_forces(ConstRef x, ConstRef v, VecRef f) const override;
+  void add_discrete_gradient(ConstRef x0, ConstRef x1, ConstRef xm, ConstRef vm,
+                             VecRef f) const override;
+  void add_discrete_gradient_jacobians(ConstRef x0, ConstRef x1, ConstRef xm, ConstRef vm,
+                                       const JacobianOptions& options, SparseMatrix& K,
+                                       SparseMatrix& D) const override;
   double potential_energy(ConstRef x) const override;
   void declare_blocks(BlockPattern& p) const override { m_springs.declare(p); }
   void bind(const BlockPattern& p) override { m_springs.bind(p); }

@@ -2,6 +2,7 @@
 
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <sstream>
 
 #include "hooke/linear/linear_registry.hpp"
@@ -40,6 +41,15 @@ OptionError ImplicitOptions::validate() const {
   return {field, os.str()};
 }
 
+ImplicitOptions ImplicitOptions::defaults(ImplicitScheme scheme) {
+  ImplicitOptions o;
+  if (scheme == ImplicitScheme::Midpoint) {
+    o.newton_iterations = kMidpointNewtonIterations;
+    o.newton_tolerance = kMidpointNewtonTolerance;
+  }
+  return o;
+}
+
 ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme scheme,
                                  std::unique_ptr<LinearSolver> solver, ImplicitOptions options)
     : m_system(system),
@@ -70,6 +80,7 @@ ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme 
     m_prev_v.setZero(N);
   }
   if (system.has_velocity_jacobian()) m_dv.setZero(N);
+  if (m_scheme == ImplicitScheme::Midpoint && m_options.discrete_gradient) m_x1.setZero(N);
   const LinearSummary a = m_solver->analyze(m_A.matrix());
   if (a.status != Status::Converged) throw SetupError(a.message);
   accumulate(m_totals, a);
@@ -169,10 +180,16 @@ ImplicitStepper::OneLeg ImplicitStepper::set_up(const State& s0, double h) {
   return c;
 }
 
-void ImplicitStepper::assemble(const OneLeg& c) {
+void ImplicitStepper::assemble(const OneLeg& c, ConstRef x0, bool discrete) {
   const auto ta = Clock::now();
-  m_system.compute_forces(m_xlin, m_vlin, m_rhs);
-  m_A.assemble_jacobians(m_xlin, m_vlin, m_jac_options);
+  if (discrete) {
+    m_x1 = m_xe + c.ex * m_v1;
+    m_system.compute_discrete_gradient(x0, m_x1, m_xlin, m_vlin, m_rhs);
+    m_A.assemble_discrete_gradient_jacobians(x0, m_x1, m_xlin, m_vlin, m_jac_options);
+  } else {
+    m_system.compute_forces(m_xlin, m_vlin, m_rhs);
+    m_A.assemble_jacobians(m_xlin, m_vlin, m_jac_options);
+  }
   const Jacobians& J = m_A.jacobians();
   // rhs = hf (f_lin + K dx + D dv) - M (v1 - vb), with dx, dv the gap between the current
   // iterate's arguments and the linearisation point (nonzero only in the first iteration).
@@ -226,13 +243,14 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
   m_xlin = s0.x;
   m_vlin = m_v0;
   double delta_norm = 0.0;
+  int failed_predictions = 0;  // consecutive iterations whose rate cannot reach the tolerance
   bool converged = m_options.newton_iterations == 1;
   for (int k = 0; k < m_options.newton_iterations; ++k) {
     if (k > 0) {
       m_xlin = m_xa + c.bx * m_v1;
       m_vlin = m_va + c.cv * m_v1;
     }
-    assemble(c);
+    assemble(c, s0.x, k > 0 && m_x1.size() > 0);
     m_solver->set_coordinates(m_xlin);
     const LinearSummary fs = m_solver->factor(m_A.matrix());
     accumulate(m_totals, fs);
@@ -263,12 +281,41 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
     m_A.zero_pinned(m_delta);
     m_v1 += m_delta;
     if (m_options.newton_iterations > 1) {
+      const double previous_norm = delta_norm;
       delta_norm = m_delta.lpNorm<Eigen::Infinity>();
       const double scale =
           std::max({m_v1.lpNorm<Eigen::Infinity>(), m_v0.lpNorm<Eigen::Infinity>(), 1e-12});
-      if (delta_norm <= m_options.newton_tolerance * scale) {
+      const double target = m_options.newton_tolerance * scale;
+      if (delta_norm <= target) {
         converged = true;
         break;
+      }
+      // A rate test in the manner of SUNDIALS' nonlinear solvers (cvode's crate): from the third
+      // iteration on (the first is the linearisation at the step's start), stop as soon as the
+      // measured contraction rate shows that the remaining iterations cannot reach the
+      // tolerance, so that a stalled or diverging iteration (a step too large for the problem's
+      // nonlinearity) fails fast and the caller can shrink h instead of waiting out the cap.
+      // Newton's pre-asymptotic phase can have one or two poor rates before it turns quadratic
+      // (measured on a stiff chain with the exact Jacobian: 0.89, then 2e-6), so only three
+      // failed predictions in a row stop it. Corrections within 1e4 ulps of the scale are
+      // round-off, whose ratios say nothing.
+      const int remaining = m_options.newton_iterations - 1 - k;
+      if (k >= 2 && remaining > 0 &&
+          delta_norm > 1e4 * std::numeric_limits<double>::epsilon() * scale) {
+        const double rate = delta_norm / previous_norm;
+        const bool hopeless =
+            rate >= 1.0 || delta_norm * std::pow(rate, remaining) / (1.0 - rate) > target;
+        failed_predictions = hopeless ? failed_predictions + 1 : 0;
+        if (failed_predictions == 3) {
+          std::ostringstream os;
+          os << name() << ": Newton cannot converge in " << m_options.newton_iterations
+             << " iterations: after " << k + 1 << ", ||delta v||_inf = " << delta_norm
+             << " contracts at rate " << rate << " per iteration (tolerance "
+             << m_options.newton_tolerance << " relative)";
+          out.status = Status::NotConverged;
+          out.message = os.str();
+          break;
+        }
       }
     }
   }

@@ -23,6 +23,11 @@ void StepMatrix::assemble_jacobians(ConstRef x, ConstRef v, const JacobianOption
   m_system.assemble_jacobians(x, v, m_J, options);
 }
 
+void StepMatrix::assemble_discrete_gradient_jacobians(ConstRef x0, ConstRef x1, ConstRef xm,
+                                                      ConstRef vm, const JacobianOptions& options) {
+  m_system.assemble_discrete_gradient_jacobians(x0, x1, xm, vm, m_J, options);
+}
+
 void StepMatrix::form(double a, double b) {
   double* A = m_J.K.valuePtr();
   const double* D = m_J.velocity_values();

@@ -20,6 +20,9 @@ class StepMatrix {
   /// K = df/dx and D = df/dv at (x, v) (MassSpringSystem::assemble_jacobians); jacobians() is
   /// valid from here until form().
   void assemble_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options);
+  /// The discrete-gradient step's K and D (MassSpringSystem::assemble_discrete_gradient_jacobians).
+  void assemble_discrete_gradient_jacobians(ConstRef x0, ConstRef x1, ConstRef xm, ConstRef vm,
+                                            const JacobianOptions& options);
   const Jacobians& jacobians() const { return m_J; }
   /// A = M - a D - b K over K's values, then the pinned rows and columns. K is gone until the
   /// next assemble_jacobians().

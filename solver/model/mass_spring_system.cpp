@@ -64,6 +64,17 @@ void MassSpringSystem::compute_forces(ConstRef x, ConstRef v, VecRef f) const {
   for (const auto& force : m_forces) force->add_forces(x, v, f);
 }
 
+void MassSpringSystem::compute_discrete_gradient(ConstRef x0, ConstRef x1, ConstRef xm, ConstRef vm,
+                                                 VecRef f) const {
+  HOOKE_ASSERT(x0.size() == dofs() && x1.size() == dofs() && xm.size() == dofs() &&
+                   vm.size() == dofs() && f.size() == dofs(),
+               "compute_discrete_gradient: sizes " << x0.size() << ", " << x1.size() << ", "
+                                                   << xm.size() << ", " << vm.size() << ", "
+                                                   << f.size() << " for " << dofs() << " dofs");
+  parallel_for(num_particles(), 1 << 15, [&](long long p) { f.segment<3>(3 * p).setZero(); });
+  for (const auto& force : m_forces) force->add_discrete_gradient(x0, x1, xm, vm, f);
+}
+
 double MassSpringSystem::potential_energy(ConstRef x) const {
   double E = 0.0;
   for (const auto& force : m_forces) E += force->potential_energy(x);
@@ -94,15 +105,27 @@ Jacobians MassSpringSystem::make_jacobians() const {
   return Jacobians{m_pattern.make_matrix(), std::move(D)};
 }
 
-void MassSpringSystem::assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
-                                          const JacobianOptions& options) const {
-  HOOKE_ASSERT(m_finalized, "assemble_jacobians before finalize");
+void MassSpringSystem::clear_jacobians(Jacobians& J, const char* caller) const {
+  HOOKE_ASSERT(m_finalized, caller << " before finalize");
   HOOKE_ASSERT(J.K.nonZeros() == 9 * m_pattern.num_blocks() &&
                    J.D.nonZeros() == (m_velocity_jacobian ? J.K.nonZeros() : 0),
-               "Jacobians were not made from this system's pattern");
+               caller << ": Jacobians were not made from this system's pattern");
   std::fill(J.K.valuePtr(), J.K.valuePtr() + J.K.nonZeros(), 0.0);
   std::fill(J.D.valuePtr(), J.D.valuePtr() + J.D.nonZeros(), 0.0);
+}
+
+void MassSpringSystem::assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
+                                          const JacobianOptions& options) const {
+  clear_jacobians(J, "assemble_jacobians");
   for (const auto& force : m_forces) force->add_jacobians(x, v, options, J.K, J.D);
+}
+
+void MassSpringSystem::assemble_discrete_gradient_jacobians(ConstRef x0, ConstRef x1, ConstRef xm,
+                                                            ConstRef vm, Jacobians& J,
+                                                            const JacobianOptions& options) const {
+  clear_jacobians(J, "assemble_discrete_gradient_jacobians");
+  for (const auto& force : m_forces)
+    force->add_discrete_gradient_jacobians(x0, x1, xm, vm, options, J.K, J.D);
 }
 
 void MassSpringSystem::apply_constraints(ConstRef x0, double h, VecRef x1, VecRef v1) const {

@@ -78,6 +78,10 @@ class MassSpringSystem {
 
   /// f = sum of all forces at (x, v); f is overwritten (3n).
   void compute_forces(ConstRef x, ConstRef v, VecRef f) const;
+  /// f = sum of the forces' discrete gradients between x0 and x1 (Force::add_discrete_gradient),
+  /// with xm = (x0 + x1) / 2 and vm the midpoint velocity; f is overwritten (3n each).
+  void compute_discrete_gradient(ConstRef x0, ConstRef x1, ConstRef xm, ConstRef vm,
+                                 VecRef f) const;
   /// Sum of the forces' potential energies (J).
   double potential_energy(ConstRef x) const;
   /// 1/2 v^T M v (J).
@@ -96,10 +100,17 @@ class MassSpringSystem {
   /// Overwrites the values of J.K and J.D with df/dx and df/dv at (x, v). No allocation.
   void assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
                           const JacobianOptions& options = {}) const;
+  /// K and D for the discrete-gradient step (Force::add_discrete_gradient_jacobians), over J's
+  /// values as assemble_jacobians does.
+  void assemble_discrete_gradient_jacobians(ConstRef x0, ConstRef x1, ConstRef xm, ConstRef vm,
+                                            Jacobians& J, const JacobianOptions& options) const;
   /// Applies every constraint, in order, to the end-of-step state (x1, v1).
   void apply_constraints(ConstRef x0, double h, VecRef x1, VecRef v1) const;
 
  private:
+  /// Checks that J has this system's pattern and zeroes its values (caller names the message).
+  void clear_jacobians(Jacobians& J, const char* caller) const;
+
   Vec m_masses, m_mass_diag, m_free_inv_mass, m_moving;
   std::vector<char> m_pinned;
   PinMotion m_pin_motion;

@@ -324,6 +324,62 @@ TEST_P(ForceConformance, ConservativeForceIsMinusEnergyGradient) {
   EXPECT_EQ(compared, fc.conservative ? kSamples : 0);
 }
 
+TEST_P(ForceConformance, DiscreteGradientMatchesEnergyDifference) {
+  // Force::add_discrete_gradient: f-bar . (x1 - x0) = -(E(x1) - E(x0)) exactly for conservative
+  // forces (up to round-off, with x1 a large random displacement of x0: up to half the box), and
+  // f-bar = f(x0) when x1 = x0. Non-conservative forces keep the default, the force at (xm, vm).
+  const ForceCase& fc = GetParam();
+  std::mt19937 rng(211);
+  int compared = 0;
+  for (Config kind : kConfigs)
+    for (int k = 0; k < kSamplesPerConfig; ++k) {
+      SCOPED_TRACE(std::string(config_name(kind)) + " sample " + std::to_string(k));
+      const Sample s = make_sample(fc, kind, rng);
+      const Vec& x0 = s.c.x;
+      const Vec x1 = x0 + random_vec(x0.size(), -0.5, 0.5, rng);
+      const Vec xm = 0.5 * (x0 + x1), vm = random_vec(x0.size(), -1.0, 1.0, rng);
+      Vec fbar = Vec::Zero(x0.size());
+      s.force->add_discrete_gradient(x0, x1, xm, vm, fbar);
+      if (!fc.conservative) {
+        EXPECT_EQ(fbar, force_at(*s.force, xm, vm));
+        continue;
+      }
+      const double E0 = s.force->potential_energy(x0), E1 = s.force->potential_energy(x1);
+      const double work = fbar.dot(x1 - x0);
+      EXPECT_NEAR(work, -(E1 - E0), 1e-13 * (std::abs(E0) + std::abs(E1)));
+      Vec fsame = Vec::Zero(x0.size());
+      s.force->add_discrete_gradient(x0, x0, x0, s.c.v, fsame);
+      EXPECT_TRUE(near_entrywise(fsame, force_at(*s.force, x0, s.c.v), 1e-13, 1e-13));
+      ++compared;
+    }
+  EXPECT_EQ(compared, fc.conservative ? kSamples : 0);
+}
+
+TEST_P(ForceConformance, DiscreteGradientJacobiansAtEqualEndsAreTheJacobians) {
+  // add_discrete_gradient_jacobians(x0, x1 = x0) must be add_jacobians(x0): the discrete-gradient
+  // Newton matrix is the midpoint rule's where the two agree, clamped or not.
+  const ForceCase& fc = GetParam();
+  std::mt19937 rng(223);
+  int compared = 0;
+  for (const bool clamp : {false, true})
+    for (Config kind : kConfigs) {
+      SCOPED_TRACE(std::string(config_name(kind)) + (clamp ? " clamped" : " exact"));
+      const Sample s = make_sample(fc, kind, rng);
+      hooke::JacobianOptions o;
+      o.clamp_compressed = clamp;
+      hooke::SparseMatrix K = s.pattern.make_matrix(), D = K, Kd = K, Dd = K;
+      for (hooke::SparseMatrix* A : {&K, &D, &Kd, &Dd})
+        std::fill(A->valuePtr(), A->valuePtr() + A->nonZeros(), 0.0);
+      s.force->add_jacobians(s.c.x, s.c.v, o, K, D);
+      s.force->add_discrete_gradient_jacobians(s.c.x, s.c.x, s.c.x, s.c.v, o, Kd, Dd);
+      const double scale = std::max(max_abs(Dense(K)), 1.0);
+      EXPECT_LE(max_abs(Dense(Kd) - Dense(K)), 1e-13 * scale);
+      EXPECT_LE(max_abs(Dense(Dd) - Dense(D)), 1e-13 * std::max(max_abs(Dense(D)), 1.0));
+      ++compared;
+    }
+  EXPECT_EQ(compared, 2 * int(std::size(kConfigs)));
+}
+
 TEST_P(ForceConformance, AssembledJacobiansMatchCentralDifferences) {
   const ForceCase& fc = GetParam();
   // The default options are the exact Jacobian, damper position terms included.

@@ -197,6 +197,39 @@ TEST(HookeSpring, KernelJacobianMatchesCentralDifferences) {
   EXPECT_EQ(near_zero, samples / 5);
 }
 
+TEST(HookeSpring, DiscreteGradientNewtonMatrixIsSymmetricApproximationOfItsDerivative) {
+  // discrete_gradient_dfdx(d0, d1) is a symmetric stand-in for 2 d(discrete_gradient)/d(d1):
+  // where d1 = d0 it equals the central-difference derivative (and dfdx); away from it, it differs
+  // from the exact, non-symmetric derivative by O(|d1 - d0| / l). With the clamp it is negative
+  // semi-definite for every pair, so the Newton matrix M - (h^2 / 4) K stays SPD.
+  using namespace hooke::hooke_spring_kernel;
+  std::mt19937 rng(20261124);
+  std::uniform_real_distribution<double> stiff(1.0, 1000.0), rest(0.5, 2.0), ratio(0.2, 2.0),
+      gap(0.0, 0.5);
+  int compared = 0, definite = 0, compressed = 0;
+  const int samples = 200;
+  for (int s = 0; s < samples; ++s) {
+    const double k = stiff(rng), L = rest(rng), l = ratio(rng) * L;
+    const Vec3 d0 = l * random_unit(rng);
+    auto fbar = [&](const Vec& dd) -> Vec { return Vec(discrete_gradient(d0, dd, k, L)); };
+    const Dense fd = central_jacobian(fbar, Vec(d0), Vec::Constant(3, kStepRel * l));
+    const Dense B = discrete_gradient_dfdx(d0, d0, k, L, false);
+    ASSERT_TRUE(near_entrywise(B, 2.0 * fd, kRelTol, kFloorRel)) << "sample " << s;
+    EXPECT_TRUE(near_entrywise(B, dfdx(d0, k, L, false), 1e-13, 1e-13)) << "sample " << s;
+    ++compared;
+    compressed += l < L;
+    // A second end up to half a spring length away: the clamped matrix is NSD and symmetric.
+    const Vec3 d1 = d0 + gap(rng) * l * random_unit(rng);
+    const Mat3 Bc = discrete_gradient_dfdx(d0, d1, k, L, true);
+    EXPECT_LE((Bc - Bc.transpose()).cwiseAbs().maxCoeff(), 1e-13 * k);
+    EXPECT_LE(Eigen::SelfAdjointEigenSolver<Mat3>(Bc).eigenvalues().maxCoeff(), 1e-12 * k);
+    ++definite;
+  }
+  EXPECT_EQ(compared, samples);
+  EXPECT_EQ(definite, samples);
+  EXPECT_GE(compressed, samples / 4);
+}
+
 TEST(HookeSpring, AssembledJacobianMatchesCentralDifferences) {
   std::mt19937 rng(7);
   int compared = 0, compressed_springs = 0;

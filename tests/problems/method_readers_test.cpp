@@ -145,6 +145,25 @@ TEST(MethodReaders, NewtonToleranceIsRefusedForTheLinearisedStep) {
   EXPECT_EQ(s.integrator.options.get<ImplicitOptions>()->newton_tolerance, 1e-9);
 }
 
+TEST(MethodReaders, ImplicitMidpointIteratesTheDiscreteGradientStepByDefault) {
+  // The scene defaults are the library's (ImplicitOptions::defaults), and its one-step form
+  // refuses discrete_gradient, which only acts from the second iteration on.
+  const auto* d =
+      load("method = \"implicit-midpoint\"\n").integrator.options.get<ImplicitOptions>();
+  ASSERT_NE(d, nullptr);
+  EXPECT_EQ(d->newton_iterations, ImplicitOptions::kMidpointNewtonIterations);
+  EXPECT_EQ(d->newton_tolerance, ImplicitOptions::kMidpointNewtonTolerance);
+  EXPECT_TRUE(d->discrete_gradient);
+  const auto* c = load("method = \"implicit-midpoint\"\ndiscrete_gradient = false\n")
+                      .integrator.options.get<ImplicitOptions>();
+  EXPECT_FALSE(c->discrete_gradient);
+  expect_ignored(
+      "method = \"implicit-midpoint\"\nnewton_iterations = 1\ndiscrete_gradient = true\n",
+      "discrete_gradient", "newton_iterations = 1", "set newton_iterations > 1");
+  EXPECT_EQ(load_error("method = \"implicit\"\ndiscrete_gradient = true\n").key(),
+            "integrator.discrete_gradient");
+}
+
 TEST(MethodReaders, PreconditionerIsRefusedUnlessTheLinearSolverIsPcg) {
   expect_ignored(
       "method = \"implicit\"\nlinear_solver = \"gauss-seidel\"\npreconditioner = \"block\"\n",
