@@ -129,13 +129,15 @@ std::optional<Reference> case_reference(const WorkPrecisionCase& c, double refer
 std::vector<std::pair<double, double>> method_runs(const WorkPrecisionCase& c, const StudyMethod& m,
                                                    const std::vector<double>& rtols, int S) {
   std::vector<std::pair<double, double>> runs;
-  if (m.sweep == Sweep::Tolerance)
-    for (double r : rtols) runs.emplace_back(c.duration / S, r);
-  else
+  if (m.sweep == Sweep::Tolerance) {
+    for (double r : rtols)
+      if (r >= m.tightest_rtol) runs.emplace_back(c.duration / S, r);
+  } else {
     for (double h : c.h) {
       const long long per_sample = std::max(1LL, std::llround(c.duration / (S * h)));
       runs.emplace_back(c.duration / double(S * per_sample), 0.0);
     }
+  }
   return runs;
 }
 
@@ -194,7 +196,7 @@ void sweep_method(const WorkPrecisionCase& c, const StudyMethod& m,
               resolved_final, resolved_traj);
     csv.flush();
     std::fprintf(
-        stderr, "workprecision: %-14s %-20s h = %-9.3g rtol = %-7.2g wall %8.3f s  err %-9.3g %s\n",
+        stderr, "workprecision: %-14s %-26s h = %-9.3g rtol = %-7.2g wall %8.3f s  err %-9.3g %s\n",
         c.name.c_str(), m.label.c_str(), h, rtol, tr.wall, e.rms_final, tr.status.c_str());
     // A method that takes 60 s for one run would take longer still at smaller h: stop it here.
     if (tr.wall > 60.0) {

@@ -85,7 +85,7 @@ const std::vector<std::string> kSundials = {"cvode", "ida"};
 const std::vector<std::string> kFixedStepFamilies = {
     "forward-euler", "symplectic-euler", "midpoint",          "trapezoid", "rk4", "dopri5",
     "bs32",          "implicit",         "implicit-midpoint", "bdf2"};
-const std::vector<std::string> kAdaptive = {"dopri5", "bs32"};
+const std::vector<std::string> kAdaptive = {"dopri5", "bs32", "implicit", "implicit-midpoint"};
 
 const std::string kSpread = "mass spread evenly over the particles; give this or mesh.mass";
 const std::string kEach = "mass of each particle; give this or mesh.total_mass";

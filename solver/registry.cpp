@@ -57,10 +57,10 @@ struct ImplicitEntry {
 const std::vector<ImplicitEntry>& implicit_table() {
   static const std::vector<ImplicitEntry> table = {
       {{"implicit", MethodKind::Implicit,
-        "beta-unified implicit step (beta = 1: backward Euler), Newton on a linear backend"},
+        "beta-unified implicit step (beta = 1: backward Euler), Newton on a linear backend", 1},
        ImplicitScheme::Beta},
       {{"implicit-midpoint", MethodKind::Implicit,
-        "implicit midpoint rule, Newton on a linear backend"},
+        "implicit midpoint rule, Newton on a linear backend", 2},
        ImplicitScheme::Midpoint},
       {{"bdf2", MethodKind::Implicit, "two-step BDF, Newton on a linear backend"},
        ImplicitScheme::Bdf2},

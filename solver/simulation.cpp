@@ -84,6 +84,7 @@ void Simulation::set_error_control(const ErrorControl& control, double first_ste
   HOOKE_ASSERT(first_step > 0.0 && std::isfinite(first_step), "first step " << first_step);
   m_control = control;
   m_controller = std::make_unique<StepController>(q, control);
+  m_stepper->set_error_estimation(true);
   m_h_next = first_step;
 }
 

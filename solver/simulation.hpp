@@ -76,7 +76,10 @@ class Simulation {
   Stepper& stepper() { return *m_stepper; }
   const Stepper& stepper() const { return *m_stepper; }
   /// Continues with another stepper (for the same system) from the current state.
-  void set_stepper(std::unique_ptr<Stepper> stepper) { m_stepper = std::move(stepper); }
+  void set_stepper(std::unique_ptr<Stepper> stepper) {
+    m_stepper = std::move(stepper);
+    if (m_controller) m_stepper->set_error_estimation(true);
+  }
 
  private:
   /// One attempt at a step of size h, without retries.

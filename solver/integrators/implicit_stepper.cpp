@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 
+#include "hooke/integrators/step_controller.hpp"
 #include "hooke/linear/linear_registry.hpp"
 
 namespace hooke {
@@ -88,6 +89,7 @@ ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme 
 
 std::string ImplicitStepper::report() const {
   std::ostringstream os;
+  if (m_doubling) os << "step doubling (3 steps per step); ";
   os << m_solver->name() << ": " << m_totals.iterations << " linear iterations; analyze "
      << m_totals.analyze_seconds << " s, factor " << m_totals.factor_seconds << " s, solve "
      << m_totals.solve_seconds << " s; force and Jacobian assembly " << m_assembly_seconds << " s";
@@ -208,13 +210,75 @@ void ImplicitStepper::assemble(const OneLeg& c, ConstRef x0, bool discrete) {
   m_assembly_seconds += seconds_since(ta);
 }
 
+int ImplicitStepper::error_estimate_order() const {
+  switch (m_scheme) {
+    case ImplicitScheme::Beta:
+      return 1;
+    case ImplicitScheme::Midpoint:
+      return 2;
+    case ImplicitScheme::Bdf2:
+      return 0;
+  }
+  return 0;
+}
+
+void ImplicitStepper::set_error_estimation(bool on) {
+  HOOKE_ASSERT(!on || error_estimate_order() > 0, name() << " makes no local error estimate");
+  m_doubling = on;
+  if (on && m_err_x.size() == 0) {
+    const Index n = m_system.num_particles();
+    for (State* s : {&m_full, &m_half, &m_start, &m_end}) *s = State(n);
+    m_err_x.setZero(3 * n);
+    m_err_v.setZero(3 * n);
+  }
+}
+
+double ImplicitStepper::error_norm(double rtol, double atol) {
+  HOOKE_ASSERT(m_doubling, name() << ": error_norm without set_error_estimation(true)");
+  // The weighted RMS over the 6n components [x; v], as the explicit pairs' (both halves have 3n).
+  const double ex = wrms_norm(m_err_x, m_start.x, m_end.x, rtol, atol);
+  const double ev = wrms_norm(m_err_v, m_start.v, m_end.v, rtol, atol);
+  return std::sqrt(0.5 * (ex * ex + ev * ev));
+}
+
 StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
   const auto t0 = Clock::now();
-  const StepSummary out = newton(s0, h, s1);
+  const StepSummary out = m_doubling ? doubled(s0, h, s1) : newton(s0, h, s1);
   ++m_steps;
   m_newton_iterations += out.newton_iterations;
   m_last_residual = out.residual;
   m_total_seconds += seconds_since(t0);
+  return out;
+}
+
+StepSummary ImplicitStepper::doubled(const State& s0, double h, State& s1) {
+  // Three steps; a failure of any ends the step with its summary (the caller shrinks h).
+  auto add = [](StepSummary& total, const StepSummary& s) {
+    total.iterations += s.iterations;
+    total.newton_iterations += s.newton_iterations;
+    total.residual = s.residual;
+    if (s.status != Status::Converged && total.status == Status::Converged) {
+      total.status = s.status;
+      total.message = s.message;
+    }
+  };
+  StepSummary out;
+  add(out, newton(s0, h, m_full));
+  if (out.status == Status::BrokeDown || out.status == Status::Fatal) return out;
+  add(out, newton(s0, 0.5 * h, m_half));
+  if (out.status == Status::BrokeDown || out.status == Status::Fatal) return out;
+  add(out, newton(m_half, (s0.t + h) - m_half.t, s1));
+  if (out.status == Status::BrokeDown || out.status == Status::Fatal) return out;
+  const double c = 1.0 / ((1 << error_estimate_order()) - 1);
+  m_err_x = c * (s1.x - m_full.x);
+  m_err_v = c * (s1.v - m_full.v);
+  m_start.x = s0.x;
+  m_start.v = s0.v;
+  s1.x += m_err_x;
+  s1.v += m_err_v;
+  s1.t = s0.t + h;
+  m_end.x = s1.x;
+  m_end.v = s1.v;
   return out;
 }
 

@@ -93,6 +93,15 @@ class ImplicitStepper final : public Stepper {
                   std::unique_ptr<LinearSolver> solver, ImplicitOptions options = {});
   const char* name() const override;
   StepSummary step(const State& s0, double h, State& s1) override;
+  /// Step doubling (Hairer, Norsett and Wanner I, II.4): with the estimate on, a step of h is
+  /// one step of h (y1) and two of h/2 (y2); the result is the Richardson-extrapolated
+  /// y2 + (y2 - y1) / (2^p - 1) and the error estimate (y2 - y1) / (2^p - 1), the error of y2
+  /// (the lower-order value is controlled and the higher-order one kept, as embedded pairs do).
+  /// p = 1 for the beta step, 2 for the midpoint rule; BDF2 makes none (its steps would restart
+  /// at every change of h).
+  int error_estimate_order() const override;
+  double error_norm(double rtol, double atol) override;
+  void set_error_estimation(bool on) override;
   const LinearSolver& linear_solver() const { return *m_solver; }
   bool exact_resume() const override { return m_solver->exact_resume(); }
   /// Newton iterations, linear iterations, the backend's factorizations and times by phase.
@@ -117,6 +126,8 @@ class ImplicitStepper final : public Stepper {
   void assemble(const OneLeg& c, ConstRef x0, bool discrete);
   /// The step itself (step() adds the counters).
   StepSummary newton(const State& s0, double h, State& s1);
+  /// Step doubling: y1, y2 and the extrapolated result into s1 (see error_estimate_order()).
+  StepSummary doubled(const State& s0, double h, State& s1);
   /// Why the current A = M - hf cv D - hf bx K can fail to be positive definite, appended to a
   /// backend's "A is not positive definite" (the backend does not know how A was built).
   std::string not_positive_definite_hint(const OneLeg& c) const;
@@ -134,6 +145,11 @@ class ImplicitStepper final : public Stepper {
   Vec m_v0, m_vb, m_xa, m_va, m_xe, m_v1, m_xlin, m_vlin, m_rhs, m_tmp, m_dx, m_dv;
   Vec m_delta;  // the last linear correction, zero on pinned DOFs
   Vec m_x1;     // the current iterate's x1 (3n; Midpoint with discrete_gradient only)
+  // Step doubling (set_error_estimation): the full step y1, the half step and its result y2 (in
+  // s1), the step's start and end (for error_norm), and the estimate (3n each).
+  bool m_doubling = false;
+  State m_full, m_half, m_start, m_end;
+  Vec m_err_x, m_err_v;
   // BDF2 history: the start state of the previous step (3n, BDF2 only) and that step's h and end
   // time.
   Vec m_prev_x, m_prev_v;

@@ -60,6 +60,10 @@ class Stepper {
   /// (wrms_norm in step_controller.hpp, between that step's start and its result before
   /// constraints). Only for methods with error_estimate_order() > 0.
   virtual double error_norm(double rtol, double atol);
+  /// Switches the local error estimate on or off, for methods whose estimate costs work (the
+  /// implicit family's step doubling: two extra steps per step); Simulation::set_error_control
+  /// switches it on. Methods whose estimate is free (embedded pairs) ignore it.
+  virtual void set_error_estimation(bool /*on*/) {}
   /// Work and time over all steps so far (fields the method has no use for stay 0).
   virtual StepperStats stats() const { return {}; }
   /// One line of counters accumulated over all steps so far, for logs: format_stats(stats()) by

@@ -21,8 +21,8 @@ namespace {
 /// Largest E(t) - E(0) (J) over the steps of the scene run to t_end by the scene's method, with
 /// up to 6 step halvings; fails the test if a step cannot be taken.
 double largest_energy_gain(const std::vector<std::string>& sets, double t_end) {
-  const Scene scene = load_scene(std::string(HOOKE_TEST_SCENES_DIR) + "/falling_stiff_cloth.toml",
-                                 sets);
+  const Scene scene =
+      load_scene(std::string(HOOKE_TEST_SCENES_DIR) + "/falling_stiff_cloth.toml", sets);
   Simulation sim(*scene.system,
                  make_stepper(scene.integrator.method, *scene.system, scene.integrator.options),
                  scene.initial);

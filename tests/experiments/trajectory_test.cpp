@@ -1,10 +1,11 @@
 // Claims of experiments/trajectory.* as the studies use it for error-controlled scenes: the
-// embedded pairs under integrator.adaptive, run to each sample time, meet their tolerance on the
-// work-precision cases (issue 21, acceptance 1): on the chain, the hanging cloth (8 x 8) and the
-// stiff cloth (k = 1e6), over 0.5 s, the largest position error over the samples (max over
-// particles, against CVODE at rtol 1e-10, an independent method) is within 10x of
-// rtol max|x| + atol for rtol 1e-3 ... 1e-7 (atol = 1e-3 rtol x the scene's size, as the
-// studies set it), and the accepted steps fall as rtol loosens.
+// embedded pairs and the implicit family (step doubling) under integrator.adaptive, run to each
+// sample time, meet their tolerance on the work-precision cases (issue 21, acceptance 1): on the
+// chain, the hanging cloth (8 x 8) and the stiff cloth (k = 1e6), over 0.5 s, the largest
+// position error over the samples (max over particles, against CVODE at rtol 1e-10, an
+// independent method) is within 10x of rtol max|x| + atol for rtol 1e-3 ... 1e-7 (the pairs) and
+// 1e-2 ... 1e-5 (the implicit family; atol = 1e-3 rtol x the scene's size, as the studies set
+// it), and the accepted steps fall as rtol loosens.
 #include "experiments/trajectory.hpp"
 
 #include <gtest/gtest.h>
@@ -15,12 +16,13 @@
 
 #include "experiments/work_precision.hpp"
 #include "hooke/config.hpp"
+#include "hooke/registry.hpp"
 
 namespace hooke {
 namespace {
 
 #if HOOKE_WITH_SUNDIALS
-TEST(ErrorControlAccuracy, EmbeddedPairsMeetTheirToleranceOnTheWorkPrecisionCases) {
+TEST(ErrorControlAccuracy, AdaptiveMethodsMeetTheirToleranceOnTheWorkPrecisionCases) {
   constexpr int kSamples = 10;
   for (const WorkPrecisionCase& c : work_precision_cases(false, HOOKE_TEST_SCENES_DIR)) {
     std::vector<std::string> sets = c.sets;
@@ -35,9 +37,18 @@ TEST(ErrorControlAccuracy, EmbeddedPairsMeetTheirToleranceOnTheWorkPrecisionCase
     ASSERT_TRUE(ref.trajectory.complete) << c.name << ": " << ref.trajectory.status;
     double size = 0.0;
     for (const State& s : ref.trajectory.samples) size = std::max(size, s.x.cwiseAbs().maxCoeff());
-    for (const char* method : {"dopri5", "bs32"}) {
+    // The explicit pairs over rtol 1e-7 .. 1e-3, the implicit family (step doubling) over
+    // 1e-5 .. 1e-2, as the issue asks; on the stiff cloth the implicit family only at the two
+    // loosest (its tight runs take 8e3-5e4 steps of three Newton solves, minutes here: the
+    // tolerance study, `hooke workprecision`, has the whole table).
+    const std::vector<double> explicit_rtols = {1e-7, 1e-6, 1e-5, 1e-4, 1e-3};
+    const std::vector<double> implicit_rtols = c.name == "stiff_cloth"
+                                                   ? std::vector<double>{1e-3, 1e-2}
+                                                   : std::vector<double>{1e-5, 1e-4, 1e-3, 1e-2};
+    for (const char* method : {"dopri5", "bs32", "implicit", "implicit-midpoint"}) {
+      const bool is_explicit = method_info(method).kind == MethodKind::Explicit;
       long long last_steps = 0;
-      for (double rtol : {1e-7, 1e-6, 1e-5, 1e-4, 1e-3}) {
+      for (double rtol : is_explicit ? explicit_rtols : implicit_rtols) {
         std::vector<std::string> mine = sets;
         mine.push_back(std::string("integrator.method=") + method);
         mine.push_back("integrator.adaptive=true");
@@ -54,7 +65,7 @@ TEST(ErrorControlAccuracy, EmbeddedPairsMeetTheirToleranceOnTheWorkPrecisionCase
               std::max(err, (tr.samples[k].x - ref.trajectory.samples[k].x).cwiseAbs().maxCoeff());
         const double allowed = rtol * size + scene.integrator.error_control.atol;
         std::printf(
-            "[ tolerance] %-13s %-6s rtol %.0e: max error %.3e = %.3f x (rtol max|x| + "
+            "[ tolerance] %-13s %-17s rtol %.0e: max error %.3e = %.3f x (rtol max|x| + "
             "atol), %lld steps\n",
             c.name.c_str(), method, rtol, err, err / allowed, tr.steps);
         EXPECT_LE(err, 10.0 * allowed) << c.name << " " << method << " rtol " << rtol;

@@ -445,6 +445,102 @@ TEST(ImplicitStepper, NewtonRateTestStopsAStalledIterationEarly) {
   EXPECT_EQ(failed, 1) << "no step of h = 0.05 s failed: the case no longer exercises the test";
 }
 
+// ---- Step doubling (the implicit family's error estimate) ----
+
+/// N steps of T / N with step doubling on (Richardson-extrapolated results).
+State integrate_doubled(const std::string& method, const MethodOptions& opt,
+                        const hooke::MassSpringSystem& system, State s, double T, int N) {
+  auto stepper = hooke::make_stepper(method, system, opt);
+  stepper->set_error_estimation(true);
+  State s1 = s;
+  for (int n = 0; n < N; ++n) {
+    const StepSummary sum = stepper->step(s, T / N, s1);
+    EXPECT_EQ(sum.status, Status::Converged) << method << " step " << n << ": " << sum.message;
+    std::swap(s, s1);
+  }
+  return s;
+}
+
+TEST(StepDoubling, ResultIsTheExtrapolationOfOneStepAndTwoHalfSteps) {
+  // s1 = y2 + (y2 - y1) / (2^p - 1) from the plain steps, to round-off, and the estimate's norm
+  // (rtol 0, atol 1: the RMS over [x; v]) is |y2 - y1| / (2^p - 1) in that norm.
+  ElasticPendulum p;
+  for (const char* method : {"implicit", "implicit-midpoint"}) {
+    SCOPED_TRACE(method);
+    const ImplicitOptions o = options(1.0, true);
+    auto plain = hooke::make_stepper(method, *p.system, o);
+    auto doubled = hooke::make_stepper(method, *p.system, o);
+    doubled->set_error_estimation(true);
+    const int q = doubled->error_estimate_order();
+    ASSERT_EQ(q, std::string(method) == "implicit" ? 1 : 2);
+    const double h = 0.02, c = 1.0 / ((1 << q) - 1);
+    const State s0 = p.initial();
+    State y1, ym, y2, s1;
+    ASSERT_EQ(plain->step(s0, h, y1).status, Status::Converged);
+    ASSERT_EQ(plain->step(s0, 0.5 * h, ym).status, Status::Converged);
+    ASSERT_EQ(plain->step(ym, 0.5 * h, y2).status, Status::Converged);
+    ASSERT_EQ(doubled->step(s0, h, s1).status, Status::Converged);
+    const Vec ex = c * (y2.x - y1.x), ev = c * (y2.v - y1.v);
+    EXPECT_LE((s1.x - (y2.x + ex)).cwiseAbs().maxCoeff(), 1e-12);
+    EXPECT_LE((s1.v - (y2.v + ev)).cwiseAbs().maxCoeff(), 1e-11);
+    EXPECT_EQ(s1.t, s0.t + h);
+    const double rms = std::sqrt((ex.squaredNorm() + ev.squaredNorm()) / (2.0 * ex.size()));
+    EXPECT_NEAR(doubled->error_norm(0.0, 1.0), rms, 1e-9 * rms);
+    EXPECT_GT(rms, 0.0);
+  }
+  // BDF2 makes no estimate (its steps would restart with every change of h).
+  EXPECT_EQ(hooke::make_stepper("bdf2", *p.system, options(1.0, true))->error_estimate_order(), 0);
+}
+
+TEST(StepDoubling, EstimateTracksTheTrueErrorOfTheHalfSteps) {
+  // On the two-particle spring (exact solution), one step from the exact state: the estimate
+  // approaches y2's true error as h shrinks (the error expansion's leading term).
+  TwoParticleSpring sp(kSpringStiffness);
+  const double A = 0.1 * sp.L, w = sp.omega();
+  for (const char* method : {"implicit", "implicit-midpoint"}) {
+    SCOPED_TRACE(method);
+    auto doubled = hooke::make_stepper(method, *sp.system, options(1.0, true));
+    doubled->set_error_estimation(true);
+    for (double hw : {0.02, 0.01}) {
+      const double h = hw / w, t0 = 0.3 / w;
+      State s0(2), s1;
+      const Vec xv0 = sp.exact_xv(A, t0);
+      s0.x = xv0.head(6);
+      s0.v = xv0.tail(6);
+      s0.t = t0;
+      ASSERT_EQ(doubled->step(s0, h, s1).status, Status::Converged);
+      const double est = doubled->error_norm(0.0, 1.0);
+      const Vec exact = sp.exact_xv(A, t0 + h);
+      // Recover y2 from a plain run of two half steps.
+      auto plain = hooke::make_stepper(method, *sp.system, options(1.0, true));
+      State ym, y2;
+      ASSERT_EQ(plain->step(s0, 0.5 * h, ym).status, Status::Converged);
+      ASSERT_EQ(plain->step(ym, 0.5 * h, y2).status, Status::Converged);
+      Vec e(12);
+      e << y2.x - exact.head(6), y2.v - exact.tail(6);
+      const double truth = std::sqrt(e.squaredNorm() / 12.0);
+      std::printf("[ doubling ] %-17s h w = %.2f: estimate %.4e, true error of y2 %.4e\n", method,
+                  hw, est, truth);
+      EXPECT_NEAR(est / truth, 1.0, hw < 0.015 ? 0.05 : 0.1) << "h w = " << hw;
+    }
+  }
+}
+
+TEST(StepDoubling, ExtrapolatedStepsGainAnOrder) {
+  // Richardson extrapolation of a first-order method is second order; of the symmetric midpoint
+  // rule (error expansion in h^2), fourth order: measured against the exact solution.
+  TwoParticleSpring sp(kSpringStiffness);
+  const double s = 0.1 * sp.L, w = sp.omega(), T = 1.3 * kPi / w;
+  const Scheme be{"BackwardEulerDoubled", "implicit", 1.0, true, 2};
+  const Scheme mid{"MidpointDoubled", "implicit-midpoint", 1.0, true, 4};
+  for (const Scheme& sc : {be, mid})
+    check_order(sc, "two-particle-spring", T, 20, [&](int N) {
+      const State st = integrate_doubled(sc.method, options(sc.beta, sc.converged), *sp.system,
+                                         sp.initial(s), T, N);
+      return scaled_error(st, sp.exact_xv(s, T), w);
+    });
+}
+
 TEST(Bdf2, StartsAndRestartsWithBackwardEulerStep) {
   // The first BDF2 step, and the first after a change of h, are backward Euler steps (the same
   // one-leg coefficients, hence bitwise equal).
