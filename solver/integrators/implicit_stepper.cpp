@@ -89,10 +89,13 @@ ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme 
 
 std::string ImplicitStepper::report() const {
   std::ostringstream os;
-  if (m_doubling) os << "step doubling (3 steps per step); ";
-  os << m_solver->name() << ": " << m_totals.iterations << " linear iterations; analyze "
-     << m_totals.analyze_seconds << " s, factor " << m_totals.factor_seconds << " s, solve "
-     << m_totals.solve_seconds << " s; force and Jacobian assembly " << m_assembly_seconds << " s";
+  if (m_doubling)
+    os << "step doubling (3 steps per step" << (m_solver_half ? ", halves on a second backend" : "")
+       << "); ";
+  os << m_solver->name() << ": " << m_totals.iterations << " linear iterations, "
+     << stats().factorizations << " factorizations; analyze " << m_totals.analyze_seconds
+     << " s, factor " << m_totals.factor_seconds << " s, solve " << m_totals.solve_seconds
+     << " s; force and Jacobian assembly " << m_assembly_seconds << " s";
   return os.str();
 }
 
@@ -230,6 +233,12 @@ void ImplicitStepper::set_error_estimation(bool on) {
     for (State* s : {&m_full, &m_half, &m_start, &m_end}) *s = State(n);
     m_err_x.setZero(3 * n);
     m_err_v.setZero(3 * n);
+    if (linear_solver_unknown(m_solver->name()).empty()) {
+      m_solver_half = make_linear_solver(m_solver->name(), "", {m_options.petsc_options});
+      const LinearSummary a = m_solver_half->analyze(m_A.matrix());
+      if (a.status != Status::Converged) throw SetupError(a.message);
+      accumulate(m_totals, a);
+    }
   }
 }
 
@@ -243,7 +252,7 @@ double ImplicitStepper::error_norm(double rtol, double atol) {
 
 StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
   const auto t0 = Clock::now();
-  const StepSummary out = m_doubling ? doubled(s0, h, s1) : newton(s0, h, s1);
+  const StepSummary out = m_doubling ? doubled(s0, h, s1) : newton(s0, h, s1, *m_solver);
   ++m_steps;
   m_newton_iterations += out.newton_iterations;
   m_last_residual = out.residual;
@@ -262,12 +271,13 @@ StepSummary ImplicitStepper::doubled(const State& s0, double h, State& s1) {
       total.message = s.message;
     }
   };
+  LinearSolver& half = m_solver_half ? *m_solver_half : *m_solver;
   StepSummary out;
-  add(out, newton(s0, h, m_full));
+  add(out, newton(s0, h, m_full, *m_solver));
   if (out.status == Status::BrokeDown || out.status == Status::Fatal) return out;
-  add(out, newton(s0, 0.5 * h, m_half));
+  add(out, newton(s0, 0.5 * h, m_half, half));
   if (out.status == Status::BrokeDown || out.status == Status::Fatal) return out;
-  add(out, newton(m_half, (s0.t + h) - m_half.t, s1));
+  add(out, newton(m_half, (s0.t + h) - m_half.t, s1, half));
   if (out.status == Status::BrokeDown || out.status == Status::Fatal) return out;
   const double c = 1.0 / ((1 << error_estimate_order()) - 1);
   m_err_x = c * (s1.x - m_full.x);
@@ -282,7 +292,7 @@ StepSummary ImplicitStepper::doubled(const State& s0, double h, State& s1) {
   return out;
 }
 
-StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
+StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1, LinearSolver& solver) {
   const Index N = m_system.dofs();
   HOOKE_ASSERT(s0.x.size() == N && s0.v.size() == N, "state size mismatch");
   // Pinned particles never move (their velocity is taken as zero throughout) unless scripted.
@@ -315,8 +325,8 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
       m_vlin = m_va + c.cv * m_v1;
     }
     assemble(c, s0.x, k > 0 && m_x1.size() > 0);
-    m_solver->set_coordinates(m_xlin);
-    const LinearSummary fs = m_solver->factor(m_A.matrix());
+    solver.set_coordinates(m_xlin);
+    const LinearSummary fs = solver.factor(m_A.matrix());
     accumulate(m_totals, fs);
     if (fs.status != Status::Converged) {
       out.status = fs.status;
@@ -325,7 +335,7 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1) {
       out.newton_iterations = k;
       return out;
     }
-    const LinearSummary ss = m_solver->solve(m_rhs, m_delta, lin);
+    const LinearSummary ss = solver.solve(m_rhs, m_delta, lin);
     accumulate(m_totals, ss);
     out.iterations += ss.iterations;
     out.residual = ss.residual;
@@ -431,7 +441,8 @@ StepperStats ImplicitStepper::stats() const {
   s.steps = m_steps;
   s.iterations = m_newton_iterations;
   s.linear_iterations = m_totals.iterations;
-  s.factorizations = m_solver->factorizations();
+  s.factorizations =
+      m_solver->factorizations() + (m_solver_half ? m_solver_half->factorizations() : 0);
   s.last_residual = m_last_residual;
   s.assembly_seconds = m_assembly_seconds;
   s.analyze_seconds = m_totals.analyze_seconds;

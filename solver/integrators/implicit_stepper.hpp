@@ -103,7 +103,9 @@ class ImplicitStepper final : public Stepper {
   double error_norm(double rtol, double atol) override;
   void set_error_estimation(bool on) override;
   const LinearSolver& linear_solver() const { return *m_solver; }
-  bool exact_resume() const override { return m_solver->exact_resume(); }
+  bool exact_resume() const override {
+    return m_solver->exact_resume() && (!m_solver_half || m_solver_half->exact_resume());
+  }
   /// Newton iterations, linear iterations, the backend's factorizations and times by phase.
   StepperStats stats() const override;
   std::string report() const override;
@@ -124,8 +126,8 @@ class ImplicitStepper final : public Stepper {
   /// With discrete = true (Midpoint), the force is the discrete gradient between x0 and the
   /// current iterate's x1 instead of f(xlin, vlin).
   void assemble(const OneLeg& c, ConstRef x0, bool discrete);
-  /// The step itself (step() adds the counters).
-  StepSummary newton(const State& s0, double h, State& s1);
+  /// The step itself on the given backend (step() adds the counters).
+  StepSummary newton(const State& s0, double h, State& s1, LinearSolver& solver);
   /// Step doubling: y1, y2 and the extrapolated result into s1 (see error_estimate_order()).
   StepSummary doubled(const State& s0, double h, State& s1);
   /// Why the current A = M - hf cv D - hf bx K can fail to be positive definite, appended to a
@@ -148,6 +150,10 @@ class ImplicitStepper final : public Stepper {
   // Step doubling (set_error_estimation): the full step y1, the half step and its result y2 (in
   // s1), the step's start and end (for error_norm), and the estimate (3n each).
   bool m_doubling = false;
+  // The half steps' own backend (a second instance of m_solver's), so that a backend reusing a
+  // factorization across steps (pcg-cholmod, petsc) sees one slowly varying h in each instance
+  // instead of h and h/2 in turn; null when the backend is not in the registry (then shared).
+  std::unique_ptr<LinearSolver> m_solver_half;
   State m_full, m_half, m_start, m_end;
   Vec m_err_x, m_err_v;
   // BDF2 history: the start state of the previous step (3n, BDF2 only) and that step's h and end

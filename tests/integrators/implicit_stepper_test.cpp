@@ -526,6 +526,26 @@ TEST(StepDoubling, EstimateTracksTheTrueErrorOfTheHalfSteps) {
   }
 }
 
+TEST(StepDoubling, HalfStepsRunOnTheirOwnBackendInstance) {
+  // The half steps factor on a second instance of the backend (so that a reused factorization
+  // sees one h per instance); the stats count both. cholmod factors once per Newton iteration.
+  if (!has_backend("cholmod")) GTEST_SKIP() << "needs cholmod";
+  ElasticPendulum p;
+  auto stepper = hooke::make_stepper("implicit", *p.system, options(1.0, true, "cholmod"));
+  stepper->set_error_estimation(true);
+  State s = p.initial(), s1;
+  long long newton = 0;
+  for (int n = 0; n < 5; ++n) {
+    const StepSummary sum = stepper->step(s, 0.01, s1);
+    ASSERT_EQ(sum.status, Status::Converged) << sum.message;
+    newton += sum.newton_iterations;
+    std::swap(s, s1);
+  }
+  EXPECT_EQ(stepper->stats().factorizations, newton);
+  EXPECT_NE(stepper->report().find("halves on a second backend"), std::string::npos)
+      << stepper->report();
+}
+
 TEST(StepDoubling, ExtrapolatedStepsGainAnOrder) {
   // Richardson extrapolation of a first-order method is second order; of the symmetric midpoint
   // rule (error expansion in h^2), fourth order: measured against the exact solution.
