@@ -148,14 +148,16 @@ TEST(MethodReaders, NewtonToleranceIsRefusedForTheLinearisedStep) {
 TEST(MethodReaders, ImplicitMidpointIteratesTheDiscreteGradientStepByDefault) {
   // The scene defaults are the library's (ImplicitOptions::defaults), and its one-step form
   // refuses discrete_gradient, which only acts from the second iteration on.
-  const auto* d =
-      load("method = \"implicit-midpoint\"\n").integrator.options.get<ImplicitOptions>();
+  // The scenes stay alive: the options live inside them.
+  const Scene def = load("method = \"implicit-midpoint\"\n");
+  const auto* d = def.integrator.options.get<ImplicitOptions>();
   ASSERT_NE(d, nullptr);
   EXPECT_EQ(d->newton_iterations, ImplicitOptions::kMidpointNewtonIterations);
   EXPECT_EQ(d->newton_tolerance, ImplicitOptions::kMidpointNewtonTolerance);
   EXPECT_TRUE(d->discrete_gradient);
-  const auto* c = load("method = \"implicit-midpoint\"\ndiscrete_gradient = false\n")
-                      .integrator.options.get<ImplicitOptions>();
+  const Scene classical = load("method = \"implicit-midpoint\"\ndiscrete_gradient = false\n");
+  const auto* c = classical.integrator.options.get<ImplicitOptions>();
+  ASSERT_NE(c, nullptr);
   EXPECT_FALSE(c->discrete_gradient);
   expect_ignored(
       "method = \"implicit-midpoint\"\nnewton_iterations = 1\ndiscrete_gradient = true\n",
