@@ -522,6 +522,39 @@ void add_pin_strain_ode_keys(std::vector<SceneKey>& t) {
   add(K("ode.x0", T::Numbers).in({"circle"}).def("[1, 0]").meaning("initial point [x, y]"));
 }
 
+/// Adds the Newton keys of the implicit methods (implicit-midpoint iterates by default).
+void add_newton_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
+  add(K("integrator.newton_iterations", T::Integer)
+          .in({"implicit", "bdf2"})
+          .def("1")
+          .between(1, 100000)
+          .meaning("most Newton iterations per step; 1 is the linearised step"));
+  add(K("integrator.newton_iterations", T::Integer)
+          .in({"implicit-midpoint"})
+          .def(std::to_string(ImplicitOptions::kMidpointNewtonIterations))
+          .between(1, 100000)
+          .meaning("most Newton iterations per step; 1 is the linearised step (which gains "
+                   "energy on stiff cloth); Newton stops early when it cannot converge"));
+  add(K("integrator.tolerance", T::Number)
+          .in({"implicit", "bdf2"})
+          .def("1e-10")
+          .positive()
+          .needs({"integrator.newton_iterations=2"})
+          .meaning("Newton stops when max |dv| <= tolerance * max(|v1|, |v0|) (infinity norms)"));
+  add(K("integrator.tolerance", T::Number)
+          .in({"implicit-midpoint"})
+          .def("1e-08")
+          .positive()
+          .meaning("Newton stops when max |dv| <= tolerance * max(|v1|, |v0|) (infinity norms)"));
+  add(K("integrator.discrete_gradient", T::Boolean)
+          .in({"implicit-midpoint"})
+          .def("true")
+          .meaning("Newton converges to the energy-momentum step (the springs' discrete gradient, "
+                   "Simo and Tarnow 1992), which conserves energy exactly; false: the classical "
+                   "rule, f at the midpoint"));
+}
+
 /// Adds integrator.method and the keys of the implicit family.
 void add_implicit_keys(std::vector<SceneKey>& t) {
   auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
@@ -588,34 +621,7 @@ void add_implicit_keys(std::vector<SceneKey>& t) {
           .example("'-pc_type gamg'")
           .meaning("PETSc options of the KSP and PC, over hooke's defaults (CG + GAMG) and under "
                    "the environment's PETSC_OPTIONS"));
-  add(K("integrator.newton_iterations", T::Integer)
-          .in({"implicit", "bdf2"})
-          .def("1")
-          .between(1, 100000)
-          .meaning("most Newton iterations per step; 1 is the linearised step"));
-  add(K("integrator.newton_iterations", T::Integer)
-          .in({"implicit-midpoint"})
-          .def(std::to_string(ImplicitOptions::kMidpointNewtonIterations))
-          .between(1, 100000)
-          .meaning("most Newton iterations per step; 1 is the linearised step (which gains "
-                   "energy on stiff cloth); Newton stops early when it cannot converge"));
-  add(K("integrator.tolerance", T::Number)
-          .in({"implicit", "bdf2"})
-          .def("1e-10")
-          .positive()
-          .needs({"integrator.newton_iterations=2"})
-          .meaning("Newton stops when max |dv| <= tolerance * max(|v1|, |v0|) (infinity norms)"));
-  add(K("integrator.tolerance", T::Number)
-          .in({"implicit-midpoint"})
-          .def("1e-08")
-          .positive()
-          .meaning("Newton stops when max |dv| <= tolerance * max(|v1|, |v0|) (infinity norms)"));
-  add(K("integrator.discrete_gradient", T::Boolean)
-          .in({"implicit-midpoint"})
-          .def("true")
-          .meaning("Newton converges to the energy-momentum step (the springs' discrete gradient, "
-                   "Simo and Tarnow 1992), which conserves energy exactly; false: the classical "
-                   "rule, f at the midpoint"));
+  add_newton_keys(t);
   add(K("integrator.linear_tolerance", T::Number)
           .in(kImplicit)
           .def("1e-08")

@@ -364,32 +364,12 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1, Linear
         converged = true;
         break;
       }
-      // A rate test in the manner of SUNDIALS' nonlinear solvers (cvode's crate): from the third
-      // iteration on (the first is the linearisation at the step's start), stop as soon as the
-      // measured contraction rate shows that the remaining iterations cannot reach the
-      // tolerance, so that a stalled or diverging iteration (a step too large for the problem's
-      // nonlinearity) fails fast and the caller can shrink h instead of waiting out the cap.
-      // Newton's pre-asymptotic phase can have one or two poor rates before it turns quadratic
-      // (measured on a stiff chain with the exact Jacobian: 0.89, then 2e-6), so only three
-      // failed predictions in a row stop it. Corrections within 1e4 ulps of the scale are
-      // round-off, whose ratios say nothing.
-      const int remaining = m_options.newton_iterations - 1 - k;
-      if (k >= 2 && remaining > 0 &&
-          delta_norm > 1e4 * std::numeric_limits<double>::epsilon() * scale) {
-        const double rate = delta_norm / previous_norm;
-        const bool hopeless =
-            rate >= 1.0 || delta_norm * std::pow(rate, remaining) / (1.0 - rate) > target;
-        failed_predictions = hopeless ? failed_predictions + 1 : 0;
-        if (failed_predictions == 3) {
-          std::ostringstream os;
-          os << name() << ": Newton cannot converge in " << m_options.newton_iterations
-             << " iterations: after " << k + 1 << ", ||delta v||_inf = " << delta_norm
-             << " contracts at rate " << rate << " per iteration (tolerance "
-             << m_options.newton_tolerance << " relative)";
-          out.status = Status::NotConverged;
-          out.message = os.str();
-          break;
-        }
+      if (const std::string why =
+              newton_hopeless(k, delta_norm, previous_norm, scale, failed_predictions);
+          !why.empty()) {
+        out.status = Status::NotConverged;
+        out.message = why;
+        break;
       }
     }
   }
@@ -405,6 +385,33 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1, Linear
   s1.x = m_xe + c.ex * m_v1;
   s1.t = s0.t + h;
   return out;
+}
+
+std::string ImplicitStepper::newton_hopeless(int k, double delta_norm, double previous_norm,
+                                             double scale, int& failed_predictions) const {
+  // A rate test in the manner of SUNDIALS' nonlinear solvers (cvode's crate): from the third
+  // iteration on (the first is the linearisation at the step's start), stop as soon as the
+  // measured contraction rate shows that the remaining iterations cannot reach the tolerance, so
+  // that a stalled or diverging iteration (a step too large for the problem's nonlinearity) fails
+  // fast and the caller can shrink h instead of waiting out the cap. Newton's pre-asymptotic phase
+  // can have one or two poor rates before it turns quadratic (measured on a stiff chain with the
+  // exact Jacobian: 0.89, then 2e-6), so only three failed predictions in a row stop it.
+  // Corrections within 1e4 ulps of the scale are round-off, whose ratios say nothing.
+  const int remaining = m_options.newton_iterations - 1 - k;
+  if (k < 2 || remaining <= 0 || delta_norm <= 1e4 * std::numeric_limits<double>::epsilon() * scale)
+    return "";
+  const double target = m_options.newton_tolerance * scale;
+  const double rate = delta_norm / previous_norm;
+  const bool hopeless =
+      rate >= 1.0 || delta_norm * std::pow(rate, remaining) / (1.0 - rate) > target;
+  failed_predictions = hopeless ? failed_predictions + 1 : 0;
+  if (failed_predictions < 3) return "";
+  std::ostringstream os;
+  os << name() << ": Newton cannot converge in " << m_options.newton_iterations
+     << " iterations: after " << k + 1 << ", ||delta v||_inf = " << delta_norm
+     << " contracts at rate " << rate << " per iteration (tolerance " << m_options.newton_tolerance
+     << " relative)";
+  return os.str();
 }
 
 std::string ImplicitStepper::not_positive_definite_hint(const OneLeg& c) const {

@@ -128,6 +128,11 @@ class ImplicitStepper final : public Stepper {
   void assemble(const OneLeg& c, ConstRef x0, bool discrete);
   /// The step itself on the given backend (step() adds the counters).
   StepSummary newton(const State& s0, double h, State& s1, LinearSolver& solver);
+  /// The rate test after Newton iteration k (0-based): why the iteration cannot reach the
+  /// tolerance in the iterations left, or "" to go on. failed_predictions counts consecutive
+  /// hopeless predictions (updated here).
+  std::string newton_hopeless(int k, double delta_norm, double previous_norm, double scale,
+                              int& failed_predictions) const;
   /// Step doubling: y1, y2 and the extrapolated result into s1 (see error_estimate_order()).
   StepSummary doubled(const State& s0, double h, State& s1);
   /// Why the current A = M - hf cv D - hf bx K can fail to be positive definite, appended to a
