@@ -33,7 +33,7 @@ run workprecision
 # Error control over a longer time: the methods swept over rtol, every case to 2 s.
 t0=$(date +%s%N)
 echo "paper: hooke workprecision --duration 2 (error control) ..."
-"$hooke" workprecision "${size[@]}" --methods dopri5-adaptive,bs32-adaptive,implicit-adaptive,implicit-midpoint-adaptive,cvode,ida --duration 2 \
+"$hooke" workprecision "${size[@]}" --methods dopri5-adaptive,bs32-adaptive,implicit-adaptive,implicit-midpoint-adaptive,bdf2-adaptive,cvode,ida --duration 2 \
   --repeat 1 --out "$out/tolerance-2s"
 echo "workprecision --duration 2,$(( ($(date +%s%N) - t0) / 1000000 ))e-3" >> "$out/timings.csv"
 run resolution

@@ -85,7 +85,8 @@ const std::vector<std::string> kSundials = {"cvode", "ida"};
 const std::vector<std::string> kFixedStepFamilies = {
     "forward-euler", "symplectic-euler", "midpoint",          "trapezoid", "rk4", "dopri5",
     "bs32",          "implicit",         "implicit-midpoint", "bdf2"};
-const std::vector<std::string> kAdaptive = {"dopri5", "bs32", "implicit", "implicit-midpoint"};
+const std::vector<std::string> kAdaptive = {"dopri5", "bs32", "implicit", "implicit-midpoint",
+                                            "bdf2"};
 
 const std::string kSpread = "mass spread evenly over the particles; give this or mesh.mass";
 const std::string kEach = "mass of each particle; give this or mesh.total_mass";
@@ -569,8 +570,9 @@ void add_implicit_keys(std::vector<SceneKey>& t) {
   add(K("integrator.adaptive", T::Boolean)
           .in(kFixedStepFamilies)
           .def("false")
-          .meaning("error-controlled steps (methods with a local error estimate: dopri5, bs32): "
-                   "time.dt is the first step, rtol and atol bound each step's local error"));
+          .meaning("error-controlled steps (methods with a local error estimate: dopri5, bs32, "
+                   "implicit, implicit-midpoint, bdf2): time.dt is the first step, rtol and atol "
+                   "bound each step's local error"));
   add(K("integrator.rtol", T::Number)
           .in(kAdaptive)
           .def("1e-08")

@@ -62,7 +62,8 @@ const std::vector<ImplicitEntry>& implicit_table() {
       {{"implicit-midpoint", MethodKind::Implicit,
         "implicit midpoint rule, Newton on a linear backend", 2},
        ImplicitScheme::Midpoint},
-      {{"bdf2", MethodKind::Implicit, "two-step BDF, Newton on a linear backend"},
+      {{"bdf2", MethodKind::Implicit, "two-step BDF (variable step), Newton on a linear backend",
+        2},
        ImplicitScheme::Bdf2},
   };
   return table;

@@ -149,6 +149,7 @@ StepSummary Simulation::advance_adaptive(double t_end) {
       m_controller->restore(err_prev, rejected_prev);
       h_new = std::max(h_new, unshortened);
     }
+    h_new = std::min(h_new, m_stepper->max_step_ratio() * h);
     if (lands) m_next.t = t_end;  // exactly, whatever t + (t_end - t) rounds to
     s = commit(std::move(s), h);
     if (s.status == Status::Fatal) {  // non-finite after constraints: retry smaller

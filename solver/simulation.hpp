@@ -35,7 +35,8 @@ class Simulation {
   /// One accepted step under error control, ending at most at t_end (s). Tries the controller's
   /// step (capped by max_dt; stretched or shortened to land on t_end when it would end within
   /// 1% of a step of it), and while the step's local error estimate exceeds the tolerance, or the
-  /// stepper fails, tries again with a smaller step (each attempt counts as rejected). The
+  /// stepper fails, tries again with a smaller step (each attempt counts as rejected). The step
+  /// after an accepted one is at most Stepper::max_step_ratio() times it. The
   /// summary of the accepted attempt has the iterations of all attempts summed. Fails (state
   /// unchanged, Status::Fatal) when the step would fall below ErrorControl::min_dt.
   StepSummary advance_adaptive(double t_end);

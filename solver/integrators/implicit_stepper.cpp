@@ -76,10 +76,11 @@ ImplicitStepper::ImplicitStepper(const MassSpringSystem& system, ImplicitScheme 
                  &m_delta})
     v->setZero(N);
   // Only what a scheme and a system use: BDF2's history, and dv where there is a D to apply.
-  if (m_scheme == ImplicitScheme::Bdf2) {
-    m_prev_x.setZero(N);
-    m_prev_v.setZero(N);
-  }
+  if (m_scheme == ImplicitScheme::Bdf2)
+    for (Point* p : {&m_hist[0], &m_hist[1], &m_last}) {
+      p->x.setZero(N);
+      p->v.setZero(N);
+    }
   if (system.has_velocity_jacobian()) m_dv.setZero(N);
   if (m_scheme == ImplicitScheme::Midpoint && m_options.discrete_gradient) m_x1.setZero(N);
   const LinearSummary a = m_solver->analyze(m_A.matrix());
@@ -101,19 +102,15 @@ std::string ImplicitStepper::report() const {
 
 std::vector<double> ImplicitStepper::history() const {
   const std::vector<char>& pinned = m_system.pinned();
-  const size_t N = size_t(m_system.dofs());
   std::vector<double> h;
-  h.reserve(3 + 2 * N + size_t(m_delta.size()));
-  h.push_back(m_has_prev ? 1.0 : 0.0);
-  h.push_back(m_prev_h);
-  h.push_back(m_prev_t1);
-  if (m_prev_x.size() > 0) {
-    h.insert(h.end(), m_prev_x.data(), m_prev_x.data() + m_prev_x.size());
-    h.insert(h.end(), m_prev_v.data(), m_prev_v.data() + m_prev_v.size());
-  } else {  // not BDF2: the format keeps the (unused) previous state, as zeros
-    h.insert(h.end(), 2 * N, 0.0);
+  if (m_scheme == ImplicitScheme::Bdf2) {
+    h = {m_has_last ? 1.0 : 0.0, m_last.t, m_last_t1, double(m_last_count), m_hist[0].t};
+    for (const Vec* v : {&m_last.x, &m_last.v, &m_hist[0].x, &m_hist[0].v})
+      h.insert(h.end(), v->data(), v->data() + v->size());
+    if (m_estimating)
+      for (const Vec* v : {&m_end.x, &m_end.v}) h.insert(h.end(), v->data(), v->data() + v->size());
   }
-  // The correction on the free DOFs only, as checkpoints have always held it.
+  // The correction on the free DOFs only.
   for (Index i = 0; i < m_delta.size(); ++i)
     if (!pinned[size_t(i / 3)]) h.push_back(m_delta[i]);
   return h;
@@ -122,17 +119,25 @@ std::vector<double> ImplicitStepper::history() const {
 void ImplicitStepper::restore_history(const std::vector<double>& h) {
   const std::vector<char>& pinned = m_system.pinned();
   const size_t N = size_t(m_system.dofs()), nf = N - 3 * size_t(m_system.num_pinned());
-  HOOKE_ASSERT(h.size() == 3 + 2 * N + nf, name() << ": history of " << h.size()
-                                                  << " numbers, expected " << 3 + 2 * N + nf
-                                                  << " for " << N << " dofs");
-  m_has_prev = h[0] != 0.0;
-  m_prev_h = h[1];
-  m_prev_t1 = h[2];
-  if (m_prev_x.size() > 0) {
-    m_prev_x = Eigen::Map<const Vec>(h.data() + 3, Index(N));
-    m_prev_v = Eigen::Map<const Vec>(h.data() + 3 + N, Index(N));
+  const size_t head = m_scheme == ImplicitScheme::Bdf2 ? 5 + (m_estimating ? 6 : 4) * N : 0;
+  HOOKE_ASSERT(h.size() == head + nf, name() << ": history of " << h.size() << " numbers, expected "
+                                             << head + nf << " for " << N << " dofs");
+  if (m_scheme == ImplicitScheme::Bdf2) {
+    HOOKE_ASSERT((h[0] == 0.0 || h[0] == 1.0) && (h[3] == 0.0 || h[3] == 1.0 || h[3] == 2.0),
+                 name() << ": history flags " << h[0] << ", " << h[3] << " out of range");
+    m_has_last = h[0] != 0.0;
+    m_last.t = h[1];
+    m_last_t1 = h[2];
+    m_last_count = int(h[3]);
+    m_hist[0].t = h[4];
+    size_t k = 5;
+    for (Vec* v : {&m_last.x, &m_last.v, &m_hist[0].x, &m_hist[0].v, &m_end.x, &m_end.v}) {
+      if (k == head) break;  // m_end only under error control
+      *v = Eigen::Map<const Vec>(h.data() + k, Index(N));
+      k += N;
+    }
   }
-  size_t k = 3 + 2 * N;
+  size_t k = head;
   for (Index i = 0; i < m_delta.size(); ++i) m_delta[i] = pinned[size_t(i / 3)] ? 0.0 : h[k++];
 }
 
@@ -149,13 +154,9 @@ const char* ImplicitStepper::name() const {
 }
 
 ImplicitStepper::OneLeg ImplicitStepper::set_up(const State& s0, double h) {
-  // BDF2 continues only if this step follows the previous one with the same h (to round-off:
-  // run loops compute h as differences of step times).
-  const bool bdf2 = m_scheme == ImplicitScheme::Bdf2 && m_has_prev &&
-                    std::abs(m_prev_h - h) <= 1e-9 * h &&
-                    std::abs(m_prev_t1 - s0.t) <= 1e-9 * std::max(h, std::abs(s0.t));
+  m_w = m_scheme == ImplicitScheme::Bdf2 ? bdf2_history(s0, h) : 0.0;
   OneLeg c;
-  if (m_scheme == ImplicitScheme::Beta || (m_scheme == ImplicitScheme::Bdf2 && !bdf2)) {
+  if (m_scheme == ImplicitScheme::Beta || (m_scheme == ImplicitScheme::Bdf2 && m_w == 0.0)) {
     const double beta = m_scheme == ImplicitScheme::Beta ? m_options.beta : 1.0;
     m_xa = s0.x;
     m_va = (1.0 - beta) * m_v0;
@@ -168,21 +169,88 @@ ImplicitStepper::OneLeg ImplicitStepper::set_up(const State& s0, double h) {
     m_vb = m_v0;
     m_xe = s0.x + (0.5 * h) * m_v0;
     c = {0.25 * h, 0.5, h, 0.5 * h};
-  } else {
-    m_xa = (4.0 / 3.0) * s0.x - (1.0 / 3.0) * m_prev_x;
+  } else {  // w = 1 gives 4/3, -1/3 and 2/3 to the last bit
+    const double w = m_w, a0 = (1.0 + w) * (1.0 + w) / (1.0 + 2.0 * w),
+                 a1 = -(w * w) / (1.0 + 2.0 * w), b = (1.0 + w) / (1.0 + 2.0 * w);
+    m_xa = a0 * s0.x + a1 * m_hist[0].x;
     m_va.setZero();
-    m_vb = (4.0 / 3.0) * m_v0 - (1.0 / 3.0) * m_prev_v;
+    m_vb = a0 * m_v0 + a1 * m_hist[0].v;
     m_xe = m_xa;
-    c = {(2.0 / 3.0) * h, 1.0, (2.0 / 3.0) * h, (2.0 / 3.0) * h};
-  }
-  if (m_scheme == ImplicitScheme::Bdf2) {
-    m_prev_x = s0.x;
-    m_prev_v = m_v0;
-    m_prev_h = h;
-    m_prev_t1 = s0.t + h;
-    m_has_prev = true;
+    c = {b * h, 1.0, b * h, b * h};
   }
   return c;
+}
+
+double ImplicitStepper::bdf2_history(const State& s0, double h) {
+  // Steps are matched by time (run loops compute h as differences of step times, and the state a
+  // step starts from is the one its caller committed, after constraints).
+  const double tol = 1e-12 * std::max({h, std::abs(s0.t), m_last_t1 - m_last.t});
+  auto swap_points = [](Point& a, Point& b) {
+    std::swap(a.t, b.t);
+    a.x.swap(b.x);  // Eigen swaps the buffers: no copy, no allocation
+    a.v.swap(b.v);
+  };
+  // Under error control the history must be a smooth trajectory for the predictor: a start state
+  // other than the last step's result (moved by a collider, the strain limit or the user) starts
+  // the history anew, as it would otherwise extrapolate the jump. Without error control it goes
+  // on through such a state, as BDF2 always has.
+  auto moved = [&] {
+    const Vec& free = m_system.moving();
+    return (s0.x - m_end.x).cwiseProduct(free).cwiseAbs().maxCoeff() != 0.0 ||
+           (m_v0 - m_end.v).cwiseProduct(free).cwiseAbs().maxCoeff() != 0.0;
+  };
+  if (m_has_last && std::abs(m_last_t1 - s0.t) <= tol &&
+      !(m_estimating && moved())) {  // follows the last step
+    swap_points(m_hist[1], m_hist[0]);
+    swap_points(m_hist[0], m_last);
+    m_count = std::min(m_last_count + 1, 2);
+  } else if (m_has_last && std::abs(m_last.t - s0.t) <= tol) {  // retries it
+    m_count = m_last_count;
+  } else {  // a new start
+    m_count = 0;
+  }
+  m_last.t = s0.t;
+  m_last.x = s0.x;
+  m_last.v = m_v0;
+  m_last_t1 = s0.t + h;
+  m_last_count = m_count;
+  m_has_last = true;
+  // Under error control the estimate needs two states before s0 (see error_estimate_order()).
+  if (m_count < (m_estimating ? 2 : 1)) return 0.0;
+  double w = h / (s0.t - m_hist[0].t);
+  if (std::abs(w - 1.0) <= 1e-9) w = 1.0;  // constant steps, to round-off in the step times
+  return w <= kBdf2MaxRatio * (1.0 + 1e-9) ? w : 0.0;
+}
+
+void ImplicitStepper::bdf2_predict(const State& s0, double h) {
+  if (m_w == 0.0) {  // backward Euler: explicit Euler, y0 + h y0' (m_rhs is scratch here)
+    m_system.compute_forces(s0.x, m_v0, m_rhs);
+    m_xp = s0.x + h * m_v0;
+    m_vp = m_v0 + h * m_rhs.cwiseQuotient(m_system.mass_diagonal());
+    m_milne = -0.5;
+  } else {  // the quadratic through y_{n-2}, y_{n-1}, y_n at t + h (Lagrange weights l0, l1, l2)
+    const double w = m_w, h1 = s0.t - m_hist[0].t, h2 = m_hist[0].t - m_hist[1].t;
+    const double l0 = (h + h1) * (h + h1 + h2) / (h1 * (h1 + h2)),
+                 l1 = -h * (h + h1 + h2) / (h1 * h2), l2 = h * (h + h1) / ((h1 + h2) * h2);
+    m_xp = l0 * s0.x + l1 * m_hist[0].x + l2 * m_hist[1].x;
+    m_vp = l0 * m_v0 + l1 * m_hist[0].v + l2 * m_hist[1].v;
+    const double C = -(1.0 + w) * (1.0 + w) * h * h * h / (6.0 * w * (1.0 + 2.0 * w)),
+                 P = h * (h + h1) * (h + h1 + h2) / 6.0;
+    m_milne = C / (P - C);
+  }
+  m_A.zero_pinned(m_vp);  // pinned particles stand still (scripted ones: newton() sets theirs)
+}
+
+void ImplicitStepper::bdf2_estimate(const State& s0, const State& s1) {
+  m_err_x = m_milne * (s1.x - m_xp);
+  m_err_v = m_milne * (s1.v - m_vp);
+  // Pinned and scripted particles follow their prescription: no integration error.
+  m_A.zero_pinned(m_err_x);
+  m_A.zero_pinned(m_err_v);
+  m_start.x = s0.x;
+  m_start.v = s0.v;
+  m_end.x = s1.x;
+  m_end.v = s1.v;
 }
 
 void ImplicitStepper::assemble(const OneLeg& c, ConstRef x0, bool discrete) {
@@ -220,19 +288,31 @@ int ImplicitStepper::error_estimate_order() const {
     case ImplicitScheme::Midpoint:
       return 2;
     case ImplicitScheme::Bdf2:
-      return 0;
+      return 2;
   }
   return 0;
 }
 
+double ImplicitStepper::max_step_ratio() const {
+  return m_scheme == ImplicitScheme::Bdf2 ? kBdf2MaxRatio : std::numeric_limits<double>::infinity();
+}
+
 void ImplicitStepper::set_error_estimation(bool on) {
   HOOKE_ASSERT(!on || error_estimate_order() > 0, name() << " makes no local error estimate");
-  m_doubling = on;
+  m_estimating = on;
+  m_doubling = on && m_scheme != ImplicitScheme::Bdf2;
+  const Index n = m_system.num_particles();
   if (on && m_err_x.size() == 0) {
-    const Index n = m_system.num_particles();
-    for (State* s : {&m_full, &m_half, &m_start, &m_end}) *s = State(n);
+    for (State* s : {&m_start, &m_end}) *s = State(n);
     m_err_x.setZero(3 * n);
     m_err_v.setZero(3 * n);
+  }
+  if (on && m_scheme == ImplicitScheme::Bdf2 && m_xp.size() == 0) {
+    m_xp.setZero(3 * n);
+    m_vp.setZero(3 * n);
+  }
+  if (m_doubling && m_full.x.size() == 0) {
+    for (State* s : {&m_full, &m_half}) *s = State(n);
     if (linear_solver_unknown(m_solver->name()).empty()) {
       m_solver_half = make_linear_solver(m_solver->name(), "", {m_options.petsc_options});
       const LinearSummary a = m_solver_half->analyze(m_A.matrix());
@@ -243,7 +323,7 @@ void ImplicitStepper::set_error_estimation(bool on) {
 }
 
 double ImplicitStepper::error_norm(double rtol, double atol) {
-  HOOKE_ASSERT(m_doubling, name() << ": error_norm without set_error_estimation(true)");
+  HOOKE_ASSERT(m_estimating, name() << ": error_norm without set_error_estimation(true)");
   // The weighted RMS over the 6n components [x; v], as the explicit pairs' (both halves have 3n).
   const double ex = wrms_norm(m_err_x, m_start.x, m_end.x, rtol, atol);
   const double ev = wrms_norm(m_err_v, m_start.v, m_end.v, rtol, atol);
@@ -253,6 +333,9 @@ double ImplicitStepper::error_norm(double rtol, double atol) {
 StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
   const auto t0 = Clock::now();
   const StepSummary out = m_doubling ? doubled(s0, h, s1) : newton(s0, h, s1, *m_solver);
+  if (m_estimating && m_scheme == ImplicitScheme::Bdf2 && out.status != Status::BrokeDown &&
+      out.status != Status::Fatal)
+    bdf2_estimate(s0, s1);
   ++m_steps;
   m_newton_iterations += out.newton_iterations;
   m_last_residual = out.residual;
@@ -305,7 +388,15 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1, Linear
   lin.tolerance = m_options.linear_tolerance;
   lin.max_iterations = m_options.max_linear_iterations;
   lin.warm_start = true;
-  m_v1 = m_v0;  // initial guess
+  // Under error control BDF2 starts Newton from its predictor, as BDF codes do: the linearisation
+  // error of one Newton step is then O(h^6) instead of O(h^3), below the error the estimate
+  // measures. Otherwise the first iteration linearises at the step's start (x0, v0).
+  const bool predicted = m_estimating && m_scheme == ImplicitScheme::Bdf2;
+  if (predicted) bdf2_predict(s0, h);
+  if (predicted)  // the initial guess
+    m_v1 = m_vp;
+  else
+    m_v1 = m_v0;
   // A scripted pin's v1 puts it on its path at t + h: x1 = xe + ex v1 = x_p(t + h). Its rows stay
   // Dirichlet rows (delta = 0); the first linearisation's K dx carries its motion to the free
   // particles' right-hand side.
@@ -314,8 +405,13 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1, Linear
     const Index p = pins.particles()[k];
     m_v1.segment<3>(3 * p) = (pins.position(k, s0.t + h) - m_xe.segment<3>(3 * p)) / c.ex;
   }
-  m_xlin = s0.x;
-  m_vlin = m_v0;
+  if (predicted) {  // (a conditional expression here would allocate a temporary vector)
+    m_xlin = m_xa + c.bx * m_v1;
+    m_vlin = m_va + c.cv * m_v1;
+  } else {
+    m_xlin = s0.x;
+    m_vlin = m_v0;
+  }
   double delta_norm = 0.0;
   int failed_predictions = 0;  // consecutive iterations whose rate cannot reach the tolerance
   bool converged = m_options.newton_iterations == 1;

@@ -19,9 +19,11 @@ enum class ImplicitScheme {
   /// M (v1 - v0) = h f((x0 + x1) / 2, (v0 + v1) / 2). Symplectic, energy-conserving for
   /// quadratic energies.
   Midpoint,
-  /// BDF2 with constant steps: x1 = 4/3 x0 - 1/3 x_prev + 2/3 h v1,
-  /// M (v1 - 4/3 v0 + 1/3 v_prev) = 2/3 h f(x1, v1). Starts (and restarts when h changes) with a
-  /// backward Euler step.
+  /// Variable-step BDF2: with w = h / h_prev (the previous step's size),
+  /// x1 = a0 x0 + a1 x_prev + b h v1, M (v1 - a0 v0 - a1 v_prev) = b h f(x1, v1), where
+  /// a0 = (1 + w)^2 / (1 + 2w), a1 = -w^2 / (1 + 2w), b = (1 + w) / (1 + 2w) (constant steps:
+  /// 4/3, -1/3, 2/3). Starts with a backward Euler step, and takes one wherever w exceeds
+  /// kBdf2MaxRatio (the formula's zero-stability needs w < 1 + sqrt(2)).
   Bdf2,
 };
 
@@ -93,13 +95,21 @@ class ImplicitStepper final : public Stepper {
                   std::unique_ptr<LinearSolver> solver, ImplicitOptions options = {});
   const char* name() const override;
   StepSummary step(const State& s0, double h, State& s1) override;
-  /// Step doubling (Hairer, Norsett and Wanner I, II.4): with the estimate on, a step of h is
-  /// one step of h (y1) and two of h/2 (y2); the result is the Richardson-extrapolated
-  /// y2 + (y2 - y1) / (2^p - 1) and the error estimate (y2 - y1) / (2^p - 1), the error of y2
-  /// (the lower-order value is controlled and the higher-order one kept, as embedded pairs do).
-  /// p = 1 for the beta step, 2 for the midpoint rule; BDF2 makes none (its steps would restart
-  /// at every change of h).
+  /// The beta step (p = 1) and the midpoint rule (p = 2) estimate by step doubling (Hairer,
+  /// Norsett and Wanner I, II.4): with the estimate on, a step of h is one step of h (y1) and two
+  /// of h/2 (y2); the result is the Richardson-extrapolated y2 + (y2 - y1) / (2^p - 1) and the
+  /// error estimate (y2 - y1) / (2^p - 1), the error of y2 (the lower-order value is controlled
+  /// and the higher-order one kept, as embedded pairs do).
+  /// BDF2 (order 2) estimates by Milne's device, for free: the local error is
+  /// C / (P - C) (y1 - yp), where yp is the quadratic through the last three committed states,
+  /// extrapolated to t + h, and C = -(1 + w)^2 h^3 / (6 w (1 + 2w)) and
+  /// P = h (h + h1) (h + h1 + h2) / 6 (h1, h2: the previous steps) are the error constants (of
+  /// y''') of the corrector and of the predictor. Under error control BDF2 starts with two
+  /// backward Euler steps (so that the predictor has its three states), whose estimate is the
+  /// same device on the explicit Euler predictor: -(y1 - y0 - h y0') / 2. Under error control
+  /// Newton starts from the predictor (see newton()).
   int error_estimate_order() const override;
+  double max_step_ratio() const override;
   double error_norm(double rtol, double atol) override;
   void set_error_estimation(bool on) override;
   const LinearSolver& linear_solver() const { return *m_solver; }
@@ -109,8 +119,11 @@ class ImplicitStepper final : public Stepper {
   /// Newton iterations, linear iterations, the backend's factorizations and times by phase.
   StepperStats stats() const override;
   std::string report() const override;
-  /// BDF2's previous state, h and end time, and the last linear correction (the warm start of
-  /// iterative backends): [has_prev, prev_h, prev_t1, prev_x (3n), prev_v (3n), delta (free dofs)].
+  /// The last linear correction on the free DOFs (the warm start of iterative backends), after,
+  /// for BDF2, its history: [has_last, last.t, last_t1, last_count, hist[0].t, last.x, last.v,
+  /// hist[0].x, hist[0].v] (3n each), and under error control the last step's result [x, v]
+  /// (see bdf2_history()). A checkpoint follows an accepted step, so the next step shifts last
+  /// into the history and drops hist[1]: it is not stored.
   std::vector<double> history() const override;
   void restore_history(const std::vector<double>& history) override;
 
@@ -121,6 +134,15 @@ class ImplicitStepper final : public Stepper {
   };
   /// Sets xa, va, vb, xe for a step of size h from s0 (and BDF2's history); returns the scalars.
   OneLeg set_up(const State& s0, double h);
+  /// BDF2: brings the history up to a step of h from s0 (a step from where the last one ended
+  /// shifts that step's start in; a retry of the last step keeps the history it had; under error
+  /// control, a start state that is not the last step's result starts it anew) and returns the
+  /// step's ratio w = h / h_prev, or 0 for a backward Euler step.
+  double bdf2_history(const State& s0, double h);
+  /// BDF2 under error control: the predictor of a step of h from s0 (m_xp, m_vp) and Milne's
+  /// factor C / (P - C); after the step, the local error estimate of s0 -> s1.
+  void bdf2_predict(const State& s0, double h);
+  void bdf2_estimate(const State& s0, const State& s1);
   /// Forces, Jacobians, the Newton matrix A and the right-hand side (zero on pinned DOFs) at
   /// (xlin, vlin).
   /// With discrete = true (Midpoint), the force is the discrete gradient between x0 and the
@@ -161,11 +183,28 @@ class ImplicitStepper final : public Stepper {
   std::unique_ptr<LinearSolver> m_solver_half;
   State m_full, m_half, m_start, m_end;
   Vec m_err_x, m_err_v;
-  // BDF2 history: the start state of the previous step (3n, BDF2 only) and that step's h and end
-  // time.
-  Vec m_prev_x, m_prev_v;
-  double m_prev_h = 0.0, m_prev_t1 = 0.0;
-  bool m_has_prev = false;
+  // BDF2 history: committed states before the current step's start, newest first (hist[0] =
+  // y_{n-1}, hist[1] = y_{n-2}; m_count of them are valid), and the last step's start, its end
+  // time and the count it had (a step that starts at m_last_t1 follows it; one at m_last.t
+  // retries it). Velocities with pinned DOFs zeroed, as the steps use them.
+  struct Point {
+    double t = 0.0;
+    Vec x, v;
+  };
+  Point m_hist[2], m_last;
+  double m_last_t1 = 0.0;
+  int m_count = 0, m_last_count = 0;
+  bool m_has_last = false;
+  double m_w = 0.0;  // the current BDF2 step's ratio h / h_prev; 0: a backward Euler step
+  bool m_estimating =
+      false;             // set_error_estimation(true): m_err_x, m_err_v, m_start, m_end hold it
+  Vec m_xp, m_vp;        // BDF2 under error control: the predictor (3n each)
+  double m_milne = 0.0;  // and Milne's factor C / (P - C)
 };
+
+/// The largest step ratio h / h_prev a BDF2 step takes (above it, a backward Euler step):
+/// variable-step BDF2 is zero-stable for ratios below 1 + sqrt(2) (Grigorieff 1983; Hairer,
+/// Norsett and Wanner I, III.5); 2 leaves a margin and lets a halved step grow back in one step.
+constexpr double kBdf2MaxRatio = 2.0;
 
 }  // namespace hooke

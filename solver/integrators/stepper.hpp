@@ -1,4 +1,5 @@
 #pragma once
+#include <limits>
 #include <string>
 #include <vector>
 
@@ -64,6 +65,10 @@ class Stepper {
   /// implicit family's step doubling: two extra steps per step); Simulation::set_error_control
   /// switches it on. Methods whose estimate is free (embedded pairs) ignore it.
   virtual void set_error_estimation(bool /*on*/) {}
+  /// The largest ratio h_next / h between consecutive steps that error control may propose
+  /// (Simulation::advance_adaptive): multistep formulas are stable only for bounded ratios.
+  /// Infinity (no bound beyond the controller's own) for one-step methods.
+  virtual double max_step_ratio() const { return std::numeric_limits<double>::infinity(); }
   /// Work and time over all steps so far (fields the method has no use for stay 0).
   virtual StepperStats stats() const { return {}; }
   /// One line of counters accumulated over all steps so far, for logs: format_stats(stats()) by

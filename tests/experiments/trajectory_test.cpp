@@ -37,15 +37,18 @@ TEST(ErrorControlAccuracy, AdaptiveMethodsMeetTheirToleranceOnTheWorkPrecisionCa
     ASSERT_TRUE(ref.trajectory.complete) << c.name << ": " << ref.trajectory.status;
     double size = 0.0;
     for (const State& s : ref.trajectory.samples) size = std::max(size, s.x.cwiseAbs().maxCoeff());
-    // The explicit pairs over rtol 1e-7 .. 1e-3, the implicit family (step doubling) over
-    // 1e-5 .. 1e-2, as the issue asks; on the stiff cloth the implicit family only at the two
-    // loosest (its tight runs take 8e3-5e4 steps of three Newton solves, minutes here: the
-    // tolerance study, `hooke workprecision`, has the whole table).
+    // The explicit pairs over rtol 1e-7 .. 1e-3, the implicit family over 1e-5 .. 1e-2, as the
+    // issue asks; on the stiff cloth the implicit family only at the two loosest: the step-doubled
+    // methods' tight runs take 8e3-5e4 steps of three Newton solves (minutes here), and BDF2,
+    // which keeps the value it estimates, misses by 33x (1e-4) and 118x (1e-5) there: its error
+    // stays at the tolerance to t = 0.25 s, then the folding cloth amplifies it 100-fold over
+    // 0.25 .. 0.5 s (CVODE's too: 1.6e-8 m at 0.25 s, 1.3e-6 m at 0.5 s at rtol 1e-5). The
+    // tolerance study, `hooke workprecision`, has the whole table.
     const std::vector<double> explicit_rtols = {1e-7, 1e-6, 1e-5, 1e-4, 1e-3};
     const std::vector<double> implicit_rtols = c.name == "stiff_cloth"
                                                    ? std::vector<double>{1e-3, 1e-2}
                                                    : std::vector<double>{1e-5, 1e-4, 1e-3, 1e-2};
-    for (const char* method : {"dopri5", "bs32", "implicit", "implicit-midpoint"}) {
+    for (const char* method : {"dopri5", "bs32", "implicit", "implicit-midpoint", "bdf2"}) {
       const bool is_explicit = method_info(method).kind == MethodKind::Explicit;
       long long last_steps = 0;
       for (double rtol : is_explicit ? explicit_rtols : implicit_rtols) {

@@ -488,8 +488,8 @@ TEST(StepDoubling, ResultIsTheExtrapolationOfOneStepAndTwoHalfSteps) {
     EXPECT_NEAR(doubled->error_norm(0.0, 1.0), rms, 1e-9 * rms);
     EXPECT_GT(rms, 0.0);
   }
-  // BDF2 makes no estimate (its steps would restart with every change of h).
-  EXPECT_EQ(hooke::make_stepper("bdf2", *p.system, options(1.0, true))->error_estimate_order(), 0);
+  // BDF2 estimates by Milne's device instead (Bdf2.* below).
+  EXPECT_EQ(hooke::make_stepper("bdf2", *p.system, options(1.0, true))->error_estimate_order(), 2);
 }
 
 TEST(StepDoubling, EstimateTracksTheTrueErrorOfTheHalfSteps) {
@@ -561,25 +561,138 @@ TEST(StepDoubling, ExtrapolatedStepsGainAnOrder) {
     });
 }
 
-TEST(Bdf2, StartsAndRestartsWithBackwardEulerStep) {
-  // The first BDF2 step, and the first after a change of h, are backward Euler steps (the same
-  // one-leg coefficients, hence bitwise equal).
+TEST(Bdf2, StartsWithBackwardEulerAndTakesOneAboveTheMaxRatio) {
+  // The first BDF2 step, and a step more than kBdf2MaxRatio times the previous one, are backward
+  // Euler steps (the same one-leg coefficients, hence bitwise equal); a smaller change of h
+  // continues the variable-step formula.
   ElasticPendulum p;
   const ImplicitOptions opt = options(1.0, true);
   auto bdf2 = hooke::make_stepper("bdf2", *p.system, opt);
   auto be = hooke::make_stepper("implicit", *p.system, opt);
-  State s0 = p.initial(), a, b;
-  ASSERT_EQ(bdf2->step(s0, 0.01, a).status, Status::Converged);
-  ASSERT_EQ(be->step(s0, 0.01, b).status, Status::Converged);
-  EXPECT_TRUE(a == b);
-  State a2, b2;
-  ASSERT_EQ(bdf2->step(a, 0.01, a2).status, Status::Converged);  // a true BDF2 step
-  ASSERT_EQ(be->step(a, 0.01, b2).status, Status::Converged);
-  EXPECT_FALSE(a2 == b2);
-  State a3, b3;
-  ASSERT_EQ(bdf2->step(a2, 0.005, a3).status, Status::Converged);  // h changed: restart
-  ASSERT_EQ(be->step(a2, 0.005, b3).status, Status::Converged);
-  EXPECT_TRUE(a3 == b3);
+  EXPECT_EQ(bdf2->max_step_ratio(), hooke::kBdf2MaxRatio);
+  State s = p.initial();
+  // h, ratio; whether the BDF2 step must equal the backward Euler step from the same state.
+  const struct {
+    double h;
+    bool is_be;
+  } steps[] = {{0.01, true},  {0.01, false},  {0.005, false},
+               {0.01, false}, {0.0201, true}, {0.03, false}};
+  for (const auto& st : steps) {
+    SCOPED_TRACE(st.h);
+    State a, b;
+    ASSERT_EQ(bdf2->step(s, st.h, a).status, Status::Converged);
+    ASSERT_EQ(be->step(s, st.h, b).status, Status::Converged);
+    EXPECT_EQ(a == b, st.is_be);
+    s = a;
+  }
+}
+
+TEST(Bdf2, ARetriedStepKeepsTheHistory) {
+  // A step retried from the same start (a rejected attempt: error control, halvings) continues
+  // from the history the rejected attempt had, bitwise as if the attempt had never been made.
+  ElasticPendulum p;
+  const ImplicitOptions opt = options(1.0, true);
+  auto tried = hooke::make_stepper("bdf2", *p.system, opt);
+  auto direct = hooke::make_stepper("bdf2", *p.system, opt);
+  const State s0 = p.initial();
+  State a, b, c, d, rejected;
+  ASSERT_EQ(tried->step(s0, 0.01, a).status, Status::Converged);
+  ASSERT_EQ(tried->step(a, 0.01, b).status, Status::Converged);
+  ASSERT_EQ(tried->step(b, 0.02, rejected).status, Status::Converged);  // thrown away
+  ASSERT_EQ(tried->step(b, 0.012, c).status, Status::Converged);
+  ASSERT_EQ(direct->step(s0, 0.01, a).status, Status::Converged);
+  ASSERT_EQ(direct->step(a, 0.01, b).status, Status::Converged);
+  ASSERT_EQ(direct->step(b, 0.012, d).status, Status::Converged);
+  EXPECT_TRUE(c == d);
+  EXPECT_FALSE(c == rejected);
+}
+
+TEST(Bdf2, UnderErrorControlAMovedStartStateRestartsTheHistory) {
+  // A start state that is not the last step's result (a collider or the strain limit moved it)
+  // would put a jump into the predictor's quadratic: under error control BDF2 starts anew there,
+  // bitwise as a fresh stepper from that state does. Without the move it goes on.
+  ElasticPendulum p;
+  const ImplicitOptions opt = options(1.0, true);
+  auto make = [&] {
+    auto st = hooke::make_stepper("bdf2", *p.system, opt);
+    st->set_error_estimation(true);
+    return st;
+  };
+  auto going = make();
+  State s = p.initial(), next;
+  for (int n = 0; n < 3; ++n) {
+    ASSERT_EQ(going->step(s, 0.01, next).status, Status::Converged);
+    s = next;
+  }
+  auto unmoved = going->history();
+  State moved = s;
+  moved.x[4] += 1e-3;  // the free particle's y
+  State c, d, e;
+  ASSERT_EQ(going->step(moved, 0.01, c).status, Status::Converged);
+  ASSERT_EQ(make()->step(moved, 0.01, d).status, Status::Converged);
+  EXPECT_TRUE(c == d);
+  auto resumed = make();
+  resumed->restore_history(unmoved);
+  ASSERT_EQ(resumed->step(s, 0.01, e).status, Status::Converged);
+  ASSERT_EQ(make()->step(s, 0.01, d).status, Status::Converged);
+  EXPECT_FALSE(e == d);  // unmoved: a true BDF2 step, not a fresh start
+}
+
+TEST(Bdf2, VariableStepsKeepOrderTwo) {
+  // Steps alternating between 0.7 h and 1.3 h (ratios 1.86 and 0.54, within kBdf2MaxRatio) stay
+  // second order on the exact two-particle spring, one Newton step and converged.
+  TwoParticleSpring sp(kSpringStiffness);
+  const double s = 0.1 * sp.L, w = sp.omega(), T = 1.3 * kPi / w;
+  for (bool converged : {false, true}) {
+    const Scheme sc{converged ? "Bdf2VariableConverged" : "Bdf2VariableOneNewtonStep", "bdf2", 1.0,
+                    converged, 2};
+    check_order(sc, "two-particle-spring", T, 20, [&](int N) {
+      auto stepper = hooke::make_stepper("bdf2", *sp.system, options(1.0, converged));
+      State st = sp.initial(s), next;
+      const double h = T / N;
+      for (int n = 0; n < N; ++n) {
+        const double hn = n + 1 == N ? T - st.t : (n % 2 == 0 ? 0.7 : 1.3) * h;
+        EXPECT_EQ(stepper->step(st, hn, next).status, Status::Converged);
+        std::swap(st, next);
+      }
+      return scaled_error(st, sp.exact_xv(s, T), sp.omega());
+    });
+  }
+}
+
+TEST(Bdf2, MilneEstimateTracksTheTrueLocalError) {
+  // From exact states (so that the history is exact and the step's error is its local error),
+  // with steps of different sizes: the estimate of the backward Euler start step and of the
+  // BDF2 steps approaches the true local error as h shrinks.
+  TwoParticleSpring sp(kSpringStiffness);
+  const double A = 0.1 * sp.L, w = sp.omega();
+  auto exact = [&](double t) {
+    State st(2);
+    const Vec xv = sp.exact_xv(A, t);
+    st.x = xv.head(6);
+    st.v = xv.tail(6);
+    st.t = t;
+    return st;
+  };
+  for (double hw : {0.02, 0.01}) {
+    auto stepper = hooke::make_stepper("bdf2", *sp.system, options(1.0, true));
+    stepper->set_error_estimation(true);
+    double t = 0.3 / w;
+    const double hs[] = {hw / w, 1.2 * hw / w, 0.9 * hw / w, 1.5 * hw / w};
+    for (int n = 0; n < 4; ++n) {
+      State s1;
+      ASSERT_EQ(stepper->step(exact(t), hs[n], s1).status, Status::Converged);
+      const State ref = exact(t + hs[n]);
+      Vec e(12);
+      e << ref.x - s1.x, ref.v - s1.v;
+      const double truth = std::sqrt(e.squaredNorm() / 12.0);
+      const double est = stepper->error_norm(0.0, 1.0);
+      std::printf("[ milne    ] h w = %.2f step %d (%s): estimate %.4e, true local error %.4e\n",
+                  hw, n, n < 2 ? "BE" : "BDF2", est, truth);
+      EXPECT_NEAR(est / truth, 1.0, hw < 0.015 ? 0.05 : 0.1) << "h w = " << hw << " step " << n;
+      t += hs[n];
+    }
+  }
 }
 
 // ---- Convergence orders ----

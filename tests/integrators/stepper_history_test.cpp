@@ -107,6 +107,45 @@ TEST_P(StepperHistory, ResumedRunMatchesUninterruptedRun) {
   EXPECT_GT((straight.state().x - c.state.x).lpNorm<Eigen::Infinity>(), 0.0);  // it did move
 }
 
+// The same under error control (methods with a local error estimate): the stepper's history and
+// the controller's state (counts, next step, memory) continue the run on the same bits.
+TEST_P(StepperHistory, ResumedAdaptiveRunMatchesUninterruptedRun) {
+  const test::Cloth c = cloth();
+  const MassSpringSystem& sys = *c.system;
+  const std::string why = method_unsupported(GetParam().method, sys);
+  if (!why.empty()) GTEST_SKIP() << why;
+  if (method_info(GetParam().method).error_estimate_order == 0)
+    GTEST_SKIP() << GetParam().method << " makes no error estimate";
+  ErrorControl control;
+  control.rtol = 1e-5;
+  control.atol = 1e-8;
+  const double t_end = 1.0;
+  // The fixture's Newton and pcg caps leave steps NotConverged, which a Simulation accepts.
+  auto taken = [](const StepSummary& s) {
+    return s.status == Status::Converged || s.status == Status::NotConverged;
+  };
+  auto adaptive = [&](const State& s0) {
+    auto sim = std::make_unique<Simulation>(sys, stepper(sys), s0);
+    sim->set_error_control(control, kH);
+    return sim;
+  };
+  auto straight = adaptive(c.state);
+  for (int k = 0; k < 12; ++k) ASSERT_TRUE(taken(straight->advance_adaptive(t_end)));
+  auto first = adaptive(c.state);
+  for (int k = 0; k < 5; ++k) ASSERT_TRUE(taken(first->advance_adaptive(t_end)));
+  auto second = adaptive(first->state());
+  second->stepper().restore_history(first->stepper().history());
+  second->restore_adaptive(first->accepted_steps(), first->rejected_steps(), first->next_step(),
+                           first->controller()->previous_error(),
+                           first->controller()->last_rejected());
+  for (int k = 0; k < 7; ++k) ASSERT_TRUE(taken(second->advance_adaptive(t_end)));
+  ASSERT_TRUE(second->stepper().exact_resume()) << "every error-controlled method resumes exactly";
+  EXPECT_EQ(second->state().t, straight->state().t);
+  EXPECT_TRUE(second->state().x == straight->state().x && second->state().v == straight->state().v);
+  EXPECT_EQ(second->accepted_steps(), straight->accepted_steps());
+  EXPECT_EQ(second->rejected_steps(), straight->rejected_steps());
+}
+
 TEST_P(StepperHistory, RestoringForeignHistoryIsRefused) {
   const test::Cloth c = cloth();
   const std::string why = method_unsupported(GetParam().method, *c.system);

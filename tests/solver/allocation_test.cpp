@@ -381,6 +381,37 @@ TEST(Allocation, ImplicitStepsDoNotAllocate) {
   }
 }
 
+// The same under error control, for every method with an estimate on pcg (no CHOLMOD inside):
+// after 4 warm-up steps (BDF2's first true step under error control is its third), 50
+// error-controlled steps (step doubling, Milne's estimate, rejections, the controller) allocate
+// nothing.
+TEST(Allocation, ErrorControlledStepsDoNotAllocate) {
+  auto sys = make_cloth();
+  hooke::ErrorControl control;
+  control.rtol = 1e-6;
+  control.atol = 1e-9;
+  for (const auto& method : hooke::methods()) {
+    if (method.error_estimate_order == 0) continue;
+    hooke::MethodOptions opt;
+    if (method.kind == hooke::MethodKind::Implicit) {
+      hooke::ImplicitOptions io = hooke::implicit_defaults(method.name);
+      io.linear_solver = "pcg";
+      opt = io;
+    }
+    hooke::Simulation sim(*sys, hooke::make_stepper(method.name, *sys, opt), cloth_state());
+    sim.set_error_control(control, 1e-4);
+    for (int k = 0; k < 4; ++k)
+      ASSERT_EQ(sim.advance_adaptive(1.0).status, hooke::Status::Converged);
+    const long before = g_allocations.load();
+    for (int k = 0; k < 50; ++k)
+      ASSERT_EQ(sim.advance_adaptive(1.0).status, hooke::Status::Converged);
+    const long allocations = g_allocations.load() - before;
+    std::printf("[ alloc    ] %-17s adaptive: %lld accepted, %lld rejected, %ld allocations\n",
+                method.name, sim.accepted_steps(), sim.rejected_steps(), allocations);
+    EXPECT_EQ(allocations, 0) << method.name << " (OpenMP threads: " << openmp_threads() << ")";
+  }
+}
+
 // Where CHOLMOD's allocations come from: on a warmed-up backend, solve() allocates nothing (its
 // workspace is kept between calls) and every factor() allocates the same number of times
 // (cholmod_l_factorize's internal temporaries, allocated and freed inside the call).

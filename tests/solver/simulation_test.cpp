@@ -7,6 +7,8 @@
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <memory>
 #include <string>
@@ -15,6 +17,7 @@
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/registry.hpp"
+#include "support/order.hpp"
 #include "support/systems.hpp"
 
 namespace hooke {
@@ -146,53 +149,129 @@ State run_fixed(const std::string& method, const MassSpringSystem& sys, const St
   return sim.state();
 }
 
+/// The two small problems of the tolerance tests: the undamped two-particle spring (exact
+/// solution) over 1 s and the spring pendulum over 2 s (reference: dopri5 at 1e-5 s).
+struct ToleranceProblems {
+  test::TwoParticleSpring sp{100.0};
+  SpringPendulum pend;
+  static constexpr double kA = 0.2, kTSpring = 1.0, kTPend = 2.0;
+  State pend_ref = run_fixed("dopri5", *pend.system, pend.initial(), kTPend, 200000);
+  static const char* name(int problem) { return problem == 0 ? "spring" : "pendulum"; }
+  /// Runs `method` under control c on problem 0 (spring) or 1 (pendulum); the achieved error
+  /// (largest over particles at the end) and rtol max|x| + atol, printed.
+  struct Result {
+    AdaptiveRun run;
+    double error, allowed;
+  };
+  Result run(const std::string& method, int problem, const ErrorControl& c) const {
+    Result out;
+    Vec exact_x;
+    if (problem == 0) {
+      out.run = run_adaptive(method, *sp.system, sp.initial(kA), kTSpring, c, 1e-4);
+      exact_x = sp.exact_xv(kA, kTSpring).head(6);
+      EXPECT_EQ(out.run.state.t, kTSpring);
+    } else {
+      out.run = run_adaptive(method, *pend.system, pend.initial(), kTPend, c, 1e-4);
+      exact_x = pend_ref.x;
+      EXPECT_EQ(out.run.state.t, kTPend);
+    }
+    out.error = (out.run.state.x - exact_x).cwiseAbs().maxCoeff();
+    out.allowed = c.rtol * exact_x.cwiseAbs().maxCoeff() + c.atol;
+    std::printf(
+        "[ adaptive ] %-17s %-9s rtol %.0e: error %.3e (%.2f of rtol max|x| + atol), "
+        "%lld accepted, %lld rejected\n",
+        method.c_str(), name(problem), c.rtol, out.error, out.error / out.allowed, out.run.accepted,
+        out.run.rejected);
+    return out;
+  }
+};
+
+ErrorControl tolerances(double rtol) {
+  ErrorControl c;
+  c.rtol = rtol;
+  c.atol = 1e-3 * rtol;
+  return c;
+}
+
 // Achieved error against the requested tolerance (issue 21, acceptance 1, on small systems): the
 // largest position error at T is within 10x of rtol max|x| + atol for rtol 1e-3 ... 1e-7 (the
 // embedded pairs) and 1e-2 ... 1e-5 (the implicit family's step doubling), and the accepted
-// steps fall as rtol loosens. The pendulum's reference is an independent fixed-step run.
+// steps fall as rtol loosens.
 TEST(SimulationAdaptive, AchievedErrorFollowsTheTolerance) {
-  test::TwoParticleSpring sp(100.0);
-  const double A = 0.2, T_spring = 1.0;
-  SpringPendulum pend;
-  const double T_pend = 2.0;
-  const State pend_ref = run_fixed("dopri5", *pend.system, pend.initial(), T_pend, 200000);
+  const ToleranceProblems p;
   const std::vector<double> explicit_rtols = {1e-7, 1e-6, 1e-5, 1e-4, 1e-3};
   const std::vector<double> implicit_rtols = {1e-5, 1e-4, 1e-3, 1e-2};
   for (const std::string method : {"dopri5", "bs32", "implicit", "implicit-midpoint"}) {
     long long last_accepted[2] = {0, 0};
     const bool is_explicit = method_info(method).kind == MethodKind::Explicit;
     for (double rtol : is_explicit ? explicit_rtols : implicit_rtols) {
-      ErrorControl c;
-      c.rtol = rtol;
-      c.atol = 1e-3 * rtol;
       for (int problem = 0; problem < 2; ++problem) {
-        AdaptiveRun r;
-        Vec exact_x;
-        if (problem == 0) {
-          r = run_adaptive(method, *sp.system, sp.initial(A), T_spring, c, 1e-4);
-          exact_x = sp.exact_xv(A, T_spring).head(6);
-          EXPECT_EQ(r.state.t, T_spring);
-        } else {
-          r = run_adaptive(method, *pend.system, pend.initial(), T_pend, c, 1e-4);
-          exact_x = pend_ref.x;
-          EXPECT_EQ(r.state.t, T_pend);
-        }
-        const double err = (r.state.x - exact_x).cwiseAbs().maxCoeff();
-        const double allowed = rtol * exact_x.cwiseAbs().maxCoeff() + c.atol;
-        std::printf(
-            "[ adaptive ] %-17s %-9s rtol %.0e: error %.3e (%.2f of rtol max|x| + atol), "
-            "%lld accepted, %lld rejected\n",
-            method.c_str(), problem == 0 ? "spring" : "pendulum", rtol, err, err / allowed,
-            r.accepted, r.rejected);
-        EXPECT_LE(err, 10.0 * allowed) << method << " problem " << problem << " rtol " << rtol;
+        const ToleranceProblems::Result r = p.run(method, problem, tolerances(rtol));
+        EXPECT_LE(r.error, 10.0 * r.allowed)
+            << method << " problem " << problem << " rtol " << rtol;
         if (last_accepted[problem] > 0) {
-          EXPECT_LT(r.accepted, last_accepted[problem])
+          EXPECT_LT(r.run.accepted, last_accepted[problem])
               << method << " problem " << problem << " rtol " << rtol;
         }
-        last_accepted[problem] = r.accepted;
+        last_accepted[problem] = r.run.accepted;
       }
     }
   }
+}
+
+// BDF2 keeps the value whose error it estimates (local extrapolation, which makes the step-doubled
+// methods above an order better than their estimate, would cost BDF2 its stability on stiff
+// oscillations). So on these undamped oscillators its global error is the sum of its local
+// errors over the run: with steps h ~ rtol^(1/3) (local error ~ h^3 ~ rtol) it falls as
+// rtol^(2/3), not rtol, and exceeds 10 rtol max|x| at tight tolerances over several periods
+// (measured: 43x on the spring and 104x on the pendulum at rtol 1e-5, 3-9x at 1e-2). Asserted:
+// that slope (the controller does what local error control promises), and accepted steps that
+// fall as rtol loosens. The work-precision cases (ErrorControlAccuracy) hold it to 10x.
+TEST(SimulationAdaptive, Bdf2GlobalErrorFallsAsLocalErrorControlPromises) {
+  const ToleranceProblems p;
+  for (int problem = 0; problem < 2; ++problem) {
+    std::vector<double> tols, errs;
+    long long last_accepted = 0;
+    for (double rtol : {1e-5, 1e-4, 1e-3, 1e-2}) {
+      const ToleranceProblems::Result r = p.run("bdf2", problem, tolerances(rtol));
+      tols.push_back(rtol);
+      errs.push_back(r.error);
+      if (last_accepted > 0) {
+        EXPECT_LT(r.run.accepted, last_accepted) << "rtol " << rtol;
+      }
+      last_accepted = r.run.accepted;
+    }
+    const double slope = test::fitted_order(tols, errs);  // the log-log slope
+    std::printf("[ adaptive ] bdf2 %-9s error ~ rtol^%.3f\n", ToleranceProblems::name(problem),
+                slope);
+    EXPECT_NEAR(slope, 2.0 / 3.0, 0.1) << "problem " << problem;
+  }
+}
+
+// Under error control a BDF2 step is at most kBdf2MaxRatio times the one before it, landings on
+// output times included (its variable-step formula is zero-stable only for bounded ratios).
+TEST(SimulationAdaptive, Bdf2StepsGrowAtMostByTheMaxRatio) {
+  test::TwoParticleSpring sp(100.0);
+  ErrorControl c;
+  c.rtol = 1e-4;
+  c.atol = 1e-7;
+  Simulation sim(*sp.system, make_stepper("bdf2", *sp.system), sp.initial(0.2));
+  sim.set_error_control(c, 1e-5);
+  double h_prev = 0.0, largest_ratio = 0.0;
+  for (int frame = 1; frame <= 40; ++frame) {
+    const double t_end = 0.0237 * frame;  // not a multiple of any step: every frame lands
+    while (sim.state().t < t_end) {
+      const double t0 = sim.state().t;
+      ASSERT_EQ(sim.advance_adaptive(t_end).status, Status::Converged);
+      const double h = sim.state().t - t0;
+      if (h_prev > 0.0) largest_ratio = std::max(largest_ratio, h / h_prev);
+      h_prev = h;
+    }
+  }
+  std::printf("[ adaptive ] bdf2 largest step ratio %.4f over %lld steps\n", largest_ratio,
+              sim.accepted_steps());
+  EXPECT_LE(largest_ratio, kBdf2MaxRatio * (1.0 + 1e-9));
+  EXPECT_GT(largest_ratio, 1.2);  // the steps did grow
 }
 
 // A first step far too large is rejected and counted, and the run still meets its tolerance;
