@@ -267,7 +267,8 @@ const std::vector<ReaderEntry>& readers() {
 
 bool read_error_control(TableReader& r, const std::string& method, ErrorControl& c) {
   const MethodInfo& info = method_info(method);
-  if (info.kind == MethodKind::WholeStep) return false;
+  if (info.name == std::string("cvode") || info.name == std::string("ida"))
+    return false;  // their rtol and atol are their own (read_sundials)
   const bool adaptive = r.boolean("adaptive", false);
   if (!adaptive) {
     const Governing off{

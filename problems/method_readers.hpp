@@ -18,9 +18,9 @@ MethodOptions read_method_options(TableReader& integrator, const std::string& me
 
 /// Reads integrator.adaptive and, when it is true, the error control's rtol, atol and max_dt
 /// into `control`; returns adaptive. Refuses adaptive = true for a method without a local error
-/// estimate (MethodInfo::error_estimate_order), and the tolerances without adaptive. Whole-step
-/// methods do not take these keys (CVODE and IDA read rtol and atol as their own): nothing is
-/// read for them. Call before read_method_options.
+/// estimate (MethodInfo::error_estimate_order), and the tolerances without adaptive. CVODE and
+/// IDA do not take these keys (they read rtol and atol as their own): nothing is read for them.
+/// Call before read_method_options.
 bool read_error_control(TableReader& integrator, const std::string& method, ErrorControl& control);
 
 }  // namespace hooke

@@ -80,13 +80,24 @@ const std::vector<std::string> kLattices = {"grid", "cantilever"};
 const std::vector<std::string> kLines = {"chain", "hair"};
 const std::vector<std::string> kImplicit = {"implicit", "implicit-midpoint", "bdf2"};
 const std::vector<std::string> kSundials = {"cvode", "ida"};
-// Methods that read integrator.adaptive (every explicit and implicit one), and those that can run
-// under error control (MethodInfo::error_estimate_order > 0).
-const std::vector<std::string> kFixedStepFamilies = {
-    "forward-euler", "symplectic-euler", "midpoint",          "trapezoid", "rk4", "dopri5",
-    "bs32",          "implicit",         "implicit-midpoint", "bdf2"};
-const std::vector<std::string> kAdaptive = {"dopri5", "bs32", "implicit", "implicit-midpoint",
-                                            "bdf2"};
+// Methods that read integrator.adaptive (all but cvode and ida, which control their error
+// always), and those that can run under error control (MethodInfo::error_estimate_order > 0).
+const std::vector<std::string> kFixedStepFamilies = {"forward-euler",
+                                                     "symplectic-euler",
+                                                     "midpoint",
+                                                     "trapezoid",
+                                                     "rk4",
+                                                     "dopri5",
+                                                     "bs32",
+                                                     "implicit",
+                                                     "implicit-midpoint",
+                                                     "bdf2",
+                                                     "ceres-implicit",
+                                                     "fast-mass-spring",
+                                                     "xpbd"};
+const std::vector<std::string> kAdaptive = {
+    "dopri5", "bs32",           "implicit",         "implicit-midpoint",
+    "bdf2",   "ceres-implicit", "fast-mass-spring", "xpbd"};
 
 const std::string kSpread = "mass spread evenly over the particles; give this or mesh.mass";
 const std::string kEach = "mass of each particle; give this or mesh.total_mass";
@@ -571,8 +582,9 @@ void add_implicit_keys(std::vector<SceneKey>& t) {
           .in(kFixedStepFamilies)
           .def("false")
           .meaning("error-controlled steps (methods with a local error estimate: dopri5, bs32, "
-                   "implicit, implicit-midpoint, bdf2): time.dt is the first step, rtol and atol "
-                   "bound each step's local error"));
+                   "implicit, implicit-midpoint, bdf2; ceres-implicit, fast-mass-spring and xpbd "
+                   "by step doubling): time.dt is the first step, rtol and atol bound each "
+                   "step's local error"));
   add(K("integrator.rtol", T::Number)
           .in(kAdaptive)
           .def("1e-08")

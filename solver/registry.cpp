@@ -4,6 +4,7 @@
 
 #include "hooke/config.hpp"
 #include "hooke/integrators/explicit_mass_spring_stepper.hpp"
+#include "hooke/integrators/step_doubling.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #if HOOKE_WITH_SUNDIALS
 #include "hooke/whole_step/cvode_stepper.hpp"
@@ -77,15 +78,23 @@ struct WholeStepEntry {
 };
 
 /// The entry of a whole-step method whose stepper T is constructed from (system, T::Options).
+/// A method of order `doubled` > 0 comes wrapped in StepDoubling, which estimates its error for
+/// error control (and otherwise passes its steps through).
 template <class T>
 WholeStepEntry whole_step(const char* name, const char* description,
-                          std::string (*unsupported)(const MassSpringSystem&) = nullptr) {
-  auto make = [name](const MassSpringSystem& sys,
-                     const MethodOptions& m) -> std::unique_ptr<Stepper> {
-    return std::make_unique<T>(sys, m.as<typename T::Options>(name));
+                          std::string (*unsupported)(const MassSpringSystem&) = nullptr,
+                          int doubled = 0) {
+  auto make = [name, doubled](const MassSpringSystem& sys,
+                              const MethodOptions& m) -> std::unique_ptr<Stepper> {
+    const typename T::Options options = m.as<typename T::Options>(name);
+    if (doubled == 0) return std::make_unique<T>(sys, options);
+    return std::make_unique<StepDoubling>(
+        sys, [&sys, options] { return std::make_unique<T>(sys, options); }, doubled);
   };
-  return {
-      {name, MethodKind::WholeStep, description}, make, unsupported, &typeid(typename T::Options)};
+  return {{name, MethodKind::WholeStep, description, doubled},
+          make,
+          unsupported,
+          &typeid(typename T::Options)};
 }
 
 // Whole-step methods, each under its build option.
@@ -100,19 +109,19 @@ const std::vector<WholeStepEntry>& whole_step_table() {
 #if HOOKE_WITH_CERES
     whole_step<CeresImplicitStepper>(
         "ceres-implicit", "backward Euler solved exactly as nonlinear least squares with Ceres",
-        ceres_implicit_unsupported),
+        ceres_implicit_unsupported, 1),
 #endif
 #if HOOKE_WITH_CHOLMOD
     whole_step<FastMassSpringStepper>(
         "fast-mass-spring",
         "Liu et al. 2013 local/global backward Euler on a prefactored CHOLMOD matrix "
         "(Chebyshev or L-BFGS acceleration)",
-        fast_mass_spring_unsupported),
+        fast_mass_spring_unsupported, 1),
 #endif
     whole_step<XpbdStepper>(
         "xpbd",
         "extended position-based dynamics with substeps (Macklin et al. 2019), compliance 1/k",
-        xpbd_unsupported),
+        xpbd_unsupported, 1),
   };
   return table;
 }

@@ -108,7 +108,8 @@ std::vector<double> ImplicitStepper::history() const {
     for (const Vec* v : {&m_last.x, &m_last.v, &m_hist[0].x, &m_hist[0].v})
       h.insert(h.end(), v->data(), v->data() + v->size());
     if (m_estimating)
-      for (const Vec* v : {&m_end.x, &m_end.v}) h.insert(h.end(), v->data(), v->data() + v->size());
+      for (const Vec* v : {&m_error.end.x, &m_error.end.v})
+        h.insert(h.end(), v->data(), v->data() + v->size());
   }
   // The correction on the free DOFs only.
   for (Index i = 0; i < m_delta.size(); ++i)
@@ -131,8 +132,9 @@ void ImplicitStepper::restore_history(const std::vector<double>& h) {
     m_last_count = int(h[3]);
     m_hist[0].t = h[4];
     size_t k = 5;
-    for (Vec* v : {&m_last.x, &m_last.v, &m_hist[0].x, &m_hist[0].v, &m_end.x, &m_end.v}) {
-      if (k == head) break;  // m_end only under error control
+    for (Vec* v :
+         {&m_last.x, &m_last.v, &m_hist[0].x, &m_hist[0].v, &m_error.end.x, &m_error.end.v}) {
+      if (k == head) break;  // m_error.end only under error control
       *v = Eigen::Map<const Vec>(h.data() + k, Index(N));
       k += N;
     }
@@ -196,8 +198,8 @@ double ImplicitStepper::bdf2_history(const State& s0, double h) {
   // on through such a state, as BDF2 always has.
   auto moved = [&] {
     const Vec& free = m_system.moving();
-    return (s0.x - m_end.x).cwiseProduct(free).cwiseAbs().maxCoeff() != 0.0 ||
-           (m_v0 - m_end.v).cwiseProduct(free).cwiseAbs().maxCoeff() != 0.0;
+    return (s0.x - m_error.end.x).cwiseProduct(free).cwiseAbs().maxCoeff() != 0.0 ||
+           (m_v0 - m_error.end.v).cwiseProduct(free).cwiseAbs().maxCoeff() != 0.0;
   };
   if (m_has_last && std::abs(m_last_t1 - s0.t) <= tol &&
       !(m_estimating && moved())) {  // follows the last step
@@ -242,15 +244,12 @@ void ImplicitStepper::bdf2_predict(const State& s0, double h) {
 }
 
 void ImplicitStepper::bdf2_estimate(const State& s0, const State& s1) {
-  m_err_x = m_milne * (s1.x - m_xp);
-  m_err_v = m_milne * (s1.v - m_vp);
+  m_error.err_x = m_milne * (s1.x - m_xp);
+  m_error.err_v = m_milne * (s1.v - m_vp);
   // Pinned and scripted particles follow their prescription: no integration error.
-  m_A.zero_pinned(m_err_x);
-  m_A.zero_pinned(m_err_v);
-  m_start.x = s0.x;
-  m_start.v = s0.v;
-  m_end.x = s1.x;
-  m_end.v = s1.v;
+  m_A.zero_pinned(m_error.err_x);
+  m_A.zero_pinned(m_error.err_v);
+  m_error.set_ends(s0, s1);
 }
 
 void ImplicitStepper::assemble(const OneLeg& c, ConstRef x0, bool discrete) {
@@ -302,11 +301,7 @@ void ImplicitStepper::set_error_estimation(bool on) {
   m_estimating = on;
   m_doubling = on && m_scheme != ImplicitScheme::Bdf2;
   const Index n = m_system.num_particles();
-  if (on && m_err_x.size() == 0) {
-    for (State* s : {&m_start, &m_end}) *s = State(n);
-    m_err_x.setZero(3 * n);
-    m_err_v.setZero(3 * n);
-  }
+  if (on && !m_error.allocated()) m_error.allocate(n);
   if (on && m_scheme == ImplicitScheme::Bdf2 && m_xp.size() == 0) {
     m_xp.setZero(3 * n);
     m_vp.setZero(3 * n);
@@ -324,10 +319,7 @@ void ImplicitStepper::set_error_estimation(bool on) {
 
 double ImplicitStepper::error_norm(double rtol, double atol) {
   HOOKE_ASSERT(m_estimating, name() << ": error_norm without set_error_estimation(true)");
-  // The weighted RMS over the 6n components [x; v], as the explicit pairs' (both halves have 3n).
-  const double ex = wrms_norm(m_err_x, m_start.x, m_end.x, rtol, atol);
-  const double ev = wrms_norm(m_err_v, m_start.v, m_end.v, rtol, atol);
-  return std::sqrt(0.5 * (ex * ex + ev * ev));
+  return m_error.norm(rtol, atol);
 }
 
 StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
@@ -345,33 +337,15 @@ StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
 
 StepSummary ImplicitStepper::doubled(const State& s0, double h, State& s1) {
   // Three steps; a failure of any ends the step with its summary (the caller shrinks h).
-  auto add = [](StepSummary& total, const StepSummary& s) {
-    total.iterations += s.iterations;
-    total.newton_iterations += s.newton_iterations;
-    total.residual = s.residual;
-    if (s.status != Status::Converged && total.status == Status::Converged) {
-      total.status = s.status;
-      total.message = s.message;
-    }
-  };
   LinearSolver& half = m_solver_half ? *m_solver_half : *m_solver;
   StepSummary out;
-  add(out, newton(s0, h, m_full, *m_solver));
-  if (out.status == Status::BrokeDown || out.status == Status::Fatal) return out;
-  add(out, newton(s0, 0.5 * h, m_half, half));
-  if (out.status == Status::BrokeDown || out.status == Status::Fatal) return out;
-  add(out, newton(m_half, (s0.t + h) - m_half.t, s1, half));
-  if (out.status == Status::BrokeDown || out.status == Status::Fatal) return out;
-  const double c = 1.0 / ((1 << error_estimate_order()) - 1);
-  m_err_x = c * (s1.x - m_full.x);
-  m_err_v = c * (s1.v - m_full.v);
-  m_start.x = s0.x;
-  m_start.v = s0.v;
-  s1.x += m_err_x;
-  s1.v += m_err_v;
-  s1.t = s0.t + h;
-  m_end.x = s1.x;
-  m_end.v = s1.v;
+  add_substep(out, newton(s0, h, m_full, *m_solver));
+  if (step_failed(out)) return out;
+  add_substep(out, newton(s0, 0.5 * h, m_half, half));
+  if (step_failed(out)) return out;
+  add_substep(out, newton(m_half, (s0.t + h) - m_half.t, s1, half));
+  if (step_failed(out)) return out;
+  m_error.extrapolate(s0, m_full, error_estimate_order(), h, s1);
   return out;
 }
 

@@ -2,6 +2,7 @@
 #include <memory>
 #include <string>
 
+#include "hooke/integrators/step_doubling.hpp"
 #include "hooke/integrators/step_matrix.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/linear/linear_solver.hpp"
@@ -181,8 +182,8 @@ class ImplicitStepper final : public Stepper {
   // factorization across steps (pcg-cholmod, petsc) sees one slowly varying h in each instance
   // instead of h and h/2 in turn; null when the backend is not in the registry (then shared).
   std::unique_ptr<LinearSolver> m_solver_half;
-  State m_full, m_half, m_start, m_end;
-  Vec m_err_x, m_err_v;
+  State m_full, m_half;
+  LocalError m_error;  // the estimate, by doubling or (BDF2) Milne's device
   // BDF2 history: committed states before the current step's start, newest first (hist[0] =
   // y_{n-1}, hist[1] = y_{n-2}; m_count of them are valid), and the last step's start, its end
   // time and the count it had (a step that starts at m_last_t1 follows it; one at m_last.t
@@ -195,11 +196,10 @@ class ImplicitStepper final : public Stepper {
   double m_last_t1 = 0.0;
   int m_count = 0, m_last_count = 0;
   bool m_has_last = false;
-  double m_w = 0.0;  // the current BDF2 step's ratio h / h_prev; 0: a backward Euler step
-  bool m_estimating =
-      false;             // set_error_estimation(true): m_err_x, m_err_v, m_start, m_end hold it
-  Vec m_xp, m_vp;        // BDF2 under error control: the predictor (3n each)
-  double m_milne = 0.0;  // and Milne's factor C / (P - C)
+  double m_w = 0.0;           // the current BDF2 step's ratio h / h_prev; 0: a backward Euler step
+  bool m_estimating = false;  // set_error_estimation(true): m_error holds the estimate
+  Vec m_xp, m_vp;             // BDF2 under error control: the predictor (3n each)
+  double m_milne = 0.0;       // and Milne's factor C / (P - C)
 };
 
 /// The largest step ratio h / h_prev a BDF2 step takes (above it, a backward Euler step):

@@ -9,6 +9,27 @@ double Stepper::error_norm(double, double) {
   return 0.0;
 }
 
+void add_work(StepperStats& to, const StepperStats& from) {
+  for (auto m : {&StepperStats::internal_steps, &StepperStats::iterations,
+                 &StepperStats::linear_iterations, &StepperStats::factorizations})
+    to.*m += from.*m;
+  for (auto m : {&StepperStats::assembly_seconds, &StepperStats::analyze_seconds,
+                 &StepperStats::factor_seconds, &StepperStats::solve_seconds,
+                 &StepperStats::local_seconds, &StepperStats::global_seconds,
+                 &StepperStats::total_seconds, &StepperStats::factor_nonzeros})
+    to.*m += from.*m;
+}
+
+void add_substep(StepSummary& total, const StepSummary& s) {
+  total.iterations += s.iterations;
+  total.newton_iterations += s.newton_iterations;
+  total.residual = s.residual;
+  if (s.status != Status::Converged && total.status == Status::Converged) {
+    total.status = s.status;
+    total.message = s.message;
+  }
+}
+
 std::string format_stats(const StepperStats& s) {
   std::ostringstream os;
   os << s.steps << " steps";

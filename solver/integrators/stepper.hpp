@@ -43,6 +43,18 @@ struct StepperStats {
 /// "N steps, I iterations, L linear iterations, F factorizations; assembly a s, ..." with the
 /// fields that are not zero: the line report() prints by default.
 std::string format_stats(const StepperStats& s);
+/// Adds `from`'s work (counts but steps, times, factor entries) to `to`, e.g. the work of a
+/// second instance of a method (step doubling's half steps).
+void add_work(StepperStats& to, const StepperStats& from);
+
+/// The summary of several steps that make one (step doubling): `s`'s counts added to `total`,
+/// its residual kept, and the first status that is not Converged with its message.
+void add_substep(StepSummary& total, const StepSummary& s);
+/// True for a status that ends a step (BrokeDown, Fatal), as opposed to Converged and the
+/// recoverable NotConverged.
+inline bool step_failed(const StepSummary& s) {
+  return s.status == Status::BrokeDown || s.status == Status::Fatal;
+}
 
 /// Advances a mass-spring state by one step of size h. Implementations hold a reference to their
 /// (read-only) system and own all their scratch; step() must not allocate once warmed up.

@@ -381,17 +381,21 @@ TEST(Allocation, ImplicitStepsDoNotAllocate) {
   }
 }
 
-// The same under error control, for every method with an estimate on pcg (no CHOLMOD inside):
-// after 4 warm-up steps (BDF2's first true step under error control is its third), 50
-// error-controlled steps (step doubling, Milne's estimate, rejections, the controller) allocate
-// nothing.
+// The same under error control, for every method with an estimate, the implicit ones on pcg (no
+// CHOLMOD inside): after 4 warm-up steps (BDF2's first true step under error control is its
+// third), 50 error-controlled steps (step doubling, Milne's estimate, rejections, the controller)
+// allocate nothing. Not checked: ceres-implicit (Ceres allocates per solve) and fast-mass-spring
+// (it refactors with CHOLMOD at every new h, which allocates inside CHOLMOD as above); xpbd runs
+// the cloth without dampers, which it does not model.
 TEST(Allocation, ErrorControlledStepsDoNotAllocate) {
-  auto sys = make_cloth();
   hooke::ErrorControl control;
   control.rtol = 1e-6;
   control.atol = 1e-9;
   for (const auto& method : hooke::methods()) {
-    if (method.error_estimate_order == 0) continue;
+    if (method.error_estimate_order == 0 || std::string(method.name) == "ceres-implicit" ||
+        std::string(method.name) == "fast-mass-spring")
+      continue;
+    auto sys = make_cloth(/*with_dampers=*/method.kind != hooke::MethodKind::WholeStep);
     hooke::MethodOptions opt;
     if (method.kind == hooke::MethodKind::Implicit) {
       hooke::ImplicitOptions io = hooke::implicit_defaults(method.name);

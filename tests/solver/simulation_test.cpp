@@ -195,13 +195,14 @@ ErrorControl tolerances(double rtol) {
 
 // Achieved error against the requested tolerance (issue 21, acceptance 1, on small systems): the
 // largest position error at T is within 10x of rtol max|x| + atol for rtol 1e-3 ... 1e-7 (the
-// embedded pairs) and 1e-2 ... 1e-5 (the implicit family's step doubling), and the accepted
-// steps fall as rtol loosens.
+// embedded pairs) and 1e-2 ... 1e-5 (step doubling: the implicit family and the whole-step
+// methods), and the accepted steps fall as rtol loosens.
 TEST(SimulationAdaptive, AchievedErrorFollowsTheTolerance) {
   const ToleranceProblems p;
   const std::vector<double> explicit_rtols = {1e-7, 1e-6, 1e-5, 1e-4, 1e-3};
   const std::vector<double> implicit_rtols = {1e-5, 1e-4, 1e-3, 1e-2};
-  for (const std::string method : {"dopri5", "bs32", "implicit", "implicit-midpoint"}) {
+  for (const std::string method : {"dopri5", "bs32", "implicit", "implicit-midpoint",
+                                   "ceres-implicit", "fast-mass-spring", "xpbd"}) {
     long long last_accepted[2] = {0, 0};
     const bool is_explicit = method_info(method).kind == MethodKind::Explicit;
     for (double rtol : is_explicit ? explicit_rtols : implicit_rtols) {
