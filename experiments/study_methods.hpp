@@ -23,9 +23,9 @@ struct StudyMethod {
   /// false: left out of the stability map unless --methods names it (hooke's error-controlled
   /// methods shrink their steps to meet the tolerance: there is no step size to find a limit of).
   bool in_stability_map = true;
-  /// Tolerance sweeps skip rtols tighter than this (0: none): the implicit family and the
-  /// whole-step methods are first or second order, and below 1e-5 their runs take minutes on the
-  /// stiff cloth.
+  /// Tolerance sweeps skip rtols tighter than this (0: none): 1e-5 for the implicit family, 1e-3
+  /// for the whole-step methods (first or second order; tighter runs take minutes on the stiff
+  /// cloth).
   double tightest_rtol = 0.0;
 };
 
