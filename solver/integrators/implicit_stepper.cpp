@@ -349,19 +349,7 @@ StepSummary ImplicitStepper::doubled(const State& s0, double h, State& s1) {
   return out;
 }
 
-StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1, LinearSolver& solver) {
-  const Index N = m_system.dofs();
-  HOOKE_ASSERT(s0.x.size() == N && s0.v.size() == N, "state size mismatch");
-  // Pinned particles never move (their velocity is taken as zero throughout) unless scripted.
-  m_v0 = s0.v.cwiseProduct(m_system.moving());
-  // One-leg coefficients: M (v1 - vb) = hf f(xa + bx v1, va + cv v1), x1 = xe + ex v1.
-  const OneLeg c = set_up(s0, h);
-
-  StepSummary out;
-  LinearSolveOptions lin;
-  lin.tolerance = m_options.linear_tolerance;
-  lin.max_iterations = m_options.max_linear_iterations;
-  lin.warm_start = true;
+void ImplicitStepper::start_newton(const State& s0, double h, const OneLeg& c) {
   // Under error control BDF2 starts Newton from its predictor, as BDF codes do: the linearisation
   // error of one Newton step is then O(h^6) instead of O(h^3), below the error the estimate
   // measures. Otherwise the first iteration linearises at the step's start (x0, v0).
@@ -386,6 +374,22 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1, Linear
     m_xlin = s0.x;
     m_vlin = m_v0;
   }
+}
+
+StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1, LinearSolver& solver) {
+  const Index N = m_system.dofs();
+  HOOKE_ASSERT(s0.x.size() == N && s0.v.size() == N, "state size mismatch");
+  // Pinned particles never move (their velocity is taken as zero throughout) unless scripted.
+  m_v0 = s0.v.cwiseProduct(m_system.moving());
+  // One-leg coefficients: M (v1 - vb) = hf f(xa + bx v1, va + cv v1), x1 = xe + ex v1.
+  const OneLeg c = set_up(s0, h);
+
+  StepSummary out;
+  LinearSolveOptions lin;
+  lin.tolerance = m_options.linear_tolerance;
+  lin.max_iterations = m_options.max_linear_iterations;
+  lin.warm_start = true;
+  start_newton(s0, h, c);
   double delta_norm = 0.0;
   int failed_predictions = 0;  // consecutive iterations whose rate cannot reach the tolerance
   bool converged = m_options.newton_iterations == 1;

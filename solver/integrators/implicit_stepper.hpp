@@ -149,6 +149,9 @@ class ImplicitStepper final : public Stepper {
   /// With discrete = true (Midpoint), the force is the discrete gradient between x0 and the
   /// current iterate's x1 instead of f(xlin, vlin).
   void assemble(const OneLeg& c, ConstRef x0, bool discrete);
+  /// Newton's initial guess v1 (BDF2's predictor under error control, else v0; scripted pins on
+  /// their path) and its first linearisation point (xlin, vlin).
+  void start_newton(const State& s0, double h, const OneLeg& c);
   /// The step itself on the given backend (step() adds the counters).
   StepSummary newton(const State& s0, double h, State& s1, LinearSolver& solver);
   /// The rate test after Newton iteration k (0-based): why the iteration cannot reach the
