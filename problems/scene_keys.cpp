@@ -99,6 +99,8 @@ const std::vector<std::string> kAdaptive = {
     "dopri5", "bs32",           "implicit",         "implicit-midpoint",
     "bdf2",   "ceres-implicit", "fast-mass-spring", "xpbd"};
 
+const std::string kNewtonStop =
+    "Newton stops when max |dv| <= tolerance * max(|v1|, |v0|) (infinity norms)";
 const std::string kSpread = "mass spread evenly over the particles; give this or mesh.mass";
 const std::string kEach = "mass of each particle; give this or mesh.total_mass";
 
@@ -553,12 +555,12 @@ void add_newton_keys(std::vector<SceneKey>& t) {
           .def("1e-10")
           .positive()
           .needs({"integrator.newton_iterations=2"})
-          .meaning("Newton stops when max |dv| <= tolerance * max(|v1|, |v0|) (infinity norms)"));
+          .meaning(kNewtonStop));
   add(K("integrator.tolerance", T::Number)
           .in({"implicit-midpoint"})
           .def("1e-08")
           .positive()
-          .meaning("Newton stops when max |dv| <= tolerance * max(|v1|, |v0|) (infinity norms)"));
+          .meaning(kNewtonStop));
   add(K("integrator.discrete_gradient", T::Boolean)
           .in({"implicit-midpoint"})
           .def("true")

@@ -201,24 +201,23 @@ double ImplicitStepper::bdf2_history(const State& s0, double h) {
     return (s0.x - m_error.end.x).cwiseProduct(free).cwiseAbs().maxCoeff() != 0.0 ||
            (m_v0 - m_error.end.v).cwiseProduct(free).cwiseAbs().maxCoeff() != 0.0;
   };
+  int count = 0;  // valid states in m_hist for this step
   if (m_has_last && std::abs(m_last_t1 - s0.t) <= tol &&
       !(m_estimating && moved())) {  // follows the last step
     swap_points(m_hist[1], m_hist[0]);
     swap_points(m_hist[0], m_last);
-    m_count = std::min(m_last_count + 1, 2);
+    count = std::min(m_last_count + 1, 2);
   } else if (m_has_last && std::abs(m_last.t - s0.t) <= tol) {  // retries it
-    m_count = m_last_count;
-  } else {  // a new start
-    m_count = 0;
-  }
+    count = m_last_count;
+  }  // else a new start: count = 0
   m_last.t = s0.t;
   m_last.x = s0.x;
   m_last.v = m_v0;
   m_last_t1 = s0.t + h;
-  m_last_count = m_count;
+  m_last_count = count;
   m_has_last = true;
   // Under error control the estimate needs two states before s0 (see error_estimate_order()).
-  if (m_count < (m_estimating ? 2 : 1)) return 0.0;
+  if (count < (m_estimating ? 2 : 1)) return 0.0;
   double w = h / (s0.t - m_hist[0].t);
   if (std::abs(w - 1.0) <= 1e-9) w = 1.0;  // constant steps, to round-off in the step times
   return w <= kBdf2MaxRatio * (1.0 + 1e-9) ? w : 0.0;

@@ -188,7 +188,7 @@ class ImplicitStepper final : public Stepper {
   State m_full, m_half;
   LocalError m_error;  // the estimate, by doubling or (BDF2) Milne's device
   // BDF2 history: committed states before the current step's start, newest first (hist[0] =
-  // y_{n-1}, hist[1] = y_{n-2}; m_count of them are valid), and the last step's start, its end
+  // y_{n-1}, hist[1] = y_{n-2}), and the last step's start, its end
   // time and the count it had (a step that starts at m_last_t1 follows it; one at m_last.t
   // retries it). Velocities with pinned DOFs zeroed, as the steps use them.
   struct Point {
@@ -197,7 +197,7 @@ class ImplicitStepper final : public Stepper {
   };
   Point m_hist[2], m_last;
   double m_last_t1 = 0.0;
-  int m_count = 0, m_last_count = 0;
+  int m_last_count = 0;  // valid states in m_hist when the last step started
   bool m_has_last = false;
   double m_w = 0.0;           // the current BDF2 step's ratio h / h_prev; 0: a backward Euler step
   bool m_estimating = false;  // set_error_estimation(true): m_error holds the estimate

@@ -605,6 +605,11 @@ TEST(Bdf2, ARetriedStepKeepsTheHistory) {
   ASSERT_EQ(direct->step(b, 0.012, d).status, Status::Converged);
   EXPECT_TRUE(c == d);
   EXPECT_FALSE(c == rejected);
+  // ... and the retry is a BDF2 step, not a backward Euler restart (which would also agree).
+  State be_step;
+  ASSERT_EQ(hooke::make_stepper("implicit", *p.system, opt)->step(b, 0.012, be_step).status,
+            Status::Converged);
+  EXPECT_FALSE(c == be_step);
 }
 
 TEST(Bdf2, UnderErrorControlAMovedStartStateRestartsTheHistory) {
