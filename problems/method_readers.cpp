@@ -229,6 +229,22 @@ MethodOptions read_fast_mass_spring(TableReader& r, const std::string&) {
 }
 #endif
 
+MethodOptions read_vbd(TableReader& r, const std::string&) {
+  VbdOptions o;
+  o.iterations = r.int_field("iterations", o.iterations);
+  o.tolerance = r.number("tolerance", o.tolerance);
+  o.initialization = r.choice("initialization", o.initialization);
+  o.acceleration = r.choice("acceleration", o.acceleration);
+  if (o.acceleration == VbdAcceleration::Chebyshev)
+    o.chebyshev_rho = r.number("chebyshev_rho", o.chebyshev_rho);
+  else
+    refuse_ignored(r, "chebyshev_rho", setting(r, "acceleration", to_string(o.acceleration)),
+                   "only Chebyshev acceleration uses it", "set acceleration = 'chebyshev'");
+  o.line_search = r.boolean("line_search", o.line_search);
+  r.check(o.validate());
+  return o;
+}
+
 MethodOptions read_xpbd(TableReader& r, const std::string&) {
   XpbdOptions o;
   o.substeps = r.int_field("substeps", o.substeps);
@@ -258,6 +274,7 @@ const std::vector<ReaderEntry>& readers() {
 #if HOOKE_WITH_CHOLMOD
     {"fast-mass-spring", read_fast_mass_spring},
 #endif
+    {"vbd", read_vbd},
     {"xpbd", read_xpbd},
   };
   return table;

@@ -94,11 +94,16 @@ const std::vector<std::string> kFixedStepFamilies = {"forward-euler",
                                                      "bdf2",
                                                      "ceres-implicit",
                                                      "fast-mass-spring",
+                                                     "vbd",
                                                      "xpbd"};
 const std::vector<std::string> kAdaptive = {
-    "dopri5", "bs32",           "implicit",         "implicit-midpoint",
-    "bdf2",   "ceres-implicit", "fast-mass-spring", "xpbd"};
+    "dopri5",           "bs32", "implicit", "implicit-midpoint", "bdf2", "ceres-implicit",
+    "fast-mass-spring", "vbd",  "xpbd"};
 
+const std::string kWholeStepTolerance =
+    "stop once h^2 max_p |grad_p g| / m_p, the distance to the exact step the mass term alone "
+    "gives, is at most tolerance times the longest side of the bounding box; 0: a fixed "
+    "iteration count";
 const std::string kNewtonStop =
     "Newton stops when max |dv| <= tolerance * max(|v1|, |v0|) (infinity norms)";
 const std::string kSpread = "mass spread evenly over the particles; give this or mesh.mass";
@@ -577,16 +582,17 @@ void add_implicit_keys(std::vector<SceneKey>& t) {
           .def("'symplectic-euler'")
           .choices({"forward-euler", "symplectic-euler", "midpoint", "trapezoid", "rk4", "dopri5",
                     "bs32", "implicit", "implicit-midpoint", "bdf2", "cvode", "ida",
-                    "ceres-implicit", "fast-mass-spring", "xpbd"})
+                    "ceres-implicit", "fast-mass-spring", "vbd", "xpbd"})
           .meaning("the time stepper; explicit methods (the first seven) take no other keys "
                    "but the error control's"));
   add(K("integrator.adaptive", T::Boolean)
           .in(kFixedStepFamilies)
           .def("false")
-          .meaning("error-controlled steps (methods with a local error estimate: dopri5, bs32, "
-                   "implicit, implicit-midpoint, bdf2; ceres-implicit, fast-mass-spring and xpbd "
-                   "by step doubling): time.dt is the first step, rtol and atol bound each "
-                   "step's local error"));
+          .meaning(
+              "error-controlled steps (methods with a local error estimate: dopri5, bs32, "
+              "implicit, implicit-midpoint, bdf2; ceres-implicit, fast-mass-spring, vbd and xpbd "
+              "by step doubling): time.dt is the first step, rtol and atol bound each "
+              "step's local error"));
   add(K("integrator.rtol", T::Number)
           .in(kAdaptive)
           .def("1e-08")
@@ -790,8 +796,7 @@ void add_local_global_keys(std::vector<SceneKey>& t) {
           .def("0")
           .range(0, false, 1, true)
           .build("CHOLMOD")
-          .meaning("stop once an iteration lowers the objective by at most tolerance times the "
-                   "decrease so far; 0: a fixed iteration count"));
+          .meaning(kWholeStepTolerance));
   add(K("integrator.warm_start", T::String)
           .in({"fast-mass-spring"})
           .def("'inertial'")
@@ -832,6 +837,42 @@ void add_local_global_keys(std::vector<SceneKey>& t) {
           .build("CHOLMOD")
           .meaning("global step: exact prefactored solve, or one Jacobi sweep (pair it with "
                    "Chebyshev; not with L-BFGS)"));
+
+  add(K("integrator.iterations", T::Integer)
+          .in({"vbd"})
+          .def("10")
+          .int_from(1)
+          .meaning("vertex block descent iterations (passes over the colours) per step (at most, "
+                   "with a tolerance)"));
+  add(K("integrator.tolerance", T::Number)
+          .in({"vbd"})
+          .def("0")
+          .range(0, false, 1, true)
+          .meaning(kWholeStepTolerance));
+  add(K("integrator.initialization", T::String)
+          .in({"vbd"})
+          .def("'adaptive'")
+          .choices({"adaptive", "previous", "inertial", "external"})
+          .meaning(
+              "first iterate: x0 + h v0 + h^2 alpha g with alpha from the last step's "
+              "acceleration (adaptive, Chen et al. 2024), x0, x0 + h v0, or x0 + h v0 + h^2 g"));
+  add(K("integrator.acceleration", T::String)
+          .in({"vbd"})
+          .def("'none'")
+          .choices({"none", "chebyshev"})
+          .meaning("plain vertex block descent, or Chebyshev (restarted when it raises the "
+                   "objective)"));
+  add(K("integrator.chebyshev_rho", T::Number)
+          .in({"vbd"})
+          .def("0.95")
+          .range(0, true, 1, true)
+          .needs({"integrator.acceleration=chebyshev"})
+          .meaning("spectral radius assumed for the plain iteration"));
+  add(K("integrator.line_search", T::Boolean)
+          .in({"vbd"})
+          .def("true")
+          .meaning("backtrack each vertex's Newton step until its local objective falls; false: "
+                   "the paper's plain step"));
 
   add(K("integrator.substeps", T::Integer)
           .in({"xpbd"})

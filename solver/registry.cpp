@@ -118,6 +118,11 @@ const std::vector<WholeStepEntry>& whole_step_table() {
         "(Chebyshev or L-BFGS acceleration)",
         fast_mass_spring_unsupported, 1),
 #endif
+    whole_step<VbdStepper>(
+        "vbd",
+        "vertex block descent (Chen et al. 2024): backward Euler by per-vertex Newton steps over a "
+        "graph colouring (Chebyshev acceleration)",
+        vbd_unsupported, 1),
     whole_step<XpbdStepper>(
         "xpbd",
         "extended position-based dynamics with substeps (Macklin et al. 2019), compliance 1/k",

@@ -15,6 +15,7 @@
 #include "hooke/whole_step/cvode_stepper.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
 #include "hooke/whole_step/ida_stepper.hpp"
+#include "hooke/whole_step/vbd.hpp"
 #include "hooke/whole_step/xpbd.hpp"
 
 namespace hooke {
@@ -28,9 +29,9 @@ enum class MethodKind {
 
 /// The options of one method: a value of that method's own Options type (ImplicitOptions for
 /// implicit, implicit-midpoint and bdf2; CvodeOptions, IdaOptions, CeresImplicitOptions,
-/// FastMassSpringOptions, XpbdOptions for the whole-step methods; explicit methods take none), or
-/// empty for the method's defaults. Scene readers fill it once with the method's type; make_stepper
-/// checks that it holds the type the method takes.
+/// FastMassSpringOptions, VbdOptions, XpbdOptions for the whole-step methods; explicit methods take
+/// none), or empty for the method's defaults. Scene readers fill it once with the method's type;
+/// make_stepper checks that it holds the type the method takes.
 class MethodOptions {
  public:
   MethodOptions() = default;

@@ -50,6 +50,8 @@ class SpringDamper final : public Force {
   /// Adds a damper between particles a != b with coefficient c >= 0 (N s/m).
   void add(int a, int b, double c) { m_springs.add(a, b, c, 0.0); }
   size_t size() const { return m_springs.size(); }
+  /// The dampers (coeff = c; rest_length unused).
+  const SpringSet& springs() const { return m_springs; }
 
   const char* name() const override { return "spring-damper"; }
   void add_forces(ConstRef x, ConstRef v, VecRef f) const override;

@@ -26,7 +26,7 @@ OptionError FastMassSpringOptions::validate() const {
     e << "iterations = " << iterations << ": must be >= 1";
   } else if (!(tolerance >= 0.0 && tolerance < 1.0)) {
     field = "tolerance";
-    e << "tolerance = " << tolerance << ": must be in [0, 1) (a relative objective decrease)";
+    e << "tolerance = " << tolerance << ": must be in [0, 1) (relative to the system's size)";
   } else if (!(chebyshev_rho >= 0.0 && chebyshev_rho < 1.0)) {
     field = "chebyshev_rho";
     e << "chebyshev_rho = " << chebyshev_rho << ": must be in [0, 1) (0 = estimate)";
@@ -123,7 +123,7 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
   }
 
   const Index dofs = 3 * n;
-  for (Vec* v : {&m_y, &m_acc, &m_x, &m_xprev, &m_xhat}) v->setZero(dofs);
+  for (Vec* v : {&m_y, &m_acc, &m_x, &m_xprev, &m_xhat, &m_spring_grad}) v->setZero(dofs);
   for (Rows3* M : {&m_const, &m_B, &m_X, &m_G, &m_Gnew, &m_D, &m_Xtrial}) M->setZero(nf, 3);
   if (m_opt.acceleration == Acceleration::Lbfgs) {
     m_s.assign(size_t(m_opt.lbfgs_history), Rows3::Zero(nf, 3));
@@ -178,6 +178,7 @@ void FastMassSpringStepper::prepare(double h) {
 void FastMassSpringStepper::begin_step(const State& s0, double h) {
   m_h = h;
   m_s0 = &s0;
+  if (m_opt.tolerance > 0.0) m_size = system_size(s0.x);
   m_y.noalias() = s0.x + h * s0.v;
   const Vec& m = m_sys.masses();
   for (size_t r = 0; r < m_free.size(); ++r) {
@@ -190,9 +191,10 @@ void FastMassSpringStepper::begin_step(const State& s0, double h) {
     m_const.row(l.r) += m_f.springs[l.set]->coeff[l.spring] * m_y.segment<3>(3 * l.q).transpose();
 }
 
-double FastMassSpringStepper::local_step(ConstRef x) {
+double FastMassSpringStepper::local_step(ConstRef x, bool gradient) {
   const auto t0 = Clock::now();
   m_acc.setZero();
+  if (gradient) m_spring_grad.setZero();
   double energy = 0.0;
   for (const SpringSet* sp : m_f.springs) {
     const SpringSet& s = *sp;
@@ -207,6 +209,10 @@ double FastMassSpringStepper::local_step(ConstRef x) {
       const Vec3 d = l > 0.0 ? Vec3((L / l) * e) : Vec3(L, 0.0, 0.0);
       m_acc.segment<3>(3 * i) += c * d;
       m_acc.segment<3>(3 * j) -= c * d;
+      if (gradient) {  // grad_i of c/2 (l - L)^2 is c (e - d), formed without cancellation
+        m_spring_grad.segment<3>(3 * i) += c * (e - d);
+        m_spring_grad.segment<3>(3 * j) -= c * (e - d);
+      }
       return 0.5 * c * (l - L) * (l - L);
     };
     if (s.num_groups() == 0) {
@@ -224,6 +230,22 @@ double FastMassSpringStepper::local_step(ConstRef x) {
     m_B.row(Index(r)) = m_const.row(Index(r)) + m_acc.segment<3>(3 * m_free[r]).transpose();
   m_local_seconds += seconds_since(t0);
   return energy;
+}
+
+double FastMassSpringStepper::error_estimate(ConstRef x) const {
+  // grad_p g = m_p (x_p - y_p) / h^2 - m_p g_grav + c (x_p - x0_p - h w) / h + springs' part, each
+  // term formed from differences (A x - b would cancel digits of |M x / h^2|).
+  const Vec& m = m_sys.masses();
+  const double h = m_h;
+  double worst = 0.0;
+  for (const Index p : m_free) {
+    const Vec3 xp = x.segment<3>(3 * p);
+    Vec3 grad = (m[p] / (h * h)) * (xp - m_y.segment<3>(3 * p)) - m[p] * m_f.gravity +
+                m_spring_grad.segment<3>(3 * p);
+    if (m_f.drag > 0.0) grad += (m_f.drag / h) * (xp - m_s0->x.segment<3>(3 * p) - h * m_f.wind);
+    worst = std::max(worst, position_error(grad, m[p], h));
+  }
+  return worst / m_size;
 }
 
 double FastMassSpringStepper::quadratic_terms(ConstRef x, ConstRef x0, ConstRef y, double h) const {
@@ -335,8 +357,8 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
   if (!converged) {
     out.status = Status::NotConverged;
     std::ostringstream msg;
-    msg << "fast-mass-spring: objective decrease " << out.residual
-        << " of the step's total still > tolerance " << m_opt.tolerance << " after " << it
+    msg << "fast-mass-spring: estimated error " << out.residual
+        << " of the system's size still > tolerance " << m_opt.tolerance << " after " << it
         << " iterations (raise [integrator] iterations)";
     out.message = msg.str();
   }
@@ -345,10 +367,10 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
 
 bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
   const bool chebyshev = m_opt.acceleration == Acceleration::Chebyshev;
-  const bool want_objective = m_opt.tolerance > 0.0 || chebyshev;
+  const bool test = m_opt.tolerance > 0.0;
   const int N = m_opt.iterations;
-  double g_start = 0.0, g_prev = 0.0, g = 0.0;
-  bool converged = m_opt.tolerance == 0.0;
+  double g_prev = 0.0, g = 0.0;
+  bool converged = !test;
   int it = 0;
   // Chebyshev state (Wang 2015, eq. 11 with gamma = 1): x_{k+1} = x_{k-1} + omega (xhat - x_{k-1}),
   // with omega = 1 for the first S - 1 iterations after a (re)start, 2 / (2 - rho^2) at the S-th
@@ -356,26 +378,24 @@ bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
   double omega = 1.0, rho = m_opt.chebyshev_rho, prev_update = 0.0;
   int j = 0;
   for (int k = 0;; ++k) {
-    // Local step at the current iterate x_k (its objective comes for free with it).
-    if (k == N && !want_objective) break;
-    const double E = local_step(m_x);
-    if (want_objective) {
+    // Local step at the current iterate x_k (its objective and gradient come with it).
+    if (k == N && !test) break;
+    const double E = local_step(m_x, test);
+    if (test) {
+      out.residual = error_estimate(m_x);
+      if (out.residual <= m_opt.tolerance) {
+        converged = true;
+        break;
+      }
+    }
+    if (chebyshev) {
       g = quadratic_terms(m_x) + E;
-      if (k == 0) {
-        g_start = g;
-      } else {
-        if (chebyshev && omega != 1.0 && g > g_prev) {
-          // The semi-iteration overshot (rho too large for this stage of a nonlinear
-          // iteration): restart it from x_k with plain iterations, as on entry.
-          j = 0;
-          omega = 1.0;
-          ++m_chebyshev_restarts;
-        }
-        out.residual = (g_start - g) > 0.0 ? (g_prev - g) / (g_start - g) : 0.0;
-        if (m_opt.tolerance > 0.0 && g_prev - g <= m_opt.tolerance * (g_start - g)) {
-          converged = true;
-          break;
-        }
+      if (k > 0 && omega != 1.0 && g > g_prev) {
+        // The semi-iteration overshot (rho too large for this stage of a nonlinear
+        // iteration): restart it from x_k with plain iterations, as on entry.
+        j = 0;
+        omega = 1.0;
+        ++m_chebyshev_restarts;
       }
       g_prev = g;
     }
@@ -441,14 +461,22 @@ Status FastMassSpringStepper::lbfgs_direction(int stored, int newest, std::strin
 
 bool FastMassSpringStepper::iterate_lbfgs(StepSummary& out) {
   const int N = m_opt.iterations;
-  double g_start = 0.0, g_prev = 0.0, g = 0.0;
-  bool converged = m_opt.tolerance == 0.0;
+  const bool test = m_opt.tolerance > 0.0;
+  double g_start = 0.0, g = 0.0;
+  bool converged = !test;
   int it = 0;
   // L-BFGS on g (Liu, Bouaziz and Kavan 2017, Algorithm 1): grad g = A x - b(d(x)), initial
   // inverse Hessian A^{-1} (the prefactored matrix), Armijo backtracking from alpha = 1.
   gather(m_x, m_X);
-  g = quadratic_terms(m_x) + local_step(m_x);
+  g = quadratic_terms(m_x) + local_step(m_x, test);
   g_start = g;
+  if (test) {
+    out.residual = error_estimate(m_x);
+    if (out.residual <= m_opt.tolerance) {
+      out.iterations = 0;
+      return true;
+    }
+  }
   m_G.noalias() = m_A * m_X;
   m_G -= m_B;
   const int H = m_opt.lbfgs_history;
@@ -474,7 +502,7 @@ bool FastMassSpringStepper::iterate_lbfgs(StepSummary& out) {
     for (int trial = 0; trial < 30; ++trial) {
       m_Xtrial = m_X + alpha * m_D;
       scatter(m_Xtrial, m_x);
-      g_trial = quadratic_terms(m_x) + local_step(m_x);
+      g_trial = quadratic_terms(m_x) + local_step(m_x, test);
       ++m_line_search_trials;
       m_Gnew.noalias() = m_A * m_Xtrial;
       m_Gnew -= m_B;
@@ -491,9 +519,13 @@ bool FastMassSpringStepper::iterate_lbfgs(StepSummary& out) {
       }
       alpha *= 0.5;
     }
-    if (!accepted) {  // no decrease of g or of its gradient is measurable any more
+    if (!accepted) {  // no decrease of g or of its gradient is measurable any more: x_k stays
       scatter(m_X, m_x);
-      converged = true;
+      if (test) {
+        local_step(m_x, true);
+        out.residual = error_estimate(m_x);
+        converged = out.residual <= m_opt.tolerance;
+      }
       break;
     }
     // History pair s = x_{k+1} - x_k, t = grad_{k+1} - grad_k (skipped unless curvature > 0).
@@ -510,13 +542,14 @@ bool FastMassSpringStepper::iterate_lbfgs(StepSummary& out) {
     }
     m_X.swap(m_Xtrial);
     m_G.swap(m_Gnew);
-    g_prev = g;
     g = g_trial;
     if (m_opt.on_iteration) m_opt.on_iteration(it, m_x);
-    out.residual = (g_start - g) > 0.0 ? (g_prev - g) / (g_start - g) : 0.0;
-    if (m_opt.tolerance > 0.0 && g_prev - g <= m_opt.tolerance * (g_start - g)) {
-      converged = true;
-      break;
+    if (test) {  // the accepted trial was the last local step: its gradient is at x_{k+1}
+      out.residual = error_estimate(m_x);
+      if (out.residual <= m_opt.tolerance) {
+        converged = true;
+        break;
+      }
     }
   }
   out.iterations = it;

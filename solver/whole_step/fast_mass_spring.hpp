@@ -39,9 +39,11 @@ struct FastMassSpringOptions {
   /// Iterations per step: exactly this many when tolerance = 0 (Liu et al. 2013 use 10), at most
   /// this many otherwise.
   int iterations = 10;
-  /// Stop early once an iteration lowers the objective g by at most tolerance * (g(x_start) - g),
-  /// i.e. relative to the decrease achieved so far in this step. 0 = fixed iteration count.
-  /// Evaluating g costs one extra pass over the springs per step.
+  /// Stop at the first iterate x whose estimated distance from the exact step is at most
+  /// tolerance times the size of the system (whole_step_error_estimate in
+  /// spring_potential_forces.hpp: h^2 max_p |grad_p g(x)| / m_p against the longest side of the
+  /// bounding box at the start of the step). 0 = a fixed iteration count. The gradient comes with
+  /// each local step at the cost of three more sums per spring.
   double tolerance = 0.0;
   /// Start of the iteration: "inertial" (y = x0 + h v0, the paper's choice) or "previous" (x0).
   WarmStart warm_start = WarmStart::Inertial;
@@ -109,9 +111,10 @@ class FastMassSpringStepper final : public Stepper {
   ~FastMassSpringStepper() override;
 
   const char* name() const override { return "fast-mass-spring"; }
-  /// iterations = local/global iterations; residual = the last relative objective decrease when
-  /// tolerance > 0 (what the tolerance tests), else the relative residual of the backward-Euler
-  /// equations at the result (step_residual()); NotConverged if tolerance > 0 and was not met.
+  /// iterations = local/global iterations; residual = the relative error estimate of the result
+  /// when tolerance > 0 (what the tolerance tests), else the relative residual of the
+  /// backward-Euler equations at the result (step_residual()); NotConverged if tolerance > 0 and
+  /// was not met.
   StepSummary step(const State& s0, double h, State& s1) override;
   /// Iterations, factorizations (or matrix refreshes), local / global / factor times, factor size.
   StepperStats stats() const override;
@@ -143,7 +146,11 @@ class FastMassSpringStepper final : public Stepper {
  private:
   void prepare(double h);
   void begin_step(const State& s0, double h);
-  double local_step(ConstRef x);
+  /// b(d(x)) into m_B and the spring energy at x; with `gradient`, also the springs' part of
+  /// grad g at x into m_spring_grad (for error_estimate()).
+  double local_step(ConstRef x, bool gradient = false);
+  /// The relative error estimate of iterate x after local_step(x, true) (see Options::tolerance).
+  double error_estimate(ConstRef x) const;
   /// The inertia, gravity and drag terms of g at x for a step from x0 with prediction y (3n).
   double quadratic_terms(ConstRef x, ConstRef x0, ConstRef y, double h) const;
   /// The same for the current step (m_s0, m_y, m_h).
@@ -155,7 +162,7 @@ class FastMassSpringStepper final : public Stepper {
   void jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X);
   /// The iterations of one step from m_x (plain or Chebyshev-accelerated local/global, or
   /// L-BFGS), leaving the result in m_x: out gets the iteration count and the last relative
-  /// objective decrease (residual), and Status::Fatal if a global solve failed. Returns whether
+  /// error estimate (residual), and Status::Fatal if a global solve failed. Returns whether
   /// the tolerance was met (always true with tolerance = 0).
   bool iterate_local_global(StepSummary& out);
   bool iterate_lbfgs(StepSummary& out);
@@ -185,7 +192,9 @@ class FastMassSpringStepper final : public Stepper {
   double m_last_factor_seconds = 0.0;
 
   // Per-step scratch (sized once).
-  Vec m_y, m_acc, m_x, m_xprev, m_xhat;                 // 3n vectors, particle-major
+  Vec m_y, m_acc, m_x, m_xprev, m_xhat;  // 3n vectors, particle-major
+  Vec m_spring_grad;                     // 3n: the springs' part of grad g
+  double m_size = 1.0;  // the system's size at the start of the step (tolerance scale, m)
   Rows3 m_const, m_B, m_X, m_G, m_Gnew, m_D, m_Xtrial;  // free x 3
   std::vector<Rows3> m_s, m_t;                          // L-BFGS history
   std::vector<double> m_rho_lbfgs, m_alpha;

@@ -3,24 +3,42 @@
 #include "hooke/forces/air_drag.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
+#include "hooke/forces/spring_damper.hpp"
 
 namespace hooke {
 
 std::string SpringPotentialForces::unsupported(const MassSpringSystem& system,
-                                               const std::string& method, const std::string& why) {
-  for (const auto& f : system.forces())
+                                               const std::string& method, const std::string& why,
+                                               bool takes_dampers) {
+  for (const auto& f : system.forces()) {
+    if (takes_dampers && dynamic_cast<const SpringDamper*>(f.get())) continue;
     if (!dynamic_cast<const HookeSpring*>(f.get()) && !dynamic_cast<const Gravity*>(f.get()) &&
         !dynamic_cast<const AirDrag*>(f.get()))
-      return method + " handles Hooke springs, gravity and air drag (" + why +
-             "); this scene has a '" + f->name() +
-             "' force (use air drag for damping, or an implicit method)";
+      return method + " handles Hooke springs" + (takes_dampers ? ", spring dampers" : "") +
+             ", gravity and air drag (" + why + "); this scene has a '" + f->name() + "' force (" +
+             (takes_dampers ? "" : "use air drag for damping, or ") + "use an implicit method)";
+  }
   return "";
+}
+
+double system_size(ConstRef x) {
+  const Index n = x.size() / 3;
+  if (n == 0) return 1.0;
+  Vec3 lo = x.segment<3>(0), hi = lo;
+  for (Index p = 1; p < n; ++p) {
+    lo = lo.cwiseMin(x.segment<3>(3 * p));
+    hi = hi.cwiseMax(x.segment<3>(3 * p));
+  }
+  const double size = (hi - lo).maxCoeff();
+  return size > 0.0 ? size : 1.0;
 }
 
 SpringPotentialForces::SpringPotentialForces(const MassSpringSystem& system) {
   Vec3 wind_sum = Vec3::Zero();
   for (const auto& f : system.forces()) {
     if (const auto* s = dynamic_cast<const HookeSpring*>(f.get())) springs.push_back(&s->springs());
+    if (const auto* d = dynamic_cast<const SpringDamper*>(f.get()))
+      dampers.push_back(&d->springs());
     if (const auto* g = dynamic_cast<const Gravity*>(f.get())) gravity += g->acceleration();
     if (const auto* d = dynamic_cast<const AirDrag*>(f.get())) {
       drag += d->coefficient();

@@ -13,6 +13,8 @@ namespace hooke {
 /// coefficients and average their winds weighted by coefficient.
 struct SpringPotentialForces {
   std::vector<const SpringSet*> springs;  ///< the springs of every HookeSpring force
+  std::vector<const SpringSet*> dampers;  ///< the dampers of every SpringDamper force (only vbd
+                                          ///< takes them; unsupported() refuses them otherwise)
   Vec3 gravity = Vec3::Zero();            ///< total gravity acceleration (m/s^2)
   double drag = 0.0;                      ///< total air-drag coefficient c (kg/s per particle)
   Vec3 wind = Vec3::Zero();               ///< c-weighted mean wind velocity (m/s)
@@ -22,7 +24,28 @@ struct SpringPotentialForces {
   /// "" if every force of system is one of the three kinds, else a message naming the first other
   /// force; `method` and `why` are spliced into it ("xpbd", "... needs each force to be ...").
   static std::string unsupported(const MassSpringSystem& system, const std::string& method,
-                                 const std::string& why);
+                                 const std::string& why, bool takes_dampers = false);
 };
+
+/// The longest side of the axis-aligned bounding box of the particles at x (3n), or 1 (m) when
+/// they all sit at one point: the length the tolerances of the iterative whole-step methods are
+/// relative to.
+double system_size(ConstRef x);
+
+/// The stopping rule of the iterative whole-step methods (fast-mass-spring, vbd): an iterate x of
+/// the step's objective g (grad g = 0 is the backward-Euler step) is accepted once
+///
+///   e(x) = h^2 max_p |grad_p g(x)|_inf / m_p  <=  tolerance * system_size(x0)
+///
+/// over the free particles p. The Hessian of g is M/h^2 plus the springs' (and dampers')
+/// stiffness, so e is the distance to the exact step that the mass term alone would give: where
+/// the stiffness acts like a graph Laplacian (H = M/h^2 + L, L diagonally dominant with
+/// non-positive off-diagonal entries) e bounds max |x - x*| exactly, since (M/h^2 + L)^-1 M/h^2
+/// is non-negative with unit row sums. On the slow, smooth error modes that stop a linearly
+/// converging iteration the bound is tight; on stiff modes it overestimates. Unlike the change per
+/// iteration, it does not shrink when the iteration merely contracts slowly.
+inline double position_error(const Vec3& gradient, double mass, double h) {
+  return h * h * gradient.lpNorm<Eigen::Infinity>() / mass;
+}
 
 }  // namespace hooke

@@ -461,10 +461,11 @@ TEST(Allocation, CholmodAllocatesOnlyInFactor) {
   EXPECT_GT(factor_counts[0], 0);  // if this ever becomes 0, tighten ImplicitStepsDoNotAllocate
 }
 
-// The same claim for the local/global and XPBD steppers, on the cloth without spring dampers
-// (which they refuse): after 2 warm-up steps (the first one factors the global matrix once), 50
-// steps of every fast-mass-spring variant (accelerations, factored and Jacobi global steps), with
-// fixed iterations and with the tolerance stop, and of XPBD allocate nothing.
+// The same claim for the local/global, vbd and XPBD steppers, on the cloth without spring dampers
+// (which fast-mass-spring and xpbd refuse; vbd runs the cloth with them): after 2 warm-up steps
+// (the first one factors the global matrix once), 50 steps of every fast-mass-spring variant
+// (accelerations, factored and Jacobi global steps) and of plain and Chebyshev vbd, with fixed
+// iterations and with the tolerance stop, and of XPBD allocate nothing.
 TEST(Allocation, LocalGlobalAndXpbdStepsDoNotAllocate) {
   auto sys = make_cloth(false);
   const double h = 1e-3;
@@ -490,8 +491,19 @@ TEST(Allocation, LocalGlobalAndXpbdStepsDoNotAllocate) {
                         "fast-mass-spring / " + variant + " / tol " + std::to_string(tol), o});
     }
   runs.push_back({"xpbd", "xpbd", {}});
+  // vbd takes the spring dampers too: it runs on the cloth with them.
+  auto damped = make_cloth(true);
+  for (const char* a : {"none", "chebyshev"})
+    for (double tol : {0.0, 1e-6}) {
+      hooke::VbdOptions o;
+      o.acceleration = *hooke::from_string<hooke::VbdAcceleration>(a);
+      o.tolerance = tol;
+      o.iterations = 20;
+      runs.push_back({"vbd", std::string("vbd / ") + a + " / tol " + std::to_string(tol), o});
+    }
   for (const auto& [name, label, opt] : runs) {
-    hooke::Simulation sim(*sys, hooke::make_stepper(name, *sys, opt), cloth_state());
+    const auto& system = name == "vbd" ? *damped : *sys;
+    hooke::Simulation sim(system, hooke::make_stepper(name, system, opt), cloth_state());
     for (int k = 0; k < 2; ++k) ASSERT_NE(sim.advance(h).status, hooke::Status::Fatal) << label;
     const long before = g_allocations.load();
     int failures = 0;

@@ -202,7 +202,7 @@ TEST(SimulationAdaptive, AchievedErrorFollowsTheTolerance) {
   const std::vector<double> explicit_rtols = {1e-7, 1e-6, 1e-5, 1e-4, 1e-3};
   const std::vector<double> implicit_rtols = {1e-5, 1e-4, 1e-3, 1e-2};
   for (const std::string method : {"dopri5", "bs32", "implicit", "implicit-midpoint",
-                                   "ceres-implicit", "fast-mass-spring", "xpbd"}) {
+                                   "ceres-implicit", "fast-mass-spring", "vbd", "xpbd"}) {
     long long last_accepted[2] = {0, 0};
     const bool is_explicit = method_info(method).kind == MethodKind::Explicit;
     for (double rtol : is_explicit ? explicit_rtols : implicit_rtols) {

@@ -10,6 +10,7 @@
 #include "hooke/forces/air_drag.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
+#include "hooke/forces/spring_damper.hpp"
 #include "hooke/registry.hpp"
 #include "support/registry.hpp"
 
@@ -20,13 +21,27 @@ struct Scene {
   State state;
 };
 
+/// Stiffnesses (N/m) of a cloth's structural, shear and flexion springs, and the coefficient of an
+/// axial SpringDamper (N s/m) on each structural spring (0: none).
+struct ClothSprings {
+  double structural = 1e4, shear = 1e3, flexion = 1e2, damper = 0.0;
+};
+
 /// A square cloth of n x n particles (1 m wide, 1 kg) lying flat in the horizontal x-z plane and
 /// held at the two corners of its first row (particles 0 and n - 1), so that it swings down under
-/// gravity and folds in 3D. Structural, shear and flexion HookeSprings (k 1e4 / 1e3 / 1e2 N/m,
-/// rest lengths rest_scale times the grid distances), Gravity, and AirDrag c (kg/s) with a wind,
-/// so that every supported term is used. stiffness_scale multiplies all three stiffnesses.
+/// gravity and folds in 3D: structural, shear and flexion HookeSprings with the stiffnesses of `k`
+/// (rest lengths rest_scale times the grid distances), dampers if k.damper > 0, Gravity, and
+/// AirDrag c (kg/s) with a wind, so that every supported term is used.
+inline Scene hanging_cloth(int n, double drag, double rest_scale, const ClothSprings& k);
+
+/// The cloth above with k 1e4 / 1e3 / 1e2 N/m times stiffness_scale and no dampers.
 inline Scene hanging_cloth(int n, double drag, double rest_scale = 1.0,
                            double stiffness_scale = 1.0) {
+  const double s = stiffness_scale;
+  return hanging_cloth(n, drag, rest_scale, ClothSprings{1e4 * s, 1e3 * s, 1e2 * s, 0.0});
+}
+
+inline Scene hanging_cloth(int n, double drag, double rest_scale, const ClothSprings& k) {
   const int np = n * n;
   const double s = 1.0 / (n - 1), m = 1.0 / np;
   std::vector<char> pinned(size_t(np), 0);
@@ -37,18 +52,22 @@ inline Scene hanging_cloth(int n, double drag, double rest_scale = 1.0,
   for (int r = 0; r < n; ++r)
     for (int c = 0; c < n; ++c) scene.state.x.segment<3>(3 * (r * n + c)) = Vec3(c * s, 0.0, r * s);
   auto springs = std::make_unique<HookeSpring>();
+  auto dampers = std::make_unique<SpringDamper>();
   const double L = rest_scale * s, D = rest_scale * s * std::sqrt(2.0);
   for (int r = 0; r < n; ++r)
     for (int c = 0; c < n; ++c) {
       const int i = r * n + c;
-      if (c + 1 < n) springs->add(i, i + 1, 1e4 * stiffness_scale, L);
-      if (r + 1 < n) springs->add(i, i + n, 1e4 * stiffness_scale, L);
-      if (c + 1 < n && r + 1 < n) springs->add(i, i + n + 1, 1e3 * stiffness_scale, D);
-      if (c > 0 && r + 1 < n) springs->add(i, i + n - 1, 1e3 * stiffness_scale, D);
-      if (c + 2 < n) springs->add(i, i + 2, 1e2 * stiffness_scale, 2 * L);
-      if (r + 2 < n) springs->add(i, i + 2 * n, 1e2 * stiffness_scale, 2 * L);
+      if (c + 1 < n) springs->add(i, i + 1, k.structural, L);
+      if (r + 1 < n) springs->add(i, i + n, k.structural, L);
+      if (c + 1 < n && r + 1 < n) springs->add(i, i + n + 1, k.shear, D);
+      if (c > 0 && r + 1 < n) springs->add(i, i + n - 1, k.shear, D);
+      if (c + 2 < n) springs->add(i, i + 2, k.flexion, 2 * L);
+      if (r + 2 < n) springs->add(i, i + 2 * n, k.flexion, 2 * L);
+      if (k.damper > 0.0 && c + 1 < n) dampers->add(i, i + 1, k.damper);
+      if (k.damper > 0.0 && r + 1 < n) dampers->add(i, i + n, k.damper);
     }
   scene.system->add_force(std::move(springs));
+  if (k.damper > 0.0) scene.system->add_force(std::move(dampers));
   scene.system->add_force(std::make_unique<Gravity>(Vec::Constant(np, m), Vec3(0.0, -9.81, 0.0)));
   if (drag > 0.0)
     scene.system->add_force(std::make_unique<AirDrag>(np, drag, Vec3(0.3, 0.0, -0.2)));
