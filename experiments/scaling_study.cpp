@@ -12,6 +12,9 @@
 //   fast-mass-spring-jacobi  the same objective with one Jacobi sweep as the global step and
 //                      Chebyshev acceleration (Wang 2015), 50 iterations per step: no factor, so
 //                      an iteration costs time linear in the springs
+//   vbd                vertex block descent (Chen et al. 2024), 10 iterations per step, each a
+//                      pass over the colours with a 3x3 Newton step per vertex (line search on)
+//   vbd-chebyshev      the same with Chebyshev acceleration (rho 0.95)
 //   implicit-pcg       beta = 1, Jacobi-PCG, tolerance 1e-6, at most 300 iterations per step
 //                      (large cloths need thousands: the time per iteration is what scales)
 //   implicit-pcg-cholmod  beta = 1, PCG preconditioned by a reused CHOLMOD factorization of the
@@ -72,6 +75,8 @@ const std::vector<MethodSpec>& specs() {
      "method = \"fast-mass-spring\"\nglobal_solver = \"jacobi\"\nacceleration = \"chebyshev\"\n"
      "iterations = 50\n",
      6.1e6},
+    {"vbd", "method = \"vbd\"\niterations = 10\n", 6.1e6},
+    {"vbd-chebyshev", "method = \"vbd\"\niterations = 10\nacceleration = \"chebyshev\"\n", 6.1e6},
     {"implicit-pcg",
      "method = \"implicit\"\nlinear_solver = \"pcg\"\nlinear_tolerance = 1e-6\n"
      "max_linear_iterations = 300\n",

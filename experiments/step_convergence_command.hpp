@@ -7,6 +7,7 @@ namespace hooke {
 struct StepConvergenceOptions {
   bool full = false;     ///< the paper's size: k = 1e2 .. 1e6 and h = 1e-3, 1e-2, 1/30
   double target = 1e-6;  ///< objective error the summary table reports reaching
+  bool as_is = false;    ///< one step of the scene as it is (its stiffness and dt), no k sweep
   std::string out_dir;   ///< where the CSV, Markdown table and PNG go
 };
 

@@ -51,6 +51,7 @@ std::vector<StudyMethod> study_methods() {
                  {"integrator.newton_iterations=1", "integrator.clamp_compressed=false"}});
   out.push_back({"bdf2", "bdf2", {"integrator.newton_iterations=1"}});
   out.push_back({"fast-mass-spring-10", "fast-mass-spring", {"integrator.iterations=10"}});
+  out.push_back({"vbd-10", "vbd", {"integrator.iterations=10"}});
   out.push_back({"xpbd", "xpbd", {}});
   // rtol 1e-6 for the stability map (the scene default 1e-8 costs minutes per run on a stiff
   // 16 x 16 cloth); the work-precision sweep sets its own rtol and atol.

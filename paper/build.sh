@@ -38,6 +38,12 @@ echo "paper: hooke workprecision --duration 2 (error control) ..."
 echo "workprecision --duration 2,$(( ($(date +%s%N) - t0) / 1000000 ))e-3" >> "$out/timings.csv"
 run resolution
 run step-convergence
+# One step of the 256 x 256 backward-Euler target as it is (its own stiffness and dt).
+t0=$(date +%s%N)
+echo "paper: hooke step-convergence target_backward_euler_256 --as-is ..."
+"$hooke" step-convergence "$here/../problems/scenes/target_backward_euler_256.toml" --as-is \
+  --out "$out/step-convergence-256"
+echo "step-convergence 256,$(( ($(date +%s%N) - t0) / 1000000 ))e-3" >> "$out/timings.csv"
 run energy
 # The implicit step's linear backends as the cloth grows (1e4 to 1e6 springs; 6e6 with --full).
 run scaling --methods implicit-pcg,implicit-pcg-nodal,implicit-petsc,implicit-petsc-gamg --threads 2

@@ -18,7 +18,7 @@ for r in rows:
         curves[(float(r["k"]), r["method"])].append(
             (int(r["iterations"]), float(r["wall_seconds"]), abs(float(r["objective_error"]))))
 methods = sorted({m for (_, m) in curves})
-style = {m: s for m, s in zip(methods, ["-", "--", "-.", ":", "-", "--"])}
+style = {m: ["-", "--", "-.", ":"][i % 4] for i, m in enumerate(methods)}
 fig, axes = plt.subplots(len(ks), 2, figsize=(11, 3.2 * len(ks)), squeeze=False)
 for row, k in enumerate(ks):
     for m in methods:
@@ -31,7 +31,7 @@ for row, k in enumerate(ks):
         marker = "o" if m.startswith(("newton", "xpbd")) else None
         axes[row][0].loglog(it, err, style[m], marker=marker, ms=3, label=m)
         axes[row][1].loglog(wall, err, style[m], marker=marker, ms=3, label=m)
-    axes[row][0].set_ylabel(f"objective error (k = {k:g} N/m)")
+    axes[row][0].set_ylabel(f"objective error (k = {k:g} N/m)" if k > 0 else "objective error")
     for c in range(2):
         axes[row][c].axhline(1e-6, color="grey", lw=0.6)
         axes[row][c].grid(True, which="major", lw=0.3)

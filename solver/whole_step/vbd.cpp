@@ -224,12 +224,21 @@ double VbdStepper::update(Index p) {
 }
 
 double VbdStepper::sweep() {
-  for (size_t c = 0; c + 1 < m_colour_start.size(); ++c) {
-    const Index* vertices = m_order.data() + m_colour_start[c];
-    parallel_for(m_colour_start[c + 1] - m_colour_start[c], 1024, [&](long long k) {
-      const Index p = vertices[k];
-      m_err[p] = update(p);
-    });
+  // The vertices of one colour are independent, so any schedule gives the same bits. Chunks are
+  // handed out dynamically: a thread whose core is shared with another process takes fewer of
+  // them instead of holding up the colour's end (a static split waits for the slowest thread).
+  constexpr long long kChunk = 256;
+  const long long colours = static_cast<long long>(m_colour_start.size()) - 1;
+  if (!run_parallel(static_cast<long long>(m_order.size()) / std::max(1LL, colours), 1024)) {
+    for (const Index p : m_order) m_err[p] = update(p);
+    return m_err.maxCoeff() / m_size;
+  }
+#pragma omp parallel
+  for (long long c = 0; c < colours; ++c) {
+    const Index* vertices = m_order.data() + m_colour_start[size_t(c)];
+    const long long count = m_colour_start[size_t(c) + 1] - m_colour_start[size_t(c)];
+#pragma omp for schedule(dynamic, kChunk)
+    for (long long k = 0; k < count; ++k) m_err[vertices[k]] = update(vertices[k]);
   }
   return m_err.maxCoeff() / m_size;
 }

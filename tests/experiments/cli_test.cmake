@@ -280,9 +280,9 @@ elseif(CASE STREQUAL "factor_over_budget")
 elseif(CASE STREQUAL "scaling")
   # Two small grids, every method, 1 and 2 threads: one CSV row each, all "ok", and the plot
   # script's figure and table of fitted exponents. An unknown method is an input error.
-  # 8 methods (11 with the PETSc backend) x 2 sizes x 2 thread counts, and the header.
-  set(methods symplectic-euler xpbd fast-mass-spring fast-mass-spring-jacobi implicit-pcg
-              implicit-pcg-cholmod implicit-pcg-nodal implicit-cholmod)
+  # 10 methods (13 with the PETSc backend) x 2 sizes x 2 thread counts, and the header.
+  set(methods symplectic-euler xpbd fast-mass-spring fast-mass-spring-jacobi vbd vbd-chebyshev
+              implicit-pcg implicit-pcg-cholmod implicit-pcg-nodal implicit-cholmod)
   if(WITH_PETSC)
     list(APPEND methods implicit-petsc implicit-petsc-gamg implicit-petsc-boomeramg)
   endif()
