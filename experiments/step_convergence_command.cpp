@@ -155,69 +155,56 @@ class StepErrors {
   double m_g_star = 0.0, m_gap = 0.0, m_dx = 0.0;
 };
 
-/// Local/global and its accelerations (up to max_iterations): one traced step after a warm-up
-/// step that factors, the time spent measuring errors excluded from the wall time.
+/// One traced step of a stepper T (fast-mass-spring, vbd) made with `o`, whose on_iteration is
+/// set here: an untraced warm-up step first (it factors; the same h below reuses the factor),
+/// then the step whose iterates go into `curve`, the time spent measuring errors excluded from
+/// the wall time.
+template <class T>
+void trace_step(const MassSpringSystem& sys, const State& s0, double h, typename T::Options o,
+                const StepErrors& errors, std::vector<Sample>& curve) {
+  Clock::time_point t0;
+  double excluded = 0.0;
+  bool done = true;  // the warm-up step is not traced
+  o.on_iteration = [&](int it, ConstRef x) {
+    if (done) return;
+    const auto c0 = Clock::now();
+    const double wall = std::chrono::duration<double>(c0 - t0).count() - excluded;
+    const double e = errors.objective(x);
+    curve.push_back({it, wall, e, errors.position(x)});
+    done = std::abs(e) < 1e-12;  // far below any target: stop tracing, the step finishes
+    excluded += seconds_since(c0);
+  };
+  T stepper(sys, o);
+  State s1 = s0;
+  stepper.step(s0, h, s1);
+  done = false;
+  t0 = Clock::now();
+  stepper.step(s0, h, s1);
+}
+
+/// Local/global and its accelerations (up to max_iterations).
 void trace_local_global(const MassSpringSystem& sys, const State& s0, double h, int max_iterations,
                         const StepErrors& errors, Curves& curves) {
-  State s1 = s0;
   for (const Acceleration a : {Acceleration::None, Acceleration::Chebyshev, Acceleration::Lbfgs}) {
     FastMassSpringOptions o;
     o.acceleration = a;
     o.iterations = max_iterations;
-    std::vector<Sample>& curve = curves[std::string("fast-mass-spring/") + to_string(a)];
-    Clock::time_point t0;
-    double excluded = 0.0;
-    bool done = false;
-    o.on_iteration = [&](int it, ConstRef x) {
-      if (done) return;
-      const auto c0 = Clock::now();
-      const double wall = std::chrono::duration<double>(c0 - t0).count() - excluded;
-      const double e = errors.objective(x);
-      curve.push_back({it, wall, e, errors.position(x)});
-      done = std::abs(e) < 1e-12;  // far below any target: stop tracing, the step finishes
-      excluded += seconds_since(c0);
-    };
-    FastMassSpringStepper fms(sys, o);
-    t0 = Clock::now();
-    fms.step(s0, h, s1);  // warm-up: factors once (the same h below reuses the factor)
-    curve.clear();
-    done = false;
-    excluded = 0.0;
-    t0 = Clock::now();
-    fms.step(s0, h, s1);
+    trace_step<FastMassSpringStepper>(sys, s0, h, o, errors,
+                                      curves[std::string("fast-mass-spring/") + to_string(a)]);
   }
 }
 
-/// Vertex block descent, plain and Chebyshev (up to max_iterations), traced like local/global and
-/// from the same inertial start y = x0 + h v0 (the paper's adaptive start needs the previous
-/// step's acceleration, which one isolated step does not have).
+/// Vertex block descent, plain and Chebyshev (up to max_iterations), from the same inertial start
+/// y = x0 + h v0 as local/global (the paper's adaptive start needs the previous step's
+/// acceleration, which one isolated step does not have).
 void trace_vbd(const MassSpringSystem& sys, const State& s0, double h, int max_iterations,
                const StepErrors& errors, Curves& curves) {
-  State s1 = s0;
   for (const VbdAcceleration a : {VbdAcceleration::None, VbdAcceleration::Chebyshev}) {
     VbdOptions o;
     o.initialization = VbdInit::Inertial;
     o.acceleration = a;
     o.iterations = max_iterations;
-    std::vector<Sample>& curve = curves[std::string("vbd/") + to_string(a)];
-    Clock::time_point t0;
-    double excluded = 0.0;
-    bool done = false;
-    o.on_iteration = [&](int it, ConstRef x) {
-      if (done) return;
-      const auto c0 = Clock::now();
-      const double wall = std::chrono::duration<double>(c0 - t0).count() - excluded;
-      const double e = errors.objective(x);
-      curve.push_back({it, wall, e, errors.position(x)});
-      done = std::abs(e) < 1e-12;
-      excluded += seconds_since(c0);
-    };
-    VbdStepper vbd(sys, o);
-    done = true;  // warm-up step: not traced
-    vbd.step(s0, h, s1);
-    done = false;
-    t0 = Clock::now();
-    vbd.step(s0, h, s1);
+    trace_step<VbdStepper>(sys, s0, h, o, errors, curves[std::string("vbd/") + to_string(a)]);
   }
 }
 

@@ -782,7 +782,7 @@ void add_ceres_keys(std::vector<SceneKey>& t) {
           .meaning("threads Ceres uses"));
 }
 
-/// Adds the keys of local/global (fast-mass-spring) and XPBD.
+/// Adds the keys of local/global (fast-mass-spring).
 void add_local_global_keys(std::vector<SceneKey>& t) {
   auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   add(K("integrator.iterations", T::Integer)
@@ -837,7 +837,11 @@ void add_local_global_keys(std::vector<SceneKey>& t) {
           .build("CHOLMOD")
           .meaning("global step: exact prefactored solve, or one Jacobi sweep (pair it with "
                    "Chebyshev; not with L-BFGS)"));
+}
 
+/// Adds the keys of vertex block descent (vbd).
+void add_vbd_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   add(K("integrator.iterations", T::Integer)
           .in({"vbd"})
           .def("10")
@@ -873,7 +877,11 @@ void add_local_global_keys(std::vector<SceneKey>& t) {
           .def("true")
           .meaning("backtrack each vertex's Newton step until its local objective falls; false: "
                    "the paper's plain step"));
+}
 
+/// Adds the keys of XPBD.
+void add_xpbd_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   add(K("integrator.substeps", T::Integer)
           .in({"xpbd"})
           .def("10")
@@ -948,7 +956,7 @@ std::vector<SceneKey> make_table() {
   for (auto section :
        {add_mesh_lattice_keys, add_mesh_line_keys, add_mesh_other_keys, add_springs_keys,
         add_scene_part_keys, add_pin_strain_ode_keys, add_implicit_keys, add_sundials_keys,
-        add_ceres_keys, add_local_global_keys, add_run_keys})
+        add_ceres_keys, add_local_global_keys, add_vbd_keys, add_xpbd_keys, add_run_keys})
     section(t);
   return t;
 }

@@ -569,18 +569,7 @@ StepperStats FastMassSpringStepper::stats() const {
 }
 
 double FastMassSpringStepper::step_residual(const State& s0, double h, const State& s1) {
-  m_sys.compute_forces(s1.x, s1.v, m_force);
-  const Vec& mass = m_sys.mass_diagonal();
-  double worst = 0.0, scale = 0.0;
-  for (Index p = 0; p < m_sys.num_particles(); ++p) {
-    if (m_row[size_t(p)] < 0) continue;
-    for (Index i = 3 * p; i < 3 * p + 3; ++i) {
-      const double inertia = mass[i] * (s1.x[i] - s0.x[i] - h * s0.v[i]) / (h * h);
-      worst = std::max(worst, std::abs(inertia - m_force[i]));
-      scale = std::max({scale, std::abs(inertia), std::abs(m_force[i])});
-    }
-  }
-  return scale > 0.0 ? worst / scale : 0.0;
+  return backward_euler_residual(m_sys, s0, h, s1, m_force);
 }
 
 std::string FastMassSpringStepper::report() const {

@@ -1,5 +1,8 @@
 #include "hooke/whole_step/spring_potential_forces.hpp"
 
+#include <algorithm>
+#include <cmath>
+
 #include "hooke/forces/air_drag.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
@@ -19,6 +22,22 @@ std::string SpringPotentialForces::unsupported(const MassSpringSystem& system,
              (takes_dampers ? "" : "use air drag for damping, or ") + "use an implicit method)";
   }
   return "";
+}
+
+double backward_euler_residual(const MassSpringSystem& system, const State& s0, double h,
+                               const State& s1, Vec& force) {
+  system.compute_forces(s1.x, s1.v, force);
+  const Vec& mass = system.mass_diagonal();
+  double worst = 0.0, scale = 0.0;
+  for (Index p = 0; p < system.num_particles(); ++p) {
+    if (system.pinned()[size_t(p)]) continue;
+    for (Index i = 3 * p; i < 3 * p + 3; ++i) {
+      const double inertia = mass[i] * (s1.x[i] - s0.x[i] - h * s0.v[i]) / (h * h);
+      worst = std::max(worst, std::abs(inertia - force[i]));
+      scale = std::max({scale, std::abs(inertia), std::abs(force[i])});
+    }
+  }
+  return scale > 0.0 ? worst / scale : 0.0;
 }
 
 double system_size(ConstRef x) {

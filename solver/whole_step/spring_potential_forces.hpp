@@ -27,6 +27,12 @@ struct SpringPotentialForces {
                                  const std::string& why, bool takes_dampers = false);
 };
 
+/// How far s1 (with v1 = (x1 - x0) / h) is from solving the backward-Euler step from s0:
+/// max |M (x1 - x0 - h v0) / h^2 - f(x1, v1)| over the free DOFs, relative to the larger of the
+/// two terms' maxima (0 for an exact step). `force` is 3n scratch.
+double backward_euler_residual(const MassSpringSystem& system, const State& s0, double h,
+                               const State& s1, Vec& force);
+
 /// The longest side of the axis-aligned bounding box of the particles at x (3n), or 1 (m) when
 /// they all sit at one point: the length the tolerances of the iterative whole-step methods are
 /// relative to.

@@ -282,19 +282,6 @@ double VbdStepper::objective(const State& s0, double h, ConstRef x) const {
   return g;
 }
 
-double VbdStepper::step_residual(const State& s0, double h, const State& s1) {
-  m_sys.compute_forces(s1.x, s1.v, m_force);
-  const Vec& mass = m_sys.mass_diagonal();
-  double worst = 0.0, scale = 0.0;
-  for (const Index p : m_order)
-    for (Index i = 3 * p; i < 3 * p + 3; ++i) {
-      const double inertia = mass[i] * (s1.x[i] - s0.x[i] - h * s0.v[i]) / (h * h);
-      worst = std::max(worst, std::abs(inertia - m_force[i]));
-      scale = std::max({scale, std::abs(inertia), std::abs(m_force[i])});
-    }
-  return scale > 0.0 ? worst / scale : 0.0;
-}
-
 StepSummary VbdStepper::step(const State& s0, double h, State& s1) {
   const auto t0 = Clock::now();
   StepSummary out;
@@ -371,7 +358,7 @@ StepSummary VbdStepper::step(const State& s0, double h, State& s1) {
   m_has_last = true;
   m_iterations += it;
   ++m_steps;
-  const double r = step_residual(s0, h, s1);
+  const double r = backward_euler_residual(m_sys, s0, h, s1, m_force);
   if (!test) out.residual = r;
   if (r > m_worst_residual) {
     m_worst_residual = r;

@@ -132,7 +132,6 @@ class VbdStepper final : public Stepper {
   /// The relative error estimate of m_x (an exact gradient pass).
   double error_estimate() const;
   double quadratic_terms(ConstRef x) const;
-  double step_residual(const State& s0, double h, const State& s1);
 
   const MassSpringSystem& m_sys;
   VbdOptions m_opt;
