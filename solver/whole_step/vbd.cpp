@@ -233,13 +233,23 @@ double VbdStepper::sweep() {
     for (const Index p : m_order) m_err[p] = update(p);
     return m_err.maxCoeff() / m_size;
   }
-#pragma omp parallel
+  // When another process holds the second core, the barrier after each colour waits for the
+  // descheduled thread: the team then drops to one thread (AdaptiveTeam times both).
+  const int threads = m_team.threads();
+  const auto t0 = Clock::now();
+  if (threads == 1) {
+    for (const Index p : m_order) m_err[p] = update(p);
+    m_team.record(1, seconds_since(t0));
+    return m_err.maxCoeff() / m_size;
+  }
+#pragma omp parallel num_threads(threads)
   for (long long c = 0; c < colours; ++c) {
     const Index* vertices = m_order.data() + m_colour_start[size_t(c)];
     const long long count = m_colour_start[size_t(c) + 1] - m_colour_start[size_t(c)];
 #pragma omp for schedule(dynamic, kChunk)
     for (long long k = 0; k < count; ++k) m_err[vertices[k]] = update(vertices[k]);
   }
+  m_team.record(threads, seconds_since(t0));
   return m_err.maxCoeff() / m_size;
 }
 

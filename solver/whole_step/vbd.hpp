@@ -7,6 +7,7 @@
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/options.hpp"
+#include "hooke/thread_team.hpp"
 #include "hooke/whole_step/spring_potential_forces.hpp"
 
 namespace hooke {
@@ -152,6 +153,7 @@ class VbdStepper final : public Stepper {
 
   // Counters.
   long long m_steps = 0, m_iterations = 0, m_backtracks = 0, m_chebyshev_restarts = 0;
+  AdaptiveTeam m_team;  // one or two threads per sweep, by their recent times
   double m_seconds = 0.0, m_worst_residual = 0.0;
   long long m_worst_step = 0;
 };

@@ -1,0 +1,55 @@
+// Claims of solver/thread_team.hpp: AdaptiveTeam measures both team sizes first, then runs the
+// faster one and probes the other once every probe_every repetitions, and follows a change of
+// load (the second core becoming busy, then free again) within a few probes.
+#include "hooke/thread_team.hpp"
+
+#include <gtest/gtest.h>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace hooke {
+namespace {
+
+/// Runs `repetitions` of a region that takes `one` s on one thread and `all` s on all; returns
+/// how many ran on one thread.
+int run(AdaptiveTeam& team, int repetitions, double one, double all) {
+  int on_one = 0;
+  for (int k = 0; k < repetitions; ++k) {
+    const int t = team.threads();
+    if (t == 1) ++on_one;
+    team.record(t, t == 1 ? one : all);
+  }
+  return on_one;
+}
+
+TEST(AdaptiveTeam, RunsTheFasterSizeAndFollowsAChangeOfLoad) {
+#ifdef _OPENMP
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(2);
+  AdaptiveTeam team(16);
+  EXPECT_EQ(team.threads(), 2);  // all threads first
+  team.record(2, 0.5);
+  EXPECT_EQ(team.threads(), 1);  // then one, to have both times
+  team.record(1, 1.0);
+  // Quiet machine: two threads twice as fast; one thread only as a probe, 1 in 16.
+  EXPECT_EQ(run(team, 160, 1.0, 0.5), 10);
+  // The second core becomes busy: two threads now take 1.3 s; within a few probes the team runs
+  // on one thread, probing two threads 1 in 16.
+  run(team, 16 * 6, 1.0, 1.3);
+  EXPECT_EQ(run(team, 160, 1.0, 1.3), 150);
+  // The core is free again: back to two threads.
+  run(team, 16 * 6, 1.0, 0.5);
+  EXPECT_EQ(run(team, 160, 1.0, 0.5), 10);
+  omp_set_num_threads(1);
+  EXPECT_EQ(team.threads(), 1);  // a single thread available: nothing to choose
+  omp_set_num_threads(threads);
+#else
+  AdaptiveTeam team;
+  EXPECT_EQ(team.threads(), 1);
+#endif
+}
+
+}  // namespace
+}  // namespace hooke
