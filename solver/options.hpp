@@ -4,6 +4,7 @@
 /// boundary (scene files, the command line) so that no step() compares strings.
 #include <array>
 #include <optional>
+#include <sstream>
 #include <string>
 #include <string_view>
 
@@ -18,6 +19,14 @@ struct OptionError {
   /// True when the options are valid.
   bool ok() const { return message.empty(); }
 };
+
+/// The OptionError of a field that breaks its rule: message "FIELD = VALUE: rule".
+template <class T>
+OptionError option_error(const std::string& field, const T& value, const std::string& rule) {
+  std::ostringstream os;
+  os << field << " = " << value << ": " << rule;
+  return {field, os.str()};
+}
 
 /// Names of the values of an enum class E, in the enum's order (E's values must be 0, 1, ...).
 /// Specialise it next to E:

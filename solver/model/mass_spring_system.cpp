@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <limits>
 
+#include "hooke/sph/fluid_model.hpp"
+
 namespace hooke {
 
 MassSpringSystem::MassSpringSystem(Vec masses, std::vector<char> pinned)
@@ -29,6 +31,17 @@ void MassSpringSystem::set_pin_motion(PinMotion motion) {
     m_moving.segment<3>(3 * i).setOnes();
   }
   m_pin_motion = std::move(motion);
+}
+
+void MassSpringSystem::set_fluid(std::shared_ptr<const FluidModel> fluid) {
+  HOOKE_ASSERT(!m_finalized, "set_fluid after finalize");
+  HOOKE_ASSERT(fluid != nullptr, "set_fluid without a fluid");
+  HOOKE_ASSERT(
+      fluid->num_particles() == num_particles(),
+      "a fluid of " << fluid->num_particles() << " particles for a system of " << num_particles());
+  for (Index i = fluid->num_fluid(); i < num_particles(); ++i)
+    HOOKE_ASSERT(m_pinned[size_t(i)], "boundary particle " << i << " is not pinned");
+  m_fluid = std::move(fluid);
 }
 
 void MassSpringSystem::add_force(std::unique_ptr<Force> force) {

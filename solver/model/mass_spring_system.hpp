@@ -10,6 +10,8 @@
 
 namespace hooke {
 
+class FluidModel;
+
 /// K = df/dx and D = df/dv of a whole system, 3n x 3n, sharing the system's block pattern.
 /// Created once (make_jacobians) and refilled by assemble_jacobians at every step.
 struct Jacobians {
@@ -43,6 +45,11 @@ class MassSpringSystem {
   /// Gives pinned particles a prescribed motion (before finalize only; every particle of `motion`
   /// must be pinned).
   void set_pin_motion(PinMotion motion);
+  /// Makes the system a fluid (before finalize only): its particles [0, fluid->num_fluid()) are
+  /// fluid particles and the rest static boundary particles, which must be pinned; only the SPH
+  /// methods (solver/sph/) step it. The system's forces (gravity, drag) act on the fluid as
+  /// external forces.
+  void set_fluid(std::shared_ptr<const FluidModel> fluid);
   /// Builds the Jacobian block pattern and binds the forces to it. Call once, after all forces.
   void finalize();
 
@@ -60,6 +67,8 @@ class MassSpringSystem {
   /// The scripted pins (empty if none).
   const PinMotion& pin_motion() const { return m_pin_motion; }
   bool has_pin_motion() const { return !m_pin_motion.empty(); }
+  /// The fluid of a fluid scene (set_fluid), nullptr for a mass-spring system.
+  const FluidModel* fluid() const { return m_fluid.get(); }
   /// 3n mask: 1 for the DOFs that move with the state's velocity (free particles and scripted
   /// pins), 0 for pins that stay still.
   const Vec& moving() const { return m_moving; }
@@ -114,6 +123,7 @@ class MassSpringSystem {
   Vec m_masses, m_mass_diag, m_free_inv_mass, m_moving;
   std::vector<char> m_pinned;
   PinMotion m_pin_motion;
+  std::shared_ptr<const FluidModel> m_fluid;
   std::vector<std::unique_ptr<Force>> m_forces;
   std::vector<std::unique_ptr<Constraint>> m_constraints;
   BlockPattern m_pattern;

@@ -1,0 +1,108 @@
+#pragma once
+#include <utility>
+
+#include "hooke/core.hpp"
+#include "hooke/options.hpp"
+#include "hooke/sph/kernels.hpp"
+#include "hooke/sph/neighbours.hpp"
+
+namespace hooke {
+
+/// What a fluid is made of: fixed for a run, validated once.
+struct FluidOptions {
+  /// 2 (particles in a plane of constant z, the 2D validation cases) or 3.
+  int dimension = 3;
+  /// Particle spacing dx (m), > 0: a fluid particle stands for a cube (2D: square) of side dx.
+  double spacing = 0.0;
+  /// Rest density rho0 (kg/m^3), > 0.
+  double rest_density = 1000.0;
+  /// Kernel support radius H as a multiple of the spacing, in [1.5, 4]: 2 gives about 13
+  /// neighbours in 2D and 33 in 3D with the cubic spline.
+  double support_factor = 2.0;
+  KernelType kernel = KernelType::CubicSpline;
+  /// Kinematic viscosity nu (m^2/s), >= 0, in the discretisation of Morris et al. 1997 /
+  /// Monaghan 2005 (Koschier et al. 2019, "SPH techniques for the physics based simulation of
+  /// fluids and solids", eq. 30): a_i += 2 (d + 2) nu sum_j (m_j / rho_ij) (v_ij . x_ij) /
+  /// (|x_ij|^2 + 0.01 H^2) gradW_ij, rho_ij = (rho_i + rho_j) / 2 so that it conserves
+  /// momentum exactly. Monaghan's artificial viscosity alpha with sound speed c
+  /// is nu = alpha c (H / 2) / (2 (d + 2)). Between fluid particles only: the walls slip.
+  double viscosity = 0.0;
+  OptionError validate() const;
+};
+
+/// A fluid of particles with static boundary particles, as smoothed particle hydrodynamics
+/// models it (Monaghan 2005, "Smoothed particle hydrodynamics", Rep. Prog. Phys. 68). The
+/// particles of a system are ordered: [0, num_fluid) fluid, [num_fluid, n) boundary. A
+/// boundary particle b carries the Akinci et al. 2012 ("Versatile rigid-fluid coupling for
+/// incompressible SPH", ACM TOG 31(4), eqs. 4-5) mass psi_b = rho0 / sum_k W_bk over the boundary
+/// particles k around it (itself included), computed once from its rest position: a sampling
+/// of any density then contributes rho0 per unit of covered kernel.
+///
+/// The SPH sums (density, pressure and viscous accelerations, the density change of a velocity
+/// field) are here, shared by the pressure methods (wcsph.hpp, iisph.hpp). Each reads a
+/// NeighbourSearch updated on all n positions with num_fluid queries; each writes only the
+/// entries of fluid particles, each particle's sum in its neighbour order, so results do not
+/// depend on the thread count.
+class FluidModel {
+ public:
+  /// num_fluid: fluid particles (>= 1); boundary_x: the 3 nb positions of the boundary
+  /// particles (m), nb >= 0. Throws InternalError if the options are not valid.
+  FluidModel(FluidOptions options, Index num_fluid, ConstRef boundary_x);
+
+  const FluidOptions& options() const { return m_options; }
+  int dimension() const { return m_options.dimension; }
+  Index num_fluid() const { return m_num_fluid; }
+  Index num_boundary() const { return m_psi.size(); }
+  Index num_particles() const { return m_num_fluid + m_psi.size(); }
+  /// The support radius H (m).
+  double support() const { return m_options.support_factor * m_options.spacing; }
+  double rest_density() const { return m_options.rest_density; }
+  /// rho0 dx^d (kg): the mass of a fluid particle of the regular sampling.
+  double particle_mass() const;
+  /// psi_b (kg) of each boundary particle, nb vector.
+  const Vec& boundary_psi() const { return m_psi; }
+
+  /// rho_i = sum_j m_j W_ij (fluid, itself included) + sum_b psi_b W_ib, for i < num_fluid.
+  /// x: 3n positions; masses: n; rho: at least num_fluid entries (kg/m^3).
+  void compute_density(const NeighbourSearch& nb, ConstRef x, ConstRef masses, VecRef rho) const;
+  /// a_i += -sum_j m_j (p_i / rho_i^2 + p_j / rho_j^2) gradW_ij - sum_b psi_b p_i / rho_i^2
+  /// gradW_ib (the symmetric, momentum-conserving gradient; boundary as in Akinci et al. 2012,
+  /// eq. 10), for fluid i. a: 3n; rho, p: num_fluid entries (Pa).
+  void add_pressure_acceleration(const NeighbourSearch& nb, ConstRef x, ConstRef masses,
+                                 ConstRef rho, ConstRef p, VecRef a) const;
+  /// a_i += the viscous acceleration of FluidOptions::viscosity (nothing if it is 0).
+  void add_viscous_acceleration(const NeighbourSearch& nb, ConstRef x, ConstRef v, ConstRef masses,
+                                ConstRef rho, VecRef a) const;
+  /// div_i = sum_j m_j (u_i - u_j) . gradW_ij + sum_b psi_b u_i . gradW_ib: the rate of change
+  /// of rho_i (kg/m^3/s) that the velocity field u (3n; boundary particles at rest) gives, the
+  /// SPH continuity equation (Monaghan 2005, eq. 4.4) with Akinci's boundary term.
+  void density_change(const NeighbourSearch& nb, ConstRef x, ConstRef masses, ConstRef u,
+                      VecRef div) const;
+  /// Calls f(kernel) with this fluid's SphKernel<Shape>, so pair loops are compiled per shape.
+  template <class F>
+  decltype(auto) with_kernel(F&& f) const {
+    if (m_options.kernel == KernelType::WendlandC2)
+      return f(SphKernel<WendlandC2Shape>(dimension(), support()));
+    return f(SphKernel<CubicSplineShape>(dimension(), support()));
+  }
+
+ private:
+  FluidOptions m_options;
+  Index m_num_fluid;
+  Vec m_psi;
+};
+
+/// Per-step figures of a fluid step (relative density errors over the fluid particles).
+struct FluidStepStats {
+  double max_density_error = 0.0;   ///< max_i (rho_i - rho0) / rho0 (compression only)
+  double mean_density_error = 0.0;  ///< mean_i max(rho_i - rho0, 0) / rho0
+  double max_speed = 0.0;           ///< max |v_i| at the step's end (m/s)
+  int pressure_iterations = 0;      ///< iterations of the pressure solve (0: none)
+  double pressure_residual = 0.0;   ///< its final mean density error (implicit methods)
+};
+
+/// The fluid's density errors (FluidStepStats's first two fields) for densities rho
+/// (num_fluid entries).
+std::pair<double, double> density_errors(ConstRef rho, double rest_density);
+
+}  // namespace hooke

@@ -1,0 +1,140 @@
+#include "hooke/sph/iisph.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace hooke {
+
+namespace {
+constexpr long long kParallelParticles = 1024;
+}  // namespace
+
+OptionError IisphOptions::validate() const {
+  if (!(tolerance > 0.0)) return option_error("tolerance", tolerance, "must be positive");
+  if (min_iterations < 1) return option_error("min_iterations", min_iterations, "must be >= 1");
+  if (max_iterations < min_iterations)
+    return option_error("max_iterations", max_iterations,
+                        "must be >= min_iterations (" + std::to_string(min_iterations) + ")");
+  if (!(omega > 0.0 && omega <= 1.0)) return option_error("omega", omega, "must be in (0, 1]");
+  if (!(max_density_error > 0.0))
+    return option_error("max_density_error", max_density_error, "must be positive");
+  return {};
+}
+
+IisphStepper::IisphStepper(const MassSpringSystem& system, Options options)
+    : SphStepper(system), m_options(options) {
+  if (const OptionError e = m_options.validate(); !e.ok())
+    throw std::invalid_argument("iisph: " + e.message);
+  const Index nf = m_fluid.num_fluid(), n = system.num_particles();
+  m_v_adv = Vec::Zero(3 * n);
+  m_ap = Vec::Zero(3 * n);
+  m_source = m_diag = m_Ap = m_div = Vec::Zero(nf);
+}
+
+double IisphStepper::cfl_step(const State& s, double courant, double max_step) const {
+  const double vmax = max_fluid_speed(s);
+  return vmax > 0.0 ? std::min(max_step, courant * m_fluid.options().spacing / vmax) : max_step;
+}
+
+std::vector<double> IisphStepper::history() const {
+  return std::vector<double>(m_p.data(), m_p.data() + m_p.size());
+}
+
+void IisphStepper::restore_history(const std::vector<double>& history) {
+  HOOKE_ASSERT(Index(history.size()) == m_p.size(), "iisph history of "
+                                                        << history.size() << " pressures for "
+                                                        << m_p.size() << " fluid particles");
+  m_p = Eigen::Map<const Vec>(history.data(), Index(history.size()));
+}
+
+void IisphStepper::compute_diagonal(ConstRef x, double h) {
+  const Index nf = m_fluid.num_fluid();
+  const Vec& masses = m_system.masses();
+  const Vec& psi = m_fluid.boundary_psi();
+  m_fluid.with_kernel([&](const auto& kernel) {
+    parallel_for(nf, kParallelParticles, [&](long long i) {
+      const Vec3 xi = x.segment<3>(3 * i);
+      const double inv_rho2 = 1.0 / (m_rho[i] * m_rho[i]);
+      // d_i: the pressure acceleration of particle i per unit of its own pressure.
+      Vec3 sum_grad = Vec3::Zero();
+      for (const int* it = m_search.begin(i); it != m_search.end(i); ++it) {
+        const Index j = *it;
+        const Vec3 xij = xi - x.segment<3>(3 * j);
+        const double mass = j < nf ? masses[j] : psi[j - nf];
+        sum_grad += mass * kernel.gradW(xij, xij.norm());
+      }
+      const Vec3 d = -inv_rho2 * sum_grad;
+      double aii = 0.0;
+      for (const int* it = m_search.begin(i); it != m_search.end(i); ++it) {
+        const Index j = *it;
+        const Vec3 xij = xi - x.segment<3>(3 * j);
+        const Vec3 g = kernel.gradW(xij, xij.norm());
+        if (j < nf)
+          aii += masses[j] * (d - masses[i] * inv_rho2 * g).dot(g);
+        else
+          aii += psi[j - nf] * d.dot(g);
+      }
+      m_diag[i] = h * h * aii;
+    });
+    return 0;
+  });
+}
+
+void IisphStepper::apply(ConstRef x, double h) {
+  m_ap.setZero();
+  m_fluid.add_pressure_acceleration(m_search, x, m_system.masses(), m_rho, m_p, m_ap);
+  m_ap.array() *= m_system.moving().array();
+  m_fluid.density_change(m_search, x, m_system.masses(), m_ap, m_div);
+  m_Ap = h * h * m_div;
+}
+
+StepSummary IisphStepper::step(const State& s0, double h, State& s1) {
+  const auto t0 = Clock::now();
+  StepSummary s;
+  if (!prepare(s0.x, s)) return s;
+  const Index nf = m_fluid.num_fluid();
+  const double rho0 = m_fluid.rest_density();
+  external_acceleration(s0.x, s0.v);
+  m_v_adv = s0.v + h * m_a;
+  m_fluid.density_change(m_search, s0.x, m_system.masses(), m_v_adv, m_div);
+  m_source = (rho0 - m_rho.array() - h * m_div.array()).matrix();
+  compute_diagonal(s0.x, h);
+  m_p *= 0.5;  // warm start (Ihmsen et al. 2014, sec. 3.3)
+  int iterations = 0;
+  double error = 0.0;
+  const double omega = m_options.omega;
+  while (true) {
+    apply(s0.x, h);
+    // Predicted compression of the current pressures: (A p - s)_i = rho_i(p) - rho0.
+    double sum = 0.0;
+    for (Index i = 0; i < nf; ++i) sum += std::max(m_Ap[i] - m_source[i], 0.0);
+    error = sum / (double(nf) * rho0);
+    if (iterations >= m_options.min_iterations &&
+        (error <= m_options.tolerance || iterations >= m_options.max_iterations))
+      break;
+    for (Index i = 0; i < nf; ++i)
+      m_p[i] = m_diag[i] != 0.0
+                   ? std::max(0.0, m_p[i] + omega * (m_source[i] - m_Ap[i]) / m_diag[i])
+                   : 0.0;
+    ++iterations;
+  }
+  m_a += m_ap;
+  finish_step(s0, h, s1, m_options.max_density_error, s);
+  m_last.pressure_iterations = iterations;
+  m_last.pressure_residual = error;
+  m_stats.iterations += iterations;
+  s.iterations = iterations;
+  s.residual = error;
+  if (s.status == Status::Converged && error > m_options.tolerance) {
+    std::ostringstream os;
+    os << "iisph: the pressure solve stopped at max_iterations " << m_options.max_iterations
+       << " with a mean density error " << error << " > tolerance " << m_options.tolerance;
+    s.status = Status::NotConverged;
+    s.message = os.str();
+  }
+  m_stats.total_seconds += seconds_since(t0);
+  return s;
+}
+
+}  // namespace hooke

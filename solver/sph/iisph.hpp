@@ -1,0 +1,62 @@
+#pragma once
+#include <vector>
+
+#include "hooke/options.hpp"
+#include "hooke/sph/sph_stepper.hpp"
+
+namespace hooke {
+
+/// Options of implicit incompressible SPH.
+struct IisphOptions {
+  /// The pressure solve stops when the mean predicted compression, mean_i max(rho_i - rho0, 0)
+  /// / rho0, is at most this (0.001: the 0.1% of Ihmsen et al.). > 0.
+  double tolerance = 1e-3;
+  /// Relaxed Jacobi iterations: at least min_iterations, at most max_iterations (then the step
+  /// is NotConverged). 1 <= min_iterations <= max_iterations.
+  int min_iterations = 2;
+  int max_iterations = 200;
+  /// Jacobi relaxation omega in (0, 1] (0.5 in Ihmsen et al. 2014).
+  double omega = 0.5;
+  /// A step whose largest density error at its start exceeds this fails (Status::Fatal). > 0.
+  double max_density_error = 0.5;
+  OptionError validate() const;
+};
+
+/// Implicit incompressible SPH (Ihmsen et al. 2014, "Implicit incompressible SPH", IEEE TVCG
+/// 20(3)), in the form of Koschier et al. 2019 (sec. 4.2.2): the non-pressure accelerations give
+/// an advected velocity v*, and the pressures solve the pressure Poisson equation
+///   (A p)_i = h^2 sum_j m_j (a_i - a_j) . gradW_ij + h^2 sum_b psi_b a_i . gradW_ib
+///           = rho0 - rho*_i,   a = FluidModel's pressure acceleration of p,
+/// rho*_i = rho_i + h drho_i/dt(v*), by relaxed Jacobi p_i += omega (s_i - (A p)_i) / A_ii,
+/// matrix-free, warm-started from half the last step's pressures, with p clamped at 0 after each
+/// update (a particle at the free surface cannot pull: with the clamp the problem is a linear
+/// complementarity problem, not a linear system). Then v1 = v* + h a(p), x1 = x0 + h v1.
+class IisphStepper final : public SphStepper {
+ public:
+  using Options = IisphOptions;
+  IisphStepper(const MassSpringSystem& system, Options options);
+  const char* name() const override { return "iisph"; }
+  StepSummary step(const State& s0, double h, State& s1) override;
+  const Options& options() const { return m_options; }
+  /// The step courant * dx / max|v| at state s (Ihmsen et al. 2014: courant 0.4), or
+  /// max_step when the fluid is at rest.
+  double cfl_step(const State& s, double courant, double max_step) const;
+  /// The last step's source term rho0 - rho*_i (kg/m^3) and diagonal A_ii, num_fluid entries.
+  const Vec& source() const { return m_source; }
+  const Vec& diagonal() const { return m_diag; }
+  /// The warm start: the pressures of the last step.
+  std::vector<double> history() const override;
+  void restore_history(const std::vector<double>& history) override;
+
+ private:
+  /// m_diag = A_ii at the current neighbours and densities, for step h.
+  void compute_diagonal(ConstRef x, double h);
+  /// m_ap = the pressure accelerations of m_p; m_Ap = A m_p.
+  void apply(ConstRef x, double h);
+
+  Options m_options;
+  Vec m_v_adv, m_ap;                  // 3n
+  Vec m_source, m_diag, m_Ap, m_div;  // num_fluid
+};
+
+}  // namespace hooke

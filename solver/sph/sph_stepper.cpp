@@ -1,0 +1,94 @@
+#include "hooke/sph/sph_stepper.hpp"
+
+#include <cmath>
+#include <sstream>
+#include <stdexcept>
+
+namespace hooke {
+
+std::string sph_unsupported(const MassSpringSystem& system) {
+  if (system.fluid() == nullptr)
+    return "the system has no fluid: the SPH methods (wcsph, iisph) step fluids only";
+  if (system.has_pin_motion()) return "scripted pins are not supported in fluid scenes";
+  return "";
+}
+
+SphStepper::SphStepper(const MassSpringSystem& system)
+    : m_system(system),
+      m_fluid(*[&] {
+        if (const std::string why = sph_unsupported(system); !why.empty())
+          throw std::invalid_argument(why);
+        return system.fluid();
+      }()),
+      m_search(m_fluid.support()) {
+  const Index nf = m_fluid.num_fluid(), n = system.num_particles();
+  m_rho = Vec::Constant(nf, m_fluid.rest_density());
+  m_p = Vec::Zero(nf);
+  m_a = Vec::Zero(3 * n);
+  m_force = Vec::Zero(3 * n);
+}
+
+double SphStepper::max_fluid_speed(const State& s) const {
+  double max_speed2 = 0.0;
+  for (Index i = 0; i < m_fluid.num_fluid(); ++i)
+    max_speed2 = std::max(max_speed2, s.v.segment<3>(3 * i).squaredNorm());
+  return std::sqrt(max_speed2);
+}
+
+std::string SphStepper::report() const {
+  std::ostringstream os;
+  os << format_stats(m_stats) << "; last step: max density error " << m_last.max_density_error
+     << ", mean " << m_last.mean_density_error;
+  return os.str();
+}
+
+bool SphStepper::prepare(ConstRef x, StepSummary& s) {
+  if (m_search.update(x, m_fluid.num_fluid()) != Status::Converged) {
+    s.status = Status::Fatal;
+    s.message = "CFL: the neighbour search failed: " + m_search.error() +
+                "; the fluid has exploded (reduce dt below the CFL step)";
+    return false;
+  }
+  m_fluid.compute_density(m_search, x, m_system.masses(), m_rho);
+  const auto [max_error, mean_error] = density_errors(m_rho, m_fluid.rest_density());
+  m_last = {};
+  m_last.max_density_error = max_error;
+  m_last.mean_density_error = mean_error;
+  return true;
+}
+
+void SphStepper::mask_acceleration() { m_a.array() *= m_system.moving().array(); }
+
+void SphStepper::external_acceleration(ConstRef x, ConstRef v) {
+  m_system.compute_forces(x, v, m_force);
+  m_a = m_system.free_inverse_mass().cwiseProduct(m_force);
+  m_fluid.add_viscous_acceleration(m_search, x, v, m_system.masses(), m_rho, m_a);
+  mask_acceleration();
+}
+
+void SphStepper::finish_step(const State& s0, double h, State& s1, double max_density_error,
+                             StepSummary& s) {
+  s1.v = s0.v + h * m_a;
+  s1.x = s0.x + h * s1.v.cwiseProduct(m_system.moving());
+  s1.t = s0.t + h;
+  m_last.max_speed = max_fluid_speed(s1);
+  ++m_stats.steps;
+  m_stats.last_residual = m_last.max_density_error;
+  if (!(m_last.max_density_error <= max_density_error)) {
+    std::ostringstream os;
+    os << "density: the largest density error " << m_last.max_density_error * 100
+       << "% exceeds max_density_error " << max_density_error * 100
+       << "%; the fluid is compressed beyond the method's limit (reduce dt)";
+    s.status = Status::Fatal;
+    s.message = os.str();
+  } else if (!(h * m_last.max_speed <= m_fluid.support())) {
+    std::ostringstream os;
+    os << "CFL: a particle moved " << h * m_last.max_speed << " m in one step at "
+       << m_last.max_speed << " m/s, more than the kernel support " << m_fluid.support()
+       << " m; the fluid has exploded (reduce dt below the CFL step)";
+    s.status = Status::Fatal;
+    s.message = os.str();
+  }
+}
+
+}  // namespace hooke

@@ -1,0 +1,56 @@
+#pragma once
+#include <string>
+
+#include "hooke/integrators/stepper.hpp"
+#include "hooke/model/mass_spring_system.hpp"
+#include "hooke/sph/fluid_model.hpp"
+#include "hooke/sph/neighbours.hpp"
+
+namespace hooke {
+
+/// "" if `system` is a fluid an SPH method can step, else why not.
+std::string sph_unsupported(const MassSpringSystem& system);
+
+/// What the SPH pressure methods share: the fluid of a system, its neighbour search, densities,
+/// the external and viscous accelerations, the symplectic Euler update and the checks that stop
+/// an exploding fluid. A pressure method (wcsph.hpp, iisph.hpp) derives from it and writes
+/// step(); all buffers are sized once here, so a step does not allocate once warm.
+class SphStepper : public Stepper {
+ public:
+  /// Figures of the last step (densities at its start, speed at its end).
+  const FluidStepStats& last_fluid_stats() const { return m_last; }
+  /// Densities at the start of the last step (kg/m^3), num_fluid entries.
+  const Vec& densities() const { return m_rho; }
+  /// Pressures of the last step (Pa), num_fluid entries.
+  const Vec& pressures() const { return m_p; }
+  const FluidModel& fluid() const { return m_fluid; }
+  /// The largest speed of a fluid particle in state s (m/s).
+  double max_fluid_speed(const State& s) const;
+  StepperStats stats() const override { return m_stats; }
+  std::string report() const override;
+
+ protected:
+  /// Throws std::invalid_argument if sph_unsupported(system) is not "".
+  explicit SphStepper(const MassSpringSystem& system);
+  /// Neighbours and densities at x (3n); false (with the message in `s`) if the search failed.
+  bool prepare(ConstRef x, StepSummary& s);
+  /// m_a = the external accelerations f/m of the system's forces plus the viscous ones at
+  /// (x, v), zero for particles that do not move.
+  void external_acceleration(ConstRef x, ConstRef v);
+  /// s1 = (x0 + h v1, v1) with v1 = v0 + h m_a on moving particles (symplectic Euler), the step's
+  /// figures in m_last, and the checks: Fatal if the densities at the step's start exceeded
+  /// max_density_error or a particle moved more than the support radius in the step.
+  void finish_step(const State& s0, double h, State& s1, double max_density_error, StepSummary& s);
+  /// Zeroes the entries of m_a of particles that do not move (pins).
+  void mask_acceleration();
+
+  const MassSpringSystem& m_system;
+  const FluidModel& m_fluid;
+  NeighbourSearch m_search;
+  Vec m_rho, m_p;    // num_fluid
+  Vec m_a, m_force;  // 3n
+  FluidStepStats m_last;
+  StepperStats m_stats;
+};
+
+}  // namespace hooke
