@@ -106,9 +106,15 @@ StepSummary IisphStepper::step(const State& s0, double h, State& s1) {
   const double omega = m_options.omega;
   while (true) {
     apply(s0.x, h);
-    // Predicted compression of the current pressures: (A p - s)_i = rho_i(p) - rho0.
+    // The residual of the complementarity problem, with (A p - s)_i = rho_i(p) - rho0: a particle
+    // under pressure must reach rho0 (either sign counts), a particle at p = 0 may expand but not
+    // be compressed. Counting compression alone would let the solve stop with pressures far from
+    // the solution wherever they are too high (tests/sph/pressure_system_test.cpp).
     double sum = 0.0;
-    for (Index i = 0; i < nf; ++i) sum += std::max(m_Ap[i] - m_source[i], 0.0);
+    for (Index i = 0; i < nf; ++i) {
+      const double r = m_Ap[i] - m_source[i];
+      sum += m_p[i] > 0.0 ? std::abs(r) : std::max(r, 0.0);
+    }
     error = sum / (double(nf) * rho0);
     if (iterations >= m_options.min_iterations &&
         (error <= m_options.tolerance || iterations >= m_options.max_iterations))

@@ -8,8 +8,10 @@ namespace hooke {
 
 /// Options of implicit incompressible SPH.
 struct IisphOptions {
-  /// The pressure solve stops when the mean predicted compression, mean_i max(rho_i - rho0, 0)
-  /// / rho0, is at most this (0.001: the 0.1% of Ihmsen et al.). > 0.
+  /// The pressure solve stops when the mean residual of the predicted densities rho_i(p) is at
+  /// most this times rho0 (0.001: the 0.1% of Ihmsen et al.): |rho_i(p) - rho0| for particles
+  /// under pressure, max(rho_i(p) - rho0, 0) for those at p = 0 (the complementarity problem's
+  /// residual; compression alone would not bound the pressures). > 0.
   double tolerance = 1e-3;
   /// Relaxed Jacobi iterations: at least min_iterations, at most max_iterations (then the step
   /// is NotConverged). 1 <= min_iterations <= max_iterations.
