@@ -16,6 +16,7 @@
 
 #include "bench/cloth_fixture.hpp"
 #include "bench/implicit_operator.hpp"
+#include "bench/triad.hpp"
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/linear/cholmod_solver.hpp"
 #include "hooke/linear/iterative_common.hpp"
@@ -28,10 +29,7 @@ constexpr long long kSprings = 1000000;
 constexpr double kH = 1.0 / 60.0;
 
 /// Triad GB/s per thread count, measured by BM_Triad (registered first) and read by the kernels.
-std::map<int, double>& triad() {
-  static std::map<int, double> t;
-  return t;
-}
+std::map<int, double>& triad() { return hooke::bench::triad_rates(); }
 
 /// One cloth and everything the kernels need, built once.
 struct Fixture {
@@ -90,21 +88,8 @@ void report(benchmark::State& state, double bytes, double flops, int t) {
 /// STREAM triad a = b + s c on 3 x 2^24 doubles (384 MB), 24 bytes and 2 flops per element.
 void BM_Triad(benchmark::State& state) {
   const int t = threads(state);
-  const long long n = 1LL << 24;
-  std::vector<double> a(size_t(n), 0.0), b(size_t(n), 1.0), c(size_t(n), 2.0);
-  const double s = 3.0;
-  double seconds = 0.0;
-  long long calls = 0;
-  for (auto _ : state) {
-    const double t0 = omp_get_wtime();
-#pragma omp parallel for schedule(static)
-    for (long long i = 0; i < n; ++i) a[size_t(i)] = b[size_t(i)] + s * c[size_t(i)];
-    seconds += omp_get_wtime() - t0;
-    ++calls;
-    benchmark::DoNotOptimize(a.data());
-  }
-  triad()[t] = 24.0 * double(n) * double(calls) / seconds / 1e9;
-  report(state, 24.0 * double(n), 2.0 * double(n), t);
+  hooke::bench::run_triad(state, t);
+  report(state, 24.0 * double(1LL << 24), 2.0 * double(1LL << 24), t);
 }
 
 /// Forces of every spring and damper, gravity: reads x, v (2 x 3n doubles), writes f (3n),

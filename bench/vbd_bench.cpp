@@ -24,6 +24,7 @@
 #include <utility>
 #include <vector>
 
+#include "bench/triad.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
 #include "hooke/whole_step/vbd.hpp"
@@ -34,10 +35,7 @@ namespace {
 using hooke::Clock;
 using hooke::seconds_since;
 
-std::map<int, double>& triad() {
-  static std::map<int, double> t;
-  return t;
-}
+std::map<int, double>& triad() { return hooke::bench::triad_rates(); }
 
 int threads(benchmark::State& state) {
   const int t = int(state.range(0));
@@ -79,23 +77,7 @@ const hooke::Scene& scene() {
   return s;
 }
 
-void BM_Triad(benchmark::State& state) {
-  const int t = threads(state);
-  const long long n = 1LL << 24;
-  std::vector<double> a(size_t(n), 0.0), b(size_t(n), 1.0), c(size_t(n), 2.0);
-  double seconds = 0.0;
-  long long calls = 0;
-  for (auto _ : state) {
-    const double t0 = omp_get_wtime();
-#pragma omp parallel for schedule(static)
-    for (long long i = 0; i < n; ++i) a[size_t(i)] = b[size_t(i)] + 3.0 * c[size_t(i)];
-    seconds += omp_get_wtime() - t0;
-    ++calls;
-    benchmark::DoNotOptimize(a.data());
-  }
-  triad()[t] = 24.0 * double(n) * double(calls) / seconds / 1e9;
-  state.counters["triad_GB/s"] = triad()[t];
-}
+void BM_Triad(benchmark::State& state) { hooke::bench::run_triad(state, threads(state)); }
 
 /// Times steps of `iterations` iterations of a stepper; returns the seconds per iteration.
 template <class Stepper>

@@ -12,7 +12,7 @@ constexpr int kAxisBits = 21;  // 3 x 21 bits: a Morton key fits 63 bits
 constexpr std::int64_t kAxisCells = std::int64_t(1) << kAxisBits;
 constexpr std::uint64_t kEmpty = std::numeric_limits<std::uint64_t>::max();
 constexpr int kDigitBits = 11;  // radix-sort digit: a 2048-entry histogram stays in L1
-constexpr long long kParallelQueries = 2048;
+constexpr long long kParallelCells = 256;
 
 /// The 21 low bits of v spread to every third bit (bit k -> bit 3k).
 std::uint64_t spread_bits(std::uint64_t v) {
@@ -93,34 +93,48 @@ void NeighbourSearch::build_cells() {
   }
 }
 
-template <bool count_only>
-Index NeighbourSearch::scan(Index i, ConstRef x, int* out) const {
-  const double* p = x.data() + 3 * i;
-  std::int64_t c[3];
-  cell_of(p, c);
-  const double r2 = m_radius * m_radius;
+void NeighbourSearch::find_cell_neighbours(ConstRef x) {
+  const Index cells = Index(m_cell_keys.size());
+  // Headroom as for the lists: the number of occupied cells changes as the fluid moves.
+  const size_t slots = size_t(27 * cells);
+  if (m_cell_neighbours.capacity() < slots) m_cell_neighbours.reserve(slots + slots / 4);
+  m_cell_neighbours.resize(slots);
   const int z_reach = m_flat ? 0 : 1;
-  Index found = 0;
-  for (int dz = -z_reach; dz <= z_reach; ++dz)
-    for (int dy = -1; dy <= 1; ++dy)
-      for (int dx = -1; dx <= 1; ++dx) {
-        const std::int64_t nc[3] = {c[0] + dx, c[1] + dy, c[2] + dz};
-        if (nc[0] < 0 || nc[1] < 0 || nc[2] < 0 || nc[0] >= kAxisCells || nc[1] >= kAxisCells ||
-            nc[2] >= kAxisCells)
-          continue;
-        const int cell = find_cell(morton(nc));
-        if (cell < 0) continue;
-        for (int k = m_cell_start[cell]; k < m_cell_start[cell + 1]; ++k) {
-          const int j = m_sorted[k];
-          if (j == i) continue;
-          const double* q = x.data() + 3 * j;
-          const double d0 = p[0] - q[0], d1 = p[1] - q[1], d2 = p[2] - q[2];
-          if (d0 * d0 + d1 * d1 + d2 * d2 < r2) {
-            if (!count_only) out[found] = j;
-            ++found;
-          }
+  parallel_for(cells, 256, [&](long long c) {
+    std::int64_t cell[3];
+    cell_of(x.data() + 3 * m_sorted[size_t(m_cell_start[size_t(c)])], cell);
+    int* out = m_cell_neighbours.data() + 27 * c;
+    int slot = 0;
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx, ++slot) {
+          const std::int64_t nc[3] = {cell[0] + dx, cell[1] + dy, cell[2] + dz};
+          const bool outside = std::abs(dz) > z_reach || nc[0] < 0 || nc[1] < 0 || nc[2] < 0 ||
+                               nc[0] >= kAxisCells || nc[1] >= kAxisCells || nc[2] >= kAxisCells;
+          out[slot] = outside ? -1 : find_cell(morton(nc));
         }
+  });
+}
+
+template <bool count_only>
+Index NeighbourSearch::scan(Index i, const int* cells, ConstRef x, int* out) const {
+  const double* p = x.data() + 3 * i;
+  const double r2 = m_radius * m_radius;
+  Index found = 0;
+  for (int slot = 0; slot < 27; ++slot) {
+    const int cell = cells[slot];
+    if (cell < 0) continue;
+    for (int k = m_cell_start[size_t(cell)]; k < m_cell_start[size_t(cell) + 1]; ++k) {
+      const int j = m_sorted[size_t(k)];
+      if (j == i) continue;
+      const double* q = x.data() + 3 * j;
+      const double d0 = p[0] - q[0], d1 = p[1] - q[1], d2 = p[2] - q[2];
+      if (d0 * d0 + d1 * d1 + d2 * d2 < r2) {
+        if (!count_only) out[found] = j;
+        ++found;
       }
+    }
+  }
   return found;
 }
 
@@ -166,23 +180,33 @@ Status NeighbourSearch::update(ConstRef x, Index num_queries) {
   sort_by_key();
   build_cells();
 
+  find_cell_neighbours(x);
   m_query_order.clear();
   for (Index k = 0; k < n; ++k)
-    if (m_sorted[k] < num_queries) m_query_order.push_back(m_sorted[k]);
-  // Count, prefix-sum, fill: every list is written by one thread from its own offset.
-  parallel_for(num_queries, kParallelQueries, [&](long long k) {
-    const Index i = m_query_order[k];
-    m_offsets[i + 1] = scan<true>(i, x, nullptr);
+    if (m_sorted[size_t(k)] < num_queries) m_query_order.push_back(m_sorted[size_t(k)]);
+  // Count, prefix-sum, fill, cell by cell (the 27 cells around a cell are looked up once): every
+  // list is written by one thread from its own offset.
+  const long long cells = static_cast<long long>(m_cell_keys.size());
+  const auto each_query = [&](long long c, auto&& visit) {
+    const int* around = m_cell_neighbours.data() + 27 * c;
+    for (int k = m_cell_start[size_t(c)]; k < m_cell_start[size_t(c) + 1]; ++k)
+      if (m_sorted[size_t(k)] < num_queries) visit(Index(m_sorted[size_t(k)]), around);
+  };
+  parallel_for(cells, kParallelCells, [&](long long c) {
+    each_query(c, [&](Index i, const int* around) {
+      m_offsets[size_t(i) + 1] = scan<true>(i, around, x, nullptr);
+    });
   });
-  for (Index i = 0; i < num_queries; ++i) m_offsets[i + 1] += m_offsets[i];
+  for (Index i = 0; i < num_queries; ++i) m_offsets[size_t(i) + 1] += m_offsets[size_t(i)];
   // A quarter of headroom when the lists grow, so that a fluid whose pair count wobbles from step
   // to step stops reallocating after its first steps.
-  const size_t pairs = size_t(m_offsets[num_queries]);
+  const size_t pairs = size_t(m_offsets[size_t(num_queries)]);
   if (m_list.capacity() < pairs) m_list.reserve(pairs + pairs / 4);
   m_list.resize(pairs);
-  parallel_for(num_queries, kParallelQueries, [&](long long k) {
-    const Index i = m_query_order[k];
-    scan<false>(i, x, m_list.data() + m_offsets[i]);
+  parallel_for(cells, kParallelCells, [&](long long c) {
+    each_query(c, [&](Index i, const int* around) {
+      scan<false>(i, around, x, m_list.data() + m_offsets[size_t(i)]);
+    });
   });
   return Status::Converged;
 }

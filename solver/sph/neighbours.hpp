@@ -51,9 +51,12 @@ class NeighbourSearch {
   void cell_of(const double* p, std::int64_t c[3]) const;
   void sort_by_key();
   void build_cells();
-  /// Lists (count_only: counts) the neighbours of query point i, writing from out.
+  /// m_cell_neighbours: for each occupied cell, the 27 cells around it (-1: empty or outside).
+  void find_cell_neighbours(ConstRef x);
+  /// Lists (count_only: counts) the neighbours of query point i, whose cell has the 27 cells
+  /// `cells` around it, writing from out.
   template <bool count_only>
-  Index scan(Index i, ConstRef x, int* out) const;
+  Index scan(Index i, const int* cells, ConstRef x, int* out) const;
 
   double m_radius, m_inv_cell;
   Index m_num_points = 0, m_num_queries = 0;
@@ -66,6 +69,7 @@ class NeighbourSearch {
   // Occupied cells in key order: [m_cell_start[c], m_cell_start[c + 1]) of m_sorted.
   std::vector<std::uint64_t> m_cell_keys;
   std::vector<int> m_cell_start;
+  std::vector<int> m_cell_neighbours;  // 27 per cell, in scan order
   // Open-addressing hash table key -> cell; capacity a power of two.
   std::vector<std::uint64_t> m_table_keys;
   std::vector<int> m_table_cells;

@@ -1,0 +1,39 @@
+// The STREAM-style triad a = b + s c on 3 x 2^24 doubles (384 MB; 24 bytes and 2 flops per
+// element), measured in the same process as the kernels it is set beside: the benchmarks report
+// their bandwidth as a fraction of it.
+#pragma once
+
+#include <benchmark/benchmark.h>
+#include <omp.h>
+
+#include <map>
+#include <vector>
+
+namespace hooke::bench {
+
+/// Triad GB/s per thread count, filled by run_triad (register the triad cases first).
+inline std::map<int, double>& triad_rates() {
+  static std::map<int, double> rates;
+  return rates;
+}
+
+/// Times the triad on the current OpenMP thread count in `state`'s loop, stores its GB/s under
+/// `threads` and reports it as the counter triad_GB/s.
+inline void run_triad(benchmark::State& state, int threads) {
+  const long long n = 1LL << 24;
+  std::vector<double> a(size_t(n), 0.0), b(size_t(n), 1.0), c(size_t(n), 2.0);
+  double seconds = 0.0;
+  long long calls = 0;
+  for (auto _ : state) {
+    const double t0 = omp_get_wtime();
+#pragma omp parallel for schedule(static)
+    for (long long i = 0; i < n; ++i) a[size_t(i)] = b[size_t(i)] + 3.0 * c[size_t(i)];
+    seconds += omp_get_wtime() - t0;
+    ++calls;
+    benchmark::DoNotOptimize(a.data());
+  }
+  triad_rates()[threads] = 24.0 * double(n) * double(calls) / seconds / 1e9;
+  state.counters["triad_GB/s"] = triad_rates()[threads];
+}
+
+}  // namespace hooke::bench
