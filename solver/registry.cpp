@@ -224,6 +224,11 @@ MethodOptions options_for(const std::string& name, const MethodOptions& options)
 }
 
 std::string method_unsupported(const std::string& name, const MassSpringSystem& system) {
+  // A fluid's pressure lives in its SPH steppers (solver/sph/), which no method here applies.
+  if (system.fluid() != nullptr)
+    return "'" + name +
+           "' steps mass-spring systems and would ignore the fluid's pressure; a fluid is "
+           "stepped by the SPH methods (solver/sph/: WcsphStepper, IisphStepper)";
   for (const auto& e : whole_step_table()) {
     if (name != e.info.name) continue;
     if (system.has_pin_motion())

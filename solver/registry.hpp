@@ -101,7 +101,8 @@ std::string default_linear_solver();
 /// The default options of an implicit method (ImplicitOptions::defaults of its scheme); throws
 /// UnknownMethod for an unknown name and std::invalid_argument for a method that is not implicit.
 ImplicitOptions implicit_defaults(const std::string& name);
-/// "" if the method can run this system, else why not (e.g. ceres-implicit and spring dampers).
+/// "" if the method can run this system, else why not (e.g. ceres-implicit and spring dampers; a
+/// fluid system, which only the SPH steppers of solver/sph/ step).
 std::string method_unsupported(const std::string& name, const MassSpringSystem& system);
 /// `options` if `name` takes options of their type, else empty (the method's defaults): how one
 /// scene's [integrator] options are passed on to other methods (crosscheck, studies), e.g. an

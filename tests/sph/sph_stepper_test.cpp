@@ -1,11 +1,13 @@
 // Claims of solver/sph/sph_stepper.* shared by every pressure method: a run gives the same bits
-// on one and two threads (each particle's sums run in its own neighbour order).
+// on one and two threads (each particle's sums run in its own neighbour order); the methods of
+// the registry, which know nothing of pressure, refuse a fluid.
 #include "hooke/sph/sph_stepper.hpp"
 
 #include <gtest/gtest.h>
 
 #include <memory>
 
+#include "hooke/registry.hpp"
 #include "hooke/sph/iisph.hpp"
 #include "hooke/sph/wcsph.hpp"
 #include "sph/sph_scenes.hpp"
@@ -48,6 +50,19 @@ TEST(SphStepper, SameBitsOnOneOrTwoThreads) {
 #else
   GTEST_SKIP() << "built without OpenMP";
 #endif
+}
+
+TEST(SphStepper, EveryRegisteredMethodRefusesAFluid) {
+  // The registry's methods would step the particles under gravity alone: they must say so.
+  auto scene = test::tank_2d(0.01, 0.2, 0.2, 0.1, 0.1, FluidOptions{});
+  int refused = 0;
+  for (const auto& m : methods()) {
+    const std::string why = method_unsupported(m.name, *scene.system);
+    EXPECT_NE(why.find("SPH"), std::string::npos) << m.name << ": '" << why << "'";
+    refused += !why.empty();
+  }
+  EXPECT_EQ(refused, int(methods().size()));
+  EXPECT_GE(refused, 10);
 }
 
 }  // namespace
