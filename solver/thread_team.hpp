@@ -8,11 +8,12 @@
 namespace hooke {
 
 /// Picks, for a region that repeats, between all available threads and one thread, by the wall
-/// time each has taken recently. On a shared machine a second thread whose core another process
-/// holds can make a region with barriers slower than one thread alone (each barrier waits for
-/// the descheduled thread); the team then falls back to one thread and checks now and then
-/// whether the other core is free again. Only for regions whose result does not depend on the
-/// thread count (the callers' determinism tests check that), so the choice changes timing only.
+/// time each has taken recently (all threads when they take at most 95% of one thread's time). On a
+/// shared machine a second thread whose core another process holds can make a region with barriers
+/// slower than one thread alone (each barrier waits for the descheduled thread); the team then
+/// falls back to one thread and checks now and then whether the other core is free again. Only for
+/// regions whose result does not depend on the thread count (the callers' determinism tests check
+/// that), so the choice changes timing only.
 ///
 /// Use: `const int t = team.threads();` run the region with num_threads(t) and time it, then
 /// `team.record(t, seconds)`.
@@ -21,7 +22,7 @@ class AdaptiveTeam {
   /// probe_every: every so many repetitions one runs on the team size not currently chosen, to
   /// refresh its time (the cost of watching: at most 1/probe_every of the repetitions on the
   /// slower size).
-  explicit AdaptiveTeam(int probe_every = 32) : m_probe_every(std::max(2, probe_every)) {}
+  explicit AdaptiveTeam(int probe_every = 64) : m_probe_every(std::max(2, probe_every)) {}
 
   /// The thread count for the next repetition: 1 or all available (omp_get_max_threads()).
   int threads() {
@@ -30,7 +31,9 @@ class AdaptiveTeam {
     // Until both sizes have a time, try all threads first, then one.
     if (m_time[1] < 0.0) return all;
     if (m_time[0] < 0.0) return 1;
-    const bool one_is_faster = m_time[0] < m_time[1];
+    // All threads only when they are clearly faster: where the two are about even (a busy second
+    // core), one thread gives the same time without the barriers' stalls and their variance.
+    const bool one_is_faster = !(m_time[1] < kMargin * m_time[0]);
     if (++m_count % m_probe_every == 0) return one_is_faster ? all : 1;
     return one_is_faster ? 1 : all;
   }
@@ -54,6 +57,7 @@ class AdaptiveTeam {
 #endif
   }
 
+  static constexpr double kMargin = 0.95;
   int m_probe_every;
   long long m_count = 0;
   double m_time[2] = {-1.0, -1.0};

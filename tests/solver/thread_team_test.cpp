@@ -1,6 +1,7 @@
 // Claims of solver/thread_team.hpp: AdaptiveTeam measures both team sizes first, then runs the
-// faster one and probes the other once every probe_every repetitions, and follows a change of
-// load (the second core becoming busy, then free again) within a few probes.
+// faster one (all threads only when clearly faster) and probes the other once every probe_every
+// repetitions, and follows a change of load (the second core becoming busy, then free again)
+// within a few probes.
 #include "hooke/thread_team.hpp"
 
 #include <gtest/gtest.h>
@@ -42,6 +43,9 @@ TEST(AdaptiveTeam, RunsTheFasterSizeAndFollowsAChangeOfLoad) {
   // The core is free again: back to two threads.
   run(team, 16 * 6, 1.0, 0.5);
   EXPECT_EQ(run(team, 160, 1.0, 0.5), 10);
+  // About even (two threads 2% faster): one thread, which is as fast without the barriers.
+  run(team, 16 * 6, 1.0, 0.98);
+  EXPECT_EQ(run(team, 160, 1.0, 0.98), 150);
   omp_set_num_threads(1);
   EXPECT_EQ(team.threads(), 1);  // a single thread available: nothing to choose
   omp_set_num_threads(threads);
