@@ -181,9 +181,6 @@ Status NeighbourSearch::update(ConstRef x, Index num_queries) {
   build_cells();
 
   find_cell_neighbours(x);
-  m_query_order.clear();
-  for (Index k = 0; k < n; ++k)
-    if (m_sorted[size_t(k)] < num_queries) m_query_order.push_back(m_sorted[size_t(k)]);
   // Count, prefix-sum, fill, cell by cell (the 27 cells around a cell are looked up once): every
   // list is written by one thread from its own offset.
   const long long cells = static_cast<long long>(m_cell_keys.size());

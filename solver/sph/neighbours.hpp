@@ -38,9 +38,6 @@ class NeighbourSearch {
   Index count(Index i) const { return m_offsets[i + 1] - m_offsets[i]; }
   /// Neighbour pairs listed (each unordered pair of query points twice).
   long long total_pairs() const { return m_offsets.empty() ? 0 : m_offsets[m_num_queries]; }
-  /// The query points in Z-order of their cells (each cell's points by index): the order in
-  /// which a pair loop touches memory most locally.
-  const std::vector<int>& query_order() const { return m_query_order; }
   /// Why the last update() failed ("" after a success).
   const std::string& error() const { return m_error; }
 
@@ -77,7 +74,6 @@ class NeighbourSearch {
   // Lists: CSR over the query points.
   std::vector<Index> m_offsets;
   std::vector<int> m_list;
-  std::vector<int> m_query_order;
 };
 
 }  // namespace hooke

@@ -17,24 +17,29 @@ std::array<long long, 3> cells(const Vec3& lower, const Vec3& upper, double dx, 
   return n;
 }
 
-/// The lattice point (i, j, k) of the box's lattice.
-Vec3 point(const Vec3& lower, double dx, long long i, long long j, long long k) {
-  return lower + dx * Vec3(double(i) + 0.5, double(j) + 0.5, double(k) + 0.5);
+/// The lattice points lower + (i + 1/2, j + 1/2, k + 1/2) dx for i, j, k in [from, to) that
+/// keep(i, j, k) accepts; in 2D every point lies in the plane z = lower.z.
+template <class Keep>
+std::vector<Vec3> lattice(const Vec3& lower, double dx, int dimension,
+                          const std::array<long long, 3>& from, const std::array<long long, 3>& to,
+                          Keep&& keep) {
+  std::vector<Vec3> out;
+  for (long long k = from[2]; k < to[2]; ++k)
+    for (long long j = from[1]; j < to[1]; ++j)
+      for (long long i = from[0]; i < to[0]; ++i) {
+        if (!keep(i, j, k)) continue;
+        Vec3 p = lower + dx * Vec3(double(i) + 0.5, double(j) + 0.5, double(k) + 0.5);
+        if (dimension == 2) p.z() = lower.z();
+        out.push_back(p);
+      }
+  return out;
 }
 }  // namespace
 
 std::vector<Vec3> sample_box(const Vec3& lower, const Vec3& upper, double dx, int dimension) {
   const auto n = cells(lower, upper, dx, dimension);
-  std::vector<Vec3> out;
-  out.reserve(size_t(n[0] * n[1] * n[2]));
-  for (long long k = 0; k < n[2]; ++k)
-    for (long long j = 0; j < n[1]; ++j)
-      for (long long i = 0; i < n[0]; ++i) {
-        Vec3 p = point(lower, dx, i, j, k);
-        if (dimension == 2) p.z() = lower.z();
-        out.push_back(p);
-      }
-  return out;
+  return lattice(lower, dx, dimension, {0, 0, 0}, n,
+                 [](long long, long long, long long) { return true; });
 }
 
 std::vector<Vec3> sample_tank(const Vec3& lower, const Vec3& upper, double dx, int dimension,
@@ -42,37 +47,23 @@ std::vector<Vec3> sample_tank(const Vec3& lower, const Vec3& upper, double dx, i
   HOOKE_ASSERT(layers >= 1, layers << " wall layers");
   const auto n = cells(lower, upper, dx, dimension);
   const long long L = layers;
-  const long long k0 = dimension == 2 ? 0 : -L, k1 = dimension == 2 ? 1 : n[2] + L;
-  std::vector<Vec3> out;
-  for (long long k = k0; k < k1; ++k)
-    for (long long j = -L; j < n[1]; ++j)
-      for (long long i = -L; i < n[0] + L; ++i) {
-        const bool inside =
-            i >= 0 && i < n[0] && j >= 0 && (dimension == 2 || (k >= 0 && k < n[2]));
-        if (inside) continue;
-        Vec3 p = point(lower, dx, i, j, k);
-        if (dimension == 2) p.z() = lower.z();
-        out.push_back(p);
-      }
-  return out;
+  const bool flat = dimension == 2;
+  // The box grown by L cells on every side but the top, minus the box.
+  return lattice(lower, dx, dimension, {-L, -L, flat ? 0 : -L},
+                 {n[0] + L, n[1], flat ? 1 : n[2] + L}, [&](long long i, long long j, long long k) {
+                   return !(i >= 0 && i < n[0] && j >= 0 && (flat || (k >= 0 && k < n[2])));
+                 });
 }
 
 std::vector<Vec3> sample_solid_box(const Vec3& lower, const Vec3& upper, double dx, int dimension,
                                    int layers) {
   HOOKE_ASSERT(layers >= 1, layers << " layers");
   const auto n = cells(lower, upper, dx, dimension);
-  std::vector<Vec3> out;
-  for (long long k = 0; k < n[2]; ++k)
-    for (long long j = 0; j < n[1]; ++j)
-      for (long long i = 0; i < n[0]; ++i) {
-        const long long depth = std::min({i, n[0] - 1 - i, j, n[1] - 1 - j,
-                                          dimension == 2 ? layers : std::min(k, n[2] - 1 - k)});
-        if (depth >= layers) continue;
-        Vec3 p = point(lower, dx, i, j, k);
-        if (dimension == 2) p.z() = lower.z();
-        out.push_back(p);
-      }
-  return out;
+  // The cells within `layers` of the box's surface (in 2D, of its edges).
+  return lattice(lower, dx, dimension, {0, 0, 0}, n, [&](long long i, long long j, long long k) {
+    const long long z_depth = dimension == 2 ? layers : std::min(k, n[2] - 1 - k);
+    return std::min({i, n[0] - 1 - i, j, n[1] - 1 - j, z_depth}) < layers;
+  });
 }
 
 }  // namespace hooke
