@@ -59,7 +59,8 @@ int run_crosscheck(const Scene& scene, const CrosscheckOptions& options) {
 
   std::vector<std::string> names = options.methods;
   if (names.empty())
-    for (const auto& m : methods()) names.push_back(m.name);
+    for (const auto& m : methods())
+      if (m.kind != MethodKind::Fluid) names.push_back(m.name);
 
   StudyOutput out(options.out_dir, "crosscheck", {"crosscheck.csv", "crosscheck.md"});
   std::ostringstream csv, md, md_all;  // rows not yet in the files; the table for stdout

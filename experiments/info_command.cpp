@@ -9,10 +9,84 @@
 
 #include "experiments/cli.hpp"
 #include "experiments/natural_frequency.hpp"
+#include "hooke/forces/gravity.hpp"
 #include "hooke/integrators/stability.hpp"
 #include "hooke/registry.hpp"
 
 namespace hooke {
+
+namespace {
+
+/// VTK frames a run writes (the first and last, and [output] every or interval between).
+long long frame_count(const Scene& scene) {
+  const long long steps = scene.time.steps();
+  const OutputSettings& o = scene.output;
+  if (!o.vtk) return 0;
+  if (o.interval > 0.0) {
+    const double k = std::floor(scene.time.duration / o.interval + 1e-9);
+    return 1 + (long long)k + (k * o.interval < scene.time.duration * (1 - 1e-12) ? 1 : 0);
+  }
+  if (o.every > 0) return 1 + steps / o.every + (steps % o.every != 0 ? 1 : 0);
+  return steps > 0 ? 2 : 1;
+}
+
+/// `hooke info` of a [fluid] scene: particles, kernel, memory, output and the CFL step.
+void print_fluid_info(const Scene& scene, std::ostream& out) {
+  const MassSpringSystem& sys = *scene.system;
+  const FluidModel& fluid = *sys.fluid();
+  const FluidOptions& o = fluid.options();
+  const Index nf = fluid.num_fluid(), nb = fluid.num_boundary();
+  out << "fluid:      " << nf << " particles (" << o.dimension << "D, spacing " << o.spacing
+      << " m, rest density " << o.rest_density << " kg/m^3, " << fluid.particle_mass()
+      << " kg each)\n";
+  out << "boundary:   " << nb << " particles (tank walls and obstacles, Akinci et al. 2012)\n";
+  out << "kernel:     " << to_string(o.kernel) << ", support " << fluid.support() << " m ("
+      << o.support_factor << " spacings); viscosity " << o.viscosity << " m^2/s\n";
+  out << "forces:    ";
+  for (const auto& f : sys.forces()) out << " " << f->name();
+  if (sys.forces().empty()) out << " none";
+  out << "\nmemory:     about "
+      << fluid_run_bytes(double(nf), double(nb), o.dimension, o.support_factor) / (1 << 20)
+      << " MiB (state, neighbour lists, the method's buffers)\n";
+  // Frames: per particle position, velocity (24 bytes each), pinned flag 4, kinetic energy,
+  // density and pressure (8 each); log.csv about 200 characters a row; final.csv the fluid.
+  const double MiB = 1 << 20;
+  const long long frames = frame_count(scene), steps = scene.time.steps();
+  const double frame_bytes = 76.0 * double(nf + nb) + 400.0;
+  const long long rows = 1 + steps / scene.output.log_every + (steps % scene.output.log_every != 0);
+  const double total = double(frames) * frame_bytes + 200.0 * double(rows) + 160.0 * double(nf);
+  out << "output:     " << frames << " VTK frames of about " << frame_bytes / MiB
+      << " MiB each, log.csv " << rows << " rows, final.csv " << nf << " rows: about "
+      << total / MiB << " MiB in all\n";
+  // The CFL step at the speed a fall from the fluid's height H gives, sqrt(2 g H).
+  double lo = 1e300, hi = -1e300;
+  for (Index i = 0; i < nf; ++i) {
+    lo = std::min(lo, scene.initial.x[3 * i + 1]);
+    hi = std::max(hi, scene.initial.x[3 * i + 1]);
+  }
+  double g = 0.0;
+  for (const auto& f : sys.forces())
+    if (const auto* gravity = dynamic_cast<const Gravity*>(f.get()))
+      g = gravity->acceleration().norm();
+  const double H = hi - lo + o.spacing, v = std::sqrt(2.0 * g * H);
+  const MethodOptions& m = scene.integrator.options;
+  double c0 = 0.0, courant = 0.0;
+  if (const auto* w = m.get<WcsphOptions>()) c0 = w->sound_speed, courant = w->courant;
+  if (const auto* i = m.get<IisphOptions>()) courant = i->courant;
+  const double cfl = 0.4 * o.spacing / (c0 + v);
+  out << "CFL step:   0.4 dx / " << (c0 > 0 ? "(c0 + v)" : "v") << " = " << cfl << " s with ";
+  if (c0 > 0) out << "c0 = " << c0 << " m/s and ";
+  out << "v = sqrt(2 g H) = " << v << " m/s (H = " << H << " m, the fluid's height)\n";
+  out << "scene dt:   " << scene.time.dt << " s (" << scene.integrator.method << ", ";
+  if (courant > 0.0)
+    out << "CFL substeps at courant " << courant << ": about "
+        << std::max(1.0, std::ceil(scene.time.dt / (cfl * courant / 0.4))) << " per step";
+  else
+    out << "no substeps: " << (scene.time.dt <= cfl ? "within" : "BEYOND") << " the CFL step";
+  out << ")\n";
+}
+
+}  // namespace
 
 void print_scene_info(const Scene& scene, std::ostream& out) {
   out << std::setprecision(6);
@@ -23,6 +97,7 @@ void print_scene_info(const Scene& scene, std::ostream& out) {
         << " s, duration = " << scene.time.duration << " s (" << scene.time.steps() << " steps)\n";
     return;
   }
+  if (scene.is_fluid()) return print_fluid_info(scene, out);
   const MassSpringSystem& sys = *scene.system;
   const Index n = sys.num_particles();
   const Index free_dofs = 3 * (n - sys.num_pinned());
@@ -52,17 +127,7 @@ void print_scene_info(const Scene& scene, std::ostream& out) {
   // log.csv and final.csv (about 160 characters a row).
   const long long steps = scene.time.steps();
   const OutputSettings& o = scene.output;
-  long long frames = 0;
-  if (o.vtk) {
-    if (o.interval > 0.0) {
-      const double k = std::floor(scene.time.duration / o.interval + 1e-9);
-      frames = 1 + (long long)k + (k * o.interval < scene.time.duration * (1 - 1e-12) ? 1 : 0);
-    } else if (o.every > 0) {
-      frames = 1 + steps / o.every + (steps % o.every != 0 ? 1 : 0);
-    } else {
-      frames = steps > 0 ? 2 : 1;
-    }
-  }
+  const long long frames = frame_count(scene);
   const double frame_bytes = 60.0 * double(n) + 20.0 * double(scene.edges.size()) +
                              24.0 * double(scene.triangles.size()) + 400.0;
   const long long rows = 1 + steps / o.log_every + (steps % o.log_every != 0 ? 1 : 0);

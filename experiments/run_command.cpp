@@ -7,6 +7,7 @@
 #include <cstdarg>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <memory>
 
 #include "experiments/checkpoint.hpp"
@@ -19,6 +20,7 @@
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
+#include "hooke/sph/sph_stepper.hpp"
 
 namespace hooke {
 
@@ -133,6 +135,12 @@ class MassSpringRun {
   int stop(long long step, int sig);
   void checkpoint(long long step);
   int finish();
+  /// A fluid's fields at state s for a frame (densities at s, the last step's pressures), or
+  /// null for a scene without fluid.
+  const RunOutput::FluidFields* fluid_fields(const State& s);
+  /// The figures of the last step for log.csv (a fluid scene), or null; at step 0 the densities
+  /// of the initial state.
+  const FluidStepStats* fluid_stats(long long step, const State& s);
 
   const Scene& m_scene;
   const MassSpringSystem& m_sys;
@@ -155,6 +163,12 @@ class MassSpringRun {
   double m_E0 = 0.0, m_scale = 0.0, m_E_limit = 0.0;
   Progress m_progress;
   Clock::time_point m_last_checkpoint = Clock::now();
+  // Fluid scenes: the stepper's figures, and densities for frames at the frame's own state.
+  const SphStepper* m_sph = nullptr;
+  std::unique_ptr<NeighbourSearch> m_frame_search;
+  Vec m_frame_rho;
+  RunOutput::FluidFields m_fields;
+  FluidStepStats m_start_stats;
 };
 
 std::unique_ptr<Stepper> MassSpringRun::make_scene_stepper(const Scene& scene) {
@@ -197,6 +211,34 @@ MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const R
   m_E_limit = m_E0 + scene.run.energy_growth_limit * m_scale;
   for (const auto& c : m_sys.constraints())
     if (const auto* limit = dynamic_cast<const StrainLimit*>(c.get())) m_strain_limit = limit;
+  if (const FluidModel* fluid = m_sys.fluid()) {
+    m_sph = dynamic_cast<const SphStepper*>(&m_sim.stepper());
+    HOOKE_ASSERT(m_sph != nullptr, "a fluid scene stepped by " << m_sim.stepper().name());
+    m_frame_search = std::make_unique<NeighbourSearch>(fluid->support());
+    m_frame_rho = Vec::Zero(fluid->num_fluid());
+  }
+}
+
+const RunOutput::FluidFields* MassSpringRun::fluid_fields(const State& s) {
+  if (!m_sph) return nullptr;
+  const FluidModel& fluid = *m_sys.fluid();
+  if (m_frame_search->update(s.x, fluid.num_fluid()) == Status::Converged)
+    fluid.compute_density(*m_frame_search, s.x, m_sys.masses(), m_frame_rho);
+  else
+    m_frame_rho.setConstant(std::numeric_limits<double>::quiet_NaN());
+  m_fields = {&m_frame_rho, &m_sph->pressures()};
+  return &m_fields;
+}
+
+const FluidStepStats* MassSpringRun::fluid_stats(long long step, const State& s) {
+  if (!m_sph) return nullptr;
+  if (step > 0) return &m_sph->last_fluid_stats();
+  fluid_fields(s);
+  m_start_stats = {};
+  const auto [max_error, mean_error] = density_errors(m_frame_rho, m_sys.fluid()->rest_density());
+  m_start_stats.max_density_error = max_error;
+  m_start_stats.mean_density_error = mean_error;
+  return &m_start_stats;
 }
 
 void MassSpringRun::restore(const Checkpoint& c) {
@@ -266,8 +308,9 @@ int MassSpringRun::run() {
 int MassSpringRun::run_steps() {
   if (m_first_step == 1) {
     const RunOutput::ControlColumns start;
-    m_out->log_row(0, m_sim.state(), 0, 0.0, m_wall, m_adaptive ? &start : nullptr);
-    m_out->frame(0, m_sim.state());
+    m_out->log_row(0, m_sim.state(), 0, 0.0, m_wall, m_adaptive ? &start : nullptr,
+                   fluid_stats(0, m_sim.state()));
+    m_out->frame(0, m_sim.state(), fluid_fields(m_sim.state()));
   }
   const StopSignals stop_signals;
   for (long long step = m_first_step; !done(step - 1); ++step) {
@@ -314,7 +357,7 @@ int MassSpringRun::after_step(long long step, const StepSummary& sum) {
     RunOutput::ControlColumns control;
     if (m_adaptive) control = {m_last_h, m_sim.accepted_steps(), m_sim.rejected_steps()};
     const double E = m_out->log_row(step, s, sum.iterations, sum.residual, m_wall,
-                                    m_adaptive ? &control : nullptr);
+                                    m_adaptive ? &control : nullptr, fluid_stats(step, s));
     if (!(E <= m_E_limit)) return report_divergence(step, E);
     if (m_strain_limit) {
       const double e = m_strain_limit->worst_strain(s.x);
@@ -326,7 +369,7 @@ int MassSpringRun::after_step(long long step, const StepSummary& sum) {
   }
   if ((m_scene.output.every > 0 && step % m_scene.output.every == 0) || last ||
       interval_frame_due(s.t))
-    m_out->frame(step, s);
+    m_out->frame(step, s, fluid_fields(s));
   m_progress.update(step, s.t);
   if (last) return -1;
   if (const int sig = stop_signal(); sig != 0 || step == m_options.stop_after)
@@ -343,16 +386,17 @@ int MassSpringRun::after_step(long long step, const StepSummary& sum) {
 int MassSpringRun::report_failure(long long step, const StepSummary& sum) {
   m_progress.done();
   const std::string what = strprintf(
-      "step %lld failed (t = %.9g, h = %.6g, %s, %d linear iterations, residual %.3g): "
+      "step %lld failed (t = %.9g, h = %.6g, %s, %d %s iterations, residual %.3g): "
       "%s: %s",
-      step, m_sim.failed_t(), m_sim.failed_h(), m_label.c_str(), sum.iterations, sum.residual,
-      to_string(sum.status), sum.message.c_str());
+      step, m_sim.failed_t(), m_sim.failed_h(), m_label.c_str(), sum.iterations,
+      m_sph ? "pressure" : "linear", sum.residual, to_string(sum.status), sum.message.c_str());
   m_out->failed(what);
   std::fprintf(stderr,
                "error: %s: %s\n"
-               "  kept: %s/log.csv and the frames written so far; fixes: a smaller time.dt, "
+               "  kept: %s/log.csv and the frames written so far; fixes: %sa smaller time.dt, "
                "run.max_step_halvings > 0%s\n",
                m_scene.file.c_str(), what.c_str(), m_dir.c_str(),
+               m_sph ? "integrator.courant = 0.4 or less (CFL substeps), " : "",
                sum.status == Status::NotConverged
                    ? ", a looser tolerance, more iterations, or run.allow_not_converged = true"
                    : "");
@@ -361,7 +405,7 @@ int MassSpringRun::report_failure(long long step, const StepSummary& sum) {
 
 int MassSpringRun::report_divergence(long long step, double E) {
   m_progress.done();
-  m_out->frame(step, m_sim.state());
+  m_out->frame(step, m_sim.state(), fluid_fields(m_sim.state()));
   const std::string what = strprintf(
       "diverged at step %lld (t = %.9g, %s): total energy %.6g J exceeds the initial %.6g J by "
       "more than %g x the scene's energy scale %.6g J (run.energy_growth_limit)",
@@ -423,7 +467,8 @@ int MassSpringRun::finish() {
   const std::string summary = strprintf("%lld steps of %s to t = %.6g in %.3f s", steps,
                                         m_scene.integrator.method.c_str(), m_sim.state().t, m_wall);
   if (m_options.on_finished) m_options.on_finished(m_sim);
-  const std::vector<std::string> written = m_out->finish(m_sim.state(), summary);
+  const std::vector<std::string> written =
+      m_out->finish(m_sim.state(), summary, fluid_fields(m_sim.state()));
   if (m_adaptive) {  // in CVODE's style: what the error control did
     const ErrorControl& c = m_scene.integrator.error_control;
     std::printf("%s: steps %lld, rejected %lld, next h %.3e (rtol %g, atol %g)\n",

@@ -3,6 +3,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
+#include <limits>
 #include <sstream>
 
 #include "experiments/output/png_writer.hpp"
@@ -42,10 +43,15 @@ std::unique_ptr<OutputFile> reopen_log(const std::string& path, const Checkpoint
   return std::make_unique<OutputFile>(OutputFile::stream(path, true));
 }
 
-void write_final_csv(const std::string& path, const State& s) {
+/// The particles of final.csv: a fluid's own (boundary particles left out), or all.
+Index listed_particles(const Scene& scene) {
+  return scene.is_fluid() ? scene.system->fluid()->num_fluid() : scene.system->num_particles();
+}
+
+void write_final_csv(const std::string& path, const State& s, Index n) {
   OutputFile f = OutputFile::replace(path);
   f.print("id,x,y,z,vx,vy,vz\n");
-  for (Index i = 0; i < s.num_particles(); ++i)
+  for (Index i = 0; i < n; ++i)
     f.print("%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%.17g\n", (long long)i, s.x[3 * i], s.x[3 * i + 1],
             s.x[3 * i + 2], s.v[3 * i], s.v[3 * i + 1], s.v[3 * i + 2]);
   f.commit();
@@ -89,9 +95,12 @@ void RunOutput::start_fresh(bool force) {
   m_dir->set_status("running");
   write_resolved_scene(m_scene, m_dir->file("scene.toml"));
   m_log = std::make_unique<OutputFile>(OutputFile::stream(m_dir->file("log.csv")));
-  m_log->print("step,t,kinetic,potential,total,max_strain,iterations,residual,wall_time%s%s\n",
+  m_log->print("step,t,kinetic,potential,total,max_strain,iterations,residual,wall_time%s%s%s\n",
                m_scene.exact ? ",error" : "",
-               m_scene.integrator.adaptive ? ",h,accepted,rejected" : "");
+               m_scene.integrator.adaptive ? ",h,accepted,rejected" : "",
+               m_scene.is_fluid()
+                   ? ",max_density_error,mean_density_error,pressure_iterations,substeps,front"
+                   : "");
 }
 
 void RunOutput::prepare_frames(const Checkpoint* resume) {
@@ -116,9 +125,10 @@ void RunOutput::prepare_frames(const Checkpoint* resume) {
 }
 
 double RunOutput::log_row(long long step, const State& s, int iterations, double residual,
-                          double wall, const ControlColumns* control) {
+                          double wall, const ControlColumns* control, const FluidStepStats* fluid) {
   HOOKE_ASSERT((control != nullptr) == m_scene.integrator.adaptive,
                "error-control columns exactly for adaptive scenes");
+  HOOKE_ASSERT((fluid != nullptr) == m_scene.is_fluid(), "fluid columns exactly for fluid scenes");
   const MassSpringSystem& sys = *m_scene.system;
   const double K = sys.kinetic_energy(s.v), U = sys.potential_energy(s.x);
   m_log->print("%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%.6g,%.6g", step, s.t, K, U, K + U,
@@ -128,20 +138,25 @@ double RunOutput::log_row(long long step, const State& s, int iterations, double
     m_log->print(",%.17g", (s.x - m_exact.x).lpNorm<Eigen::Infinity>());
   }
   if (control) m_log->print(",%.17g,%lld,%lld", control->h, control->accepted, control->rejected);
+  if (fluid) {
+    double front = -std::numeric_limits<double>::infinity();
+    for (Index i = 0; i < m_scene.system->fluid()->num_fluid(); ++i)
+      front = std::max(front, s.x[3 * i]);
+    m_log->print(",%.6g,%.6g,%d,%d,%.17g", fluid->max_density_error, fluid->mean_density_error,
+                 fluid->pressure_iterations, fluid->substeps, front);
+  }
   m_log->print("\n");
   return K + U;
 }
 
-void RunOutput::frame(long long step, const State& s) {
+void RunOutput::frame(long long step, const State& s, const FluidFields* fluid) {
   if (!m_scene.output.vtk) return;
   char name[64];
   std::snprintf(name, sizeof name, "frame_%08lld.vtk", step);
   // Frames of fixed steps carry the step's nominal time (0.1, not a sum of steps
   // 0.10000000000000002); error control lands on its frame times exactly.
   const double t = m_scene.integrator.adaptive ? s.t : m_scene.time.time_at(step);
-  write_vtk_frame(m_frames_dir + "/" + name, s, t,
-                  FrameMesh{m_scene.edges, m_scene.edge_rest, m_scene.triangles,
-                            m_scene.system->pinned(), m_scene.system->masses()});
+  write_vtk_frame(m_frames_dir + "/" + name, s, t, frame_mesh(fluid));
   m_frames.emplace_back(t, std::string("frames/") + name);
   write_pvd(m_dir->file("frames.pvd"), m_frames);
 }
@@ -169,7 +184,18 @@ bool RunOutput::failed(const std::string& why) noexcept {
   return m_dir->mark_failed(why);
 }
 
-std::vector<std::string> RunOutput::finish(const State& s, const std::string& summary) {
+FrameMesh RunOutput::frame_mesh(const FluidFields* fluid) const {
+  return FrameMesh{m_scene.edges,
+                   m_scene.edge_rest,
+                   m_scene.triangles,
+                   m_scene.system->pinned(),
+                   m_scene.system->masses(),
+                   fluid ? fluid->density : nullptr,
+                   fluid ? fluid->pressure : nullptr};
+}
+
+std::vector<std::string> RunOutput::finish(const State& s, const std::string& summary,
+                                           const FluidFields* fluid) {
   std::vector<std::string> written = {"scene.toml", "log.csv"};
   m_log->commit();
   if (m_scene.output.vtk) written.insert(written.end(), {"frames/", "frames.pvd"});
@@ -177,9 +203,7 @@ std::vector<std::string> RunOutput::finish(const State& s, const std::string& su
     // The final state as a frame (ParaView opens it too), drawn by experiments/plot/final.py with
     // matplotlib: axes in metres, the time, a strain colour bar, the colliders. Without Python or
     // matplotlib, the built-in renderer still leaves a picture.
-    write_vtk_frame(m_dir->file("final.vtk"), s, s.t,
-                    FrameMesh{m_scene.edges, m_scene.edge_rest, m_scene.triangles,
-                              m_scene.system->pinned(), m_scene.system->masses()});
+    write_vtk_frame(m_dir->file("final.vtk"), s, s.t, frame_mesh(fluid));
     written.push_back("final.vtk");
     if (run_plot_script("final.py", m_dir->path(), false) != 0) {
       std::fprintf(stderr,
@@ -192,7 +216,7 @@ std::vector<std::string> RunOutput::finish(const State& s, const std::string& su
     written.push_back("final.png");
   }
   // final.csv last: its presence says the run finished, so nothing may fail after it.
-  write_final_csv(m_dir->file("final.csv"), s);
+  write_final_csv(m_dir->file("final.csv"), s, listed_particles(m_scene));
   written.push_back("final.csv");
   try {
     std::error_code ec;

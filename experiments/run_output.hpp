@@ -7,6 +7,8 @@
 #include "experiments/checkpoint.hpp"
 #include "experiments/output/output_dir.hpp"
 #include "experiments/output/output_file.hpp"
+#include "experiments/output/vtk_writer.hpp"
+#include "hooke/sph/fluid_model.hpp"
 #include "problems/scene.hpp"
 
 namespace hooke {
@@ -27,7 +29,9 @@ void check_no_stopped_run(const OutputDir& dir, bool force);
 /// final.vtk, checkpoint.bin, frames) and writes scene.toml and a new log.csv. A resumed run cuts
 /// log.csv back to the checkpointed step and removes the frames written after it. Then one row per
 /// logged step, VTK frames with their frames.pvd, checkpoints, and at the end final.vtk,
-/// final.png and final.csv, after which status.txt says "finished". Every file of a run is
+/// final.png and final.csv, after which status.txt says "finished". final.csv lists the fluid
+/// particles only in a fluid scene (its boundary particles are the tank and obstacles, in the
+/// frames with pinned = 1). Every file of a run is
 /// opened, written and named here and nowhere else, through OutputFile (a failed write throws
 /// OutputError), except final.png, which experiments/plot/final.py draws from final.vtk and
 /// writes just as atomically (common.save_figure), or the built-in renderer if it cannot.
@@ -52,12 +56,20 @@ class RunOutput {
     double h = 0.0;
     long long accepted = 0, rejected = 0;
   };
+  /// What a fluid run adds to its frames: the density at the frame's state (kg/m^3) and the
+  /// pressures of the last step (Pa), one entry per fluid particle.
+  struct FluidFields {
+    const Vec* density = nullptr;
+    const Vec* pressure = nullptr;
+  };
   /// Appends the log row of `step` at state s; returns the total energy (J) it logged. control:
-  /// the error control's columns, given exactly for adaptive scenes.
+  /// the error control's columns, given exactly for adaptive scenes. fluid: the step's figures,
+  /// given exactly for fluid scenes, in columns max_density_error, mean_density_error,
+  /// pressure_iterations, substeps, and front (the largest x of a fluid particle, m).
   double log_row(long long step, const State& s, int iterations, double residual, double wall,
-                 const ControlColumns* control = nullptr);
-  /// Writes frame `step` (if [output] vtk) and rewrites frames.pvd.
-  void frame(long long step, const State& s);
+                 const ControlColumns* control = nullptr, const FluidStepStats* fluid = nullptr);
+  /// Writes frame `step` (if [output] vtk) and rewrites frames.pvd; fluid: a fluid's fields.
+  void frame(long long step, const State& s, const FluidFields* fluid = nullptr);
   /// Makes log.csv durable and writes DIR/checkpoint.bin from c, with the log position, frames
   /// and the scene's identity (version, resolved scene, initial-state hash) filled in.
   void checkpoint(Checkpoint c);
@@ -71,10 +83,12 @@ class RunOutput {
   /// The end of a complete run: writes final.csv (and final.vtk, final.png if [output] png) from s,
   /// removes the checkpoint (nothing is left to resume) and marks the folder finished. Returns the
   /// names of the files the run wrote, for the end-of-run line.
-  std::vector<std::string> finish(const State& s, const std::string& summary);
+  std::vector<std::string> finish(const State& s, const std::string& summary,
+                                  const FluidFields* fluid = nullptr);
 
  private:
   void start_fresh(bool force);
+  FrameMesh frame_mesh(const FluidFields* fluid) const;
   void prepare_frames(const Checkpoint* resume);
 
   const Scene& m_scene;

@@ -36,7 +36,8 @@ struct StudyMethod {
 /// tolerance sweep sets them); then any other
 /// registry method with its default options, except ceres-implicit (exact backward Euler by a
 /// general least-squares solver: the stability of implicit-b1 run to convergence at 100x the
-/// cost). Entries whose method this build lacks are dropped later by available_study_methods().
+/// cost) and the fluid methods (which step [fluid] scenes only). Entries whose method this build
+/// lacks are dropped later by available_study_methods().
 std::vector<StudyMethod> study_methods();
 
 /// The entries of `all` whose method is in this build's registry and whose label or method name

@@ -10,6 +10,10 @@ namespace {
 /// One method's reader: its keys, with the defaults of its Options type, then validate().
 using MethodReader = MethodOptions (*)(TableReader& r, const std::string& method);
 
+/// The CFL number of a fluid scene's substeps: safe steps by default (the library's default, 0,
+/// steps the caller's h unsplit, for studies that cross the limit on purpose).
+constexpr double kSceneCourant = 0.4;
+
 // Keys that depend on another setting. A reader reads such a key only when the settings read
 // before it make it take effect; otherwise it calls refuse_ignored(), which refuses the key if the
 // scene (or --set) gives it and records nothing, so that a default never triggers the refusal and
@@ -253,6 +257,28 @@ MethodOptions read_xpbd(TableReader& r, const std::string&) {
   return o;
 }
 
+MethodOptions read_wcsph(TableReader& r, const std::string&) {
+  WcsphOptions o;
+  o.sound_speed = r.positive("sound_speed");
+  o.gamma = r.number("gamma", o.gamma);
+  o.max_density_error = r.number("max_density_error", o.max_density_error);
+  o.courant = r.number("courant", kSceneCourant);
+  r.check(o.validate());
+  return o;
+}
+
+MethodOptions read_iisph(TableReader& r, const std::string&) {
+  IisphOptions o;
+  o.tolerance = r.number("tolerance", o.tolerance);
+  o.min_iterations = r.int_field("min_iterations", o.min_iterations);
+  o.max_iterations = r.int_field("max_iterations", o.max_iterations);
+  o.omega = r.number("omega", o.omega);
+  o.max_density_error = r.number("max_density_error", o.max_density_error);
+  o.courant = r.number("courant", kSceneCourant);
+  r.check(o.validate());
+  return o;
+}
+
 struct ReaderEntry {
   const char* method;
   MethodReader read;
@@ -276,6 +302,8 @@ const std::vector<ReaderEntry>& readers() {
 #endif
     {"vbd", read_vbd},
     {"xpbd", read_xpbd},
+    {"wcsph", read_wcsph},
+    {"iisph", read_iisph},
   };
   return table;
 }
@@ -286,6 +314,7 @@ bool read_error_control(TableReader& r, const std::string& method, ErrorControl&
   const MethodInfo& info = method_info(method);
   if (info.name == std::string("cvode") || info.name == std::string("ida"))
     return false;  // their rtol and atol are their own (read_sundials)
+  if (info.kind == MethodKind::Fluid) return false;  // CFL substeps (integrator.courant)
   const bool adaptive = r.boolean("adaptive", false);
   if (!adaptive) {
     const Governing off{

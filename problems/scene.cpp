@@ -351,6 +351,16 @@ void read_run_settings(TableReader& root, Scene& scene) {
       r.fail("method", e.what());
     }
     scene.integrator.method = method;
+    // A fluid is stepped by the fluid methods only, and they step nothing else.
+    const bool fluid_method = method_info(method).kind == MethodKind::Fluid;
+    if (scene.is_fluid() && !fluid_method)
+      r.fail("method", "'" + method +
+                           "' steps mass-spring systems; a [fluid] scene is stepped by a fluid "
+                           "method: " +
+                           fluid_method_names());
+    if (fluid_method && !scene.is_fluid())
+      r.fail("method", "'" + method + "' steps fluids: it needs a [fluid] scene (this one has " +
+                           (scene.ode ? "an [ode]" : "a [mesh]") + ")");
     r.set_variant(method);
     scene.integrator.adaptive = read_error_control(r, method, scene.integrator.error_control);
     if (scene.integrator.adaptive && scene.ode)
@@ -472,20 +482,42 @@ Scene load_parsed(toml::table tbl, const std::string& file,
   scene.file = file;
   scene.name = std::filesystem::path(file).stem().string();
   const bool is_ode = tbl.contains("ode");
+  const bool is_fluid = !is_ode && tbl.contains("fluid");
   // Sections every scene has are created empty so their defaults land in the resolved scene.
   for (const char* sec : {"integrator", "time", "output", "run"})
     if (!tbl.contains(sec)) tbl.insert(sec, toml::table{});
-  if (!is_ode && !tbl.contains("springs")) tbl.insert("springs", toml::table{});
+  if (!is_ode && !is_fluid && !tbl.contains("springs")) tbl.insert("springs", toml::table{});
   TableReader root(tbl, scene.resolved, file, "", context);
 
   if (is_ode) {
-    for (const char* sec : {"mesh", "springs", "forces", "collision", "strain_limit", "pin_motion"})
+    for (const char* sec :
+         {"mesh", "springs", "forces", "collision", "strain_limit", "pin_motion", "fluid"})
       root.reject_if_present(sec, "an [ode] scene has no particles; remove this section");
     auto ode = root.table("ode");
     read_ode(*ode, scene);
     ode->finish();
+  } else if (is_fluid) {
+    for (const char* sec : {"mesh", "springs", "strain_limit", "pin_motion"})
+      root.reject_if_present(sec,
+                             "a [fluid] scene has fluid particles only (no mesh or springs); "
+                             "remove this section");
+    root.reject_if_present("collision",
+                           "a fluid meets solids as boundary particles: give the walls as "
+                           "[fluid.tank] and solids as [[fluid.obstacle]] boxes");
+    Vec3 gravity = Vec3::Zero();
+    if (auto f = root.table("forces")) {
+      if (f->has("gravity")) gravity = f->vec3("gravity");
+      for (const char* key : {"drag", "wind"})
+        f->reject_if_present(key,
+                             "air drag is not modelled on fluid particles (a fluid scene takes "
+                             "forces.gravity only)");
+      f->finish();
+    }
+    auto fluid = root.table("fluid");
+    build_fluid(*fluid, gravity, scene);
+    fluid->finish();
   } else {
-    if (!root.has("mesh")) root.fail("mesh", "is required (or an [ode] section)");
+    if (!root.has("mesh")) root.fail("mesh", "is required (or an [ode] or [fluid] section)");
     auto mesh = root.table("mesh");
     auto springs = root.table("springs");
     const std::string base_dir = std::filesystem::path(file).parent_path().string();

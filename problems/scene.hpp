@@ -78,8 +78,9 @@ using ExactMassSpring = std::function<void(double t, State& s)>;
 /// An exact solution of an ODE scene: writes X(t).
 using ExactOde = std::function<void(double t, VecRef X)>;
 
-/// A loaded, validated scene: either a mass-spring system with its initial state, or a generic
-/// first-order ODE (the [ode] test problems), plus the run settings and the resolved TOML.
+/// A loaded, validated scene: either a mass-spring system with its initial state (a [mesh] of
+/// springs, or a [fluid] of SPH particles), or a generic first-order ODE (the [ode] test
+/// problems), plus the run settings and the resolved TOML.
 struct Scene {
   std::string file;  ///< path of the scene file as given
   std::string name;  ///< file stem, used for the default output directory
@@ -108,6 +109,8 @@ struct Scene {
   std::vector<std::string> warnings;
 
   bool is_ode() const { return ode != nullptr; }
+  /// A [fluid] scene: its system's particles are the fluid's, then its boundary particles.
+  bool is_fluid() const { return system != nullptr && system->fluid() != nullptr; }
   /// Where a step under error control (integrator.adaptive) that starts at t must end at the
   /// latest: the next frame time (a multiple of output.interval, a time within 1e-9 of an
   /// interval past t counting as reached) or the duration. `hooke run` and the Python module's
@@ -132,6 +135,10 @@ Scene load_scene_from_string(const std::string& text, const std::string& file,
 double scene_memory_limit();
 /// Sets the budget for this process (bytes > 0); e.g. the fuzz target keeps it below its RSS limit.
 void set_scene_memory_limit(double bytes);
+
+/// Resident memory of a fluid run (bytes), estimated from its particle counts before they are
+/// sampled: what the loader checks against scene_memory_limit() and `hooke info` prints.
+double fluid_run_bytes(double num_fluid, double num_boundary, int dimension, double support_factor);
 
 /// Names of the mesh types ("grid", "chain", ...), for messages and `hooke scenes`.
 const std::vector<std::string>& mesh_types();

@@ -582,9 +582,10 @@ void add_implicit_keys(std::vector<SceneKey>& t) {
           .def("'symplectic-euler'")
           .choices({"forward-euler", "symplectic-euler", "midpoint", "trapezoid", "rk4", "dopri5",
                     "bs32", "implicit", "implicit-midpoint", "bdf2", "cvode", "ida",
-                    "ceres-implicit", "fast-mass-spring", "vbd", "xpbd"})
+                    "ceres-implicit", "fast-mass-spring", "vbd", "xpbd", "wcsph", "iisph"})
           .meaning("the time stepper; explicit methods (the first seven) take no other keys "
-                   "but the error control's"));
+                   "but the error control's; wcsph and iisph step [fluid] scenes, and only they "
+                   "do"));
   add(K("integrator.adaptive", T::Boolean)
           .in(kFixedStepFamilies)
           .def("false")
@@ -894,6 +895,133 @@ void add_xpbd_keys(std::vector<SceneKey>& t) {
           .meaning("constraint sweeps per substep"));
 }
 
+/// Adds [fluid]: SPH particles in blocks, a tank and obstacles.
+void add_fluid_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
+  const std::string layers =
+      "layers of boundary particles (Akinci et al. 2012 volumes) inside its surface";
+  add(K("fluid.dimension", T::Integer)
+          .def("3")
+          .between(2, 3)
+          .meaning("2: particles in one plane z = const (the validation cases; every box corner "
+                   "has that z), 3: space"));
+  add(K("fluid.spacing", T::Number)
+          .unit("m")
+          .positive()
+          .example("0.02")
+          .meaning("particle spacing dx: each fluid particle stands for a cube (2D: square) of "
+                   "side dx, of mass rest_density dx^dimension"));
+  add(K("fluid.rest_density", T::Number)
+          .unit("kg/m^3")
+          .def("1000")
+          .positive()
+          .meaning("rest density rho0 of the fluid (water: 1000)"));
+  add(K("fluid.kernel", T::String)
+          .def("'cubic-spline'")
+          .choices({"cubic-spline", "wendland-c2"})
+          .meaning("SPH kernel: the cubic B-spline (Monaghan 1992) or Wendland's C2"));
+  add(K("fluid.support_factor", T::Number)
+          .def("2")
+          .between(1.5, 4)
+          .meaning("kernel support radius in spacings (2: about 13 neighbours in 2D, 33 in 3D)"));
+  add(K("fluid.viscosity", T::Number)
+          .unit("m^2/s")
+          .def("0")
+          .non_negative()
+          .meaning("kinematic viscosity nu between fluid particles (Morris et al. 1997); the "
+                   "walls slip"));
+  add(K("fluid.block.lower", T::Vector3)
+          .unit("m")
+          .example("[0, 0, 0]")
+          .meaning("lower corner of a block of water ([[fluid.block]], one or more, disjoint), "
+                   "filled on the lattice of spacing dx"));
+  add(K("fluid.block.upper", T::Vector3)
+          .unit("m")
+          .example("[0.1, 0.2, 0.1]")
+          .meaning("upper corner of the block of water"));
+  add(K("fluid.tank.lower", T::Vector3)
+          .unit("m")
+          .example("[0, 0, 0]")
+          .meaning("lower corner of the inside of the tank: walls at x (and z in 3D) and a "
+                   "floor below y, open at the top; the water must lie inside"));
+  add(K("fluid.tank.upper", T::Vector3)
+          .unit("m")
+          .example("[0.4, 0.3, 0.1]")
+          .meaning("upper corner of the inside of the tank (the walls' height is its y)"));
+  add(K("fluid.tank.layers", T::Integer)
+          .computed("ceil(fluid.support_factor)")
+          .between(1, 10)
+          .example("3")
+          .meaning("layers of boundary particles (Akinci et al. 2012 volumes) in the walls and "
+                   "floor"));
+  add(K("fluid.obstacle.lower", T::Vector3)
+          .unit("m")
+          .example("[0.3, 0, 0]")
+          .meaning("lower corner of a solid box in the fluid ([[fluid.obstacle]], any number)"));
+  add(K("fluid.obstacle.upper", T::Vector3)
+          .unit("m")
+          .example("[0.34, 0.06, 0.1]")
+          .meaning("upper corner of the solid box"));
+  add(K("fluid.obstacle.layers", T::Integer)
+          .computed("ceil(fluid.support_factor)")
+          .between(1, 10)
+          .example("3")
+          .meaning(layers + " (all of it when thinner)"));
+}
+
+/// Adds the keys of the fluid methods (wcsph, iisph).
+void add_sph_method_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
+  const std::vector<std::string> sph = {"wcsph", "iisph"};
+  add(K("integrator.sound_speed", T::Number)
+          .in({"wcsph"})
+          .unit("m/s")
+          .positive()
+          .example("20")
+          .meaning("speed of sound c0; the Tait stiffness is B = rho0 c0^2 / gamma. Monaghan's "
+                   "rule c0 = 10 max|v| keeps the density within about 1% of rho0"));
+  add(K("integrator.gamma", T::Number)
+          .in({"wcsph"})
+          .def("7")
+          .range(1, false, std::nullopt, false)
+          .meaning("Tait exponent: p = B ((rho / rho0)^gamma - 1), clamped at 0"));
+  add(K("integrator.tolerance", T::Number)
+          .in({"iisph"})
+          .def("0.001")
+          .positive()
+          .meaning("the pressure solve stops when the mean density residual is at most this "
+                   "times rho0 (0.001: 0.1%)"));
+  add(K("integrator.min_iterations", T::Integer)
+          .in({"iisph"})
+          .def("2")
+          .int_from(1)
+          .meaning("fewest relaxed Jacobi iterations of the pressure solve per step"));
+  add(K("integrator.max_iterations", T::Integer)
+          .in({"iisph"})
+          .def("200")
+          .int_from(1)
+          .meaning("most relaxed Jacobi iterations per step (then the step has not converged; "
+                   ">= min_iterations)"));
+  add(K("integrator.omega", T::Number)
+          .in({"iisph"})
+          .def("0.5")
+          .range(0, true, 1, false)
+          .meaning("Jacobi relaxation (Ihmsen et al. 2014: 0.5)"));
+  add(K("integrator.max_density_error", T::Number)
+          .in(sph)
+          .def("0.5")
+          .positive()
+          .meaning("stop (exit 3) when a particle is compressed beyond this relative density "
+                   "error at the start of a step: the fluid is being crushed"));
+  add(K("integrator.courant", T::Number)
+          .in(sph)
+          .def("0.4")
+          .non_negative()
+          .meaning("split each time.dt step into the fewest equal substeps of at most courant dx "
+                   "/ (c0 + max|v|) (wcsph) or courant dx / max|v| (iisph); 0: steps of time.dt "
+                   "exactly, as the stability study needs to cross the CFL limit"));
+}
+
 /// Adds [time], [output] and [run].
 void add_run_keys(std::vector<SceneKey>& t) {
   auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
@@ -956,7 +1084,8 @@ std::vector<SceneKey> make_table() {
   for (auto section :
        {add_mesh_lattice_keys, add_mesh_line_keys, add_mesh_other_keys, add_springs_keys,
         add_scene_part_keys, add_pin_strain_ode_keys, add_implicit_keys, add_sundials_keys,
-        add_ceres_keys, add_local_global_keys, add_vbd_keys, add_xpbd_keys, add_run_keys})
+        add_ceres_keys, add_local_global_keys, add_vbd_keys, add_xpbd_keys, add_sph_method_keys,
+        add_fluid_keys, add_run_keys})
     section(t);
   return t;
 }
@@ -1123,8 +1252,9 @@ std::string scene_keys_markdown() {
         "relative to the current folder (where hooke runs). The resolved scene that a run "
         "writes (`scene.toml` in its output folder) holds absolute paths, so it runs from "
         "anywhere.\n\n"
-        "Array tables: `[collision.ground]`, `[collision.sphere]` and `[pin_motion]` may be "
-        "given once or as arrays (`[[collision.sphere]]`), one table per collider or motion.\n";
+        "Array tables: `[collision.ground]`, `[collision.sphere]`, `[pin_motion]`, "
+        "`[fluid.block]` and `[fluid.obstacle]` may be given once or as arrays "
+        "(`[[collision.sphere]]`), one table per collider, motion or box.\n";
   std::string current;
   for (const auto& k : scene_keys()) {
     const std::string sec = section_of(k.name);

@@ -687,9 +687,10 @@ PYBIND11_MODULE(_hooke, m) {
     for (const auto& e : methods()) {
       py::dict d;
       d["name"] = e.name;
-      d["kind"] = e.kind == MethodKind::Explicit   ? "explicit"
-                  : e.kind == MethodKind::Implicit ? "implicit"
-                                                   : "whole-step";
+      d["kind"] = e.kind == MethodKind::Explicit    ? "explicit"
+                  : e.kind == MethodKind::Implicit  ? "implicit"
+                  : e.kind == MethodKind::WholeStep ? "whole-step"
+                                                    : "fluid";
       d["description"] = e.description;
       out.append(d);
     }

@@ -83,7 +83,7 @@ struct WholeStepEntry {
 template <class T>
 WholeStepEntry whole_step(const char* name, const char* description,
                           std::string (*unsupported)(const MassSpringSystem&) = nullptr,
-                          int doubled = 0) {
+                          int doubled = 0, MethodKind kind = MethodKind::WholeStep) {
   auto make = [name, doubled](const MassSpringSystem& sys,
                               const MethodOptions& m) -> std::unique_ptr<Stepper> {
     const typename T::Options options = m.as<typename T::Options>(name);
@@ -91,10 +91,7 @@ WholeStepEntry whole_step(const char* name, const char* description,
     return std::make_unique<StepDoubling>(
         sys, [&sys, options] { return std::make_unique<T>(sys, options); }, doubled);
   };
-  return {{name, MethodKind::WholeStep, description, doubled},
-          make,
-          unsupported,
-          &typeid(typename T::Options)};
+  return {{name, kind, description, doubled}, make, unsupported, &typeid(typename T::Options)};
 }
 
 // Whole-step methods, each under its build option.
@@ -127,6 +124,16 @@ const std::vector<WholeStepEntry>& whole_step_table() {
         "xpbd",
         "extended position-based dynamics with substeps (Macklin et al. 2019), compliance 1/k",
         xpbd_unsupported, 1),
+    whole_step<WcsphStepper>(
+        "wcsph",
+        "weakly compressible SPH (Becker and Teschner 2007): Tait pressure, symplectic Euler, "
+        "CFL substeps; fluids only",
+        sph_unsupported, 0, MethodKind::Fluid),
+    whole_step<IisphStepper>(
+        "iisph",
+        "implicit incompressible SPH (Ihmsen et al. 2014): the pressure Poisson equation by "
+        "relaxed Jacobi to a density-error tolerance; fluids only",
+        sph_unsupported, 0, MethodKind::Fluid),
   };
   return table;
 }
@@ -157,6 +164,13 @@ const std::vector<MethodInfo>& methods() {
     return v;
   }();
   return all;
+}
+
+std::string fluid_method_names() {
+  std::string s;
+  for (const auto& m : methods())
+    if (m.kind == MethodKind::Fluid) s += (s.empty() ? "" : ", ") + std::string(m.name);
+  return s;
 }
 
 std::string method_names() {
@@ -224,13 +238,16 @@ MethodOptions options_for(const std::string& name, const MethodOptions& options)
 }
 
 std::string method_unsupported(const std::string& name, const MassSpringSystem& system) {
-  // A fluid's pressure lives in its SPH steppers (solver/sph/), which no method here applies.
-  if (system.fluid() != nullptr)
+  const MethodKind kind = method_info(name).kind;  // throws for unknown names
+  // A fluid's pressure lives in the fluid methods (solver/sph/), which no other method applies.
+  if (system.fluid() != nullptr && kind != MethodKind::Fluid)
     return "'" + name +
            "' steps mass-spring systems and would ignore the fluid's pressure; a fluid is "
-           "stepped by the SPH methods (solver/sph/: WcsphStepper, IisphStepper)";
+           "stepped by the fluid methods (" +
+           fluid_method_names() + ")";
   for (const auto& e : whole_step_table()) {
     if (name != e.info.name) continue;
+    if (kind == MethodKind::Fluid) return e.unsupported(system);
     if (system.has_pin_motion())
       return "'" + name +
              "' keeps pinned particles still and cannot follow scripted pins (pin_motion); use "

@@ -11,6 +11,8 @@
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "hooke/sph/iisph.hpp"
+#include "hooke/sph/wcsph.hpp"
 #include "hooke/whole_step/ceres_implicit_stepper.hpp"
 #include "hooke/whole_step/cvode_stepper.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
@@ -25,11 +27,15 @@ enum class MethodKind {
   Explicit,   ///< runs on any OdeSystem; takes no options
   Implicit,   ///< Newton on a linear backend; takes ImplicitOptions
   WholeStep,  ///< a solver of its own advances the whole step; takes its own Options type
+  /// An SPH pressure method (solver/sph/): steps fluid systems only, and no other method steps
+  /// them; takes its own Options type.
+  Fluid,
 };
 
 /// The options of one method: a value of that method's own Options type (ImplicitOptions for
 /// implicit, implicit-midpoint and bdf2; CvodeOptions, IdaOptions, CeresImplicitOptions,
-/// FastMassSpringOptions, VbdOptions, XpbdOptions for the whole-step methods; explicit methods take
+/// FastMassSpringOptions, VbdOptions, XpbdOptions for the whole-step methods, WcsphOptions and
+/// IisphOptions for the fluid methods; explicit methods take
 /// none), or empty for the method's defaults. Scene readers fill it once with the method's type;
 /// make_stepper checks that it holds the type the method takes.
 class MethodOptions {
@@ -93,6 +99,8 @@ const std::vector<MethodInfo>& methods();
 const MethodInfo& method_info(const std::string& name);
 /// Comma-separated list of method names, for messages.
 std::string method_names();
+/// The same for the fluid methods (MethodKind::Fluid) only.
+std::string fluid_method_names();
 /// An explicit stepper for any OdeSystem; throws UnknownMethod if name is not an explicit method.
 std::unique_ptr<ExplicitStepper> make_explicit_stepper(const std::string& name);
 /// Name of the default linear backend of implicit methods.
@@ -102,7 +110,7 @@ std::string default_linear_solver();
 /// UnknownMethod for an unknown name and std::invalid_argument for a method that is not implicit.
 ImplicitOptions implicit_defaults(const std::string& name);
 /// "" if the method can run this system, else why not (e.g. ceres-implicit and spring dampers; a
-/// fluid system, which only the SPH steppers of solver/sph/ step).
+/// fluid system, which only the fluid methods step, and they step nothing else).
 std::string method_unsupported(const std::string& name, const MassSpringSystem& system);
 /// `options` if `name` takes options of their type, else empty (the method's defaults): how one
 /// scene's [integrator] options are passed on to other methods (crosscheck, studies), e.g. an

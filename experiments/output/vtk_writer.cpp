@@ -5,6 +5,7 @@
 #include <limits>
 #include <sstream>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "experiments/output/output_file.hpp"
@@ -93,6 +94,13 @@ void write_vtk_frame(const std::string& path, const State& s, double t, const Fr
   out.text("\nSCALARS kinetic_energy double 1\nLOOKUP_TABLE default\n");
   for (Index i = 0; i < n; ++i)
     out.be<double>(0.5 * mesh.masses[i] * s.v.segment<3>(3 * i).squaredNorm());
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  for (const auto& [name, field] :
+       {std::pair<const char*, const Vec*>{"density", mesh.density}, {"pressure", mesh.pressure}}) {
+    if (field == nullptr) continue;
+    out.text(std::string("\nSCALARS ") + name + " double 1\nLOOKUP_TABLE default\n");
+    for (Index i = 0; i < n; ++i) out.be<double>(i < field->size() ? (*field)[i] : nan);
+  }
   out.text("\n");
   out.flush();
   file.commit();

@@ -78,7 +78,9 @@ def style(label, labels):
 def read_vtk(path):
     """A frame written by hooke (experiments/output/vtk_writer.cpp: legacy binary POLYDATA,
     big-endian) as a dict: t, points (n x 3), lines (m x 2 particle ids), triangles (k x 3),
-    strain (per line), velocity (n x 3), pinned (n booleans), kinetic_energy (n)."""
+    strain (per line), velocity (n x 3), pinned (n booleans), kinetic_energy (n) and, when the
+    frame has them (fluid scenes), density (kg/m^3) and pressure (Pa): n each, NaN on boundary
+    particles."""
     with open(path, "rb") as f:
         data = f.read()
     pos = 0
@@ -118,4 +120,9 @@ def read_vtk(path):
     out["pinned"] = array(">i4", n) != 0
     section(rb"\nSCALARS kinetic_energy double 1\nLOOKUP_TABLE default\n")
     out["kinetic_energy"] = array(">f8", n)
+    # Further per-particle doubles follow kinetic_energy directly (density, pressure).
+    extra = re.compile(rb"\nSCALARS (\w+) double 1\nLOOKUP_TABLE default\n")
+    while field := extra.match(data, pos):
+        pos = field.end()
+        out[field.group(1).decode()] = array(">f8", n)
     return out

@@ -52,6 +52,12 @@ void build_hair(TableReader& mesh, TableReader& springs, MeshBuild& out);
 void build_damped_springs(TableReader& mesh, TableReader& springs, MeshBuild& out);
 void build_two_particle(TableReader& mesh, TableReader& springs, MeshBuild& out);
 void build_particles(TableReader& mesh, TableReader& springs, MeshBuild& out);
+/// [fluid]: the blocks of water ([[fluid.block]]), the tank ([fluid.tank]) and the obstacles
+/// ([[fluid.obstacle]]) sampled as SPH particles at fluid.spacing, with uniform gravity; fills
+/// scene.system (a fluid system, solver/sph/fluid_system.hpp) and scene.initial. Refuses, naming
+/// the key: boxes thinner than the spacing, water outside the tank or inside an obstacle or
+/// another block, and a fluid above the memory budget (before sampling it).
+void build_fluid(TableReader& fluid, const Vec3& gravity, Scene& scene);
 /// base_dir: directory of the scene file, against which a relative OBJ path is resolved.
 void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_dir,
                MeshBuild& out);

@@ -92,13 +92,16 @@ class FluidModel {
   Vec m_psi;
 };
 
-/// Per-step figures of a fluid step (relative density errors over the fluid particles).
+/// Per-step figures of a fluid step (relative density errors over the fluid particles, at the
+/// start of each substep). A step of several CFL substeps reports the largest errors and
+/// residual of its substeps and the sum of their pressure iterations.
 struct FluidStepStats {
   double max_density_error = 0.0;   ///< max_i (rho_i - rho0) / rho0 (compression only)
   double mean_density_error = 0.0;  ///< mean_i max(rho_i - rho0, 0) / rho0
   double max_speed = 0.0;           ///< max |v_i| at the step's end (m/s)
   int pressure_iterations = 0;      ///< iterations of the pressure solve (0: none)
   double pressure_residual = 0.0;   ///< its final mean density error (implicit methods)
+  int substeps = 0;                 ///< substeps the step took (1 without CFL substeps)
 };
 
 /// The fluid's density errors (FluidStepStats's first two fields) for densities rho

@@ -19,13 +19,21 @@ OptionError IisphOptions::validate() const {
   if (!(omega > 0.0 && omega <= 1.0)) return option_error("omega", omega, "must be in (0, 1]");
   if (!(max_density_error > 0.0))
     return option_error("max_density_error", max_density_error, "must be positive");
+  if (!(courant >= 0.0) || !std::isfinite(courant))
+    return option_error("courant", courant, "must be >= 0 (0: no CFL substeps)");
   return {};
 }
 
-IisphStepper::IisphStepper(const MassSpringSystem& system, Options options)
-    : SphStepper(system), m_options(options) {
-  if (const OptionError e = m_options.validate(); !e.ok())
+namespace {
+const IisphOptions& checked(const IisphOptions& o) {
+  if (const OptionError e = o.validate(); !e.ok())
     throw std::invalid_argument("iisph: " + e.message);
+  return o;
+}
+}  // namespace
+
+IisphStepper::IisphStepper(const MassSpringSystem& system, Options options)
+    : SphStepper(system, checked(options).courant), m_options(options) {
   const Index nf = m_fluid.num_fluid(), n = system.num_particles();
   m_v_adv = Vec::Zero(3 * n);
   m_ap = Vec::Zero(3 * n);
@@ -89,7 +97,7 @@ void IisphStepper::apply(ConstRef x, double h) {
   m_Ap = h * h * m_div;
 }
 
-StepSummary IisphStepper::step(const State& s0, double h, State& s1) {
+StepSummary IisphStepper::substep(const State& s0, double h, State& s1) {
   const auto t0 = Clock::now();
   StepSummary s;
   if (!prepare(s0.x, s)) return s;

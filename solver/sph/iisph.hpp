@@ -1,4 +1,5 @@
 #pragma once
+#include <limits>
 #include <vector>
 
 #include "hooke/options.hpp"
@@ -21,6 +22,10 @@ struct IisphOptions {
   double omega = 0.5;
   /// A step whose largest density error at its start exceeds this fails (Status::Fatal). > 0.
   double max_density_error = 0.5;
+  /// CFL number of the substeps a step is split into (SphStepper): each at most
+  /// courant dx / max|v| (Ihmsen et al. 2014: 0.4); a fluid at rest takes the caller's h. 0:
+  /// steps of the caller's h, unsplit; scenes default to 0.4. >= 0.
+  double courant = 0.0;
   OptionError validate() const;
 };
 
@@ -38,7 +43,10 @@ class IisphStepper final : public SphStepper {
   using Options = IisphOptions;
   IisphStepper(const MassSpringSystem& system, Options options);
   const char* name() const override { return "iisph"; }
-  StepSummary step(const State& s0, double h, State& s1) override;
+  StepSummary substep(const State& s0, double h, State& s1) override;
+  double cfl_limit(const State& s) const override {
+    return cfl_step(s, m_options.courant, std::numeric_limits<double>::infinity());
+  }
   const Options& options() const { return m_options; }
   /// The step courant * dx / max|v| at state s (Ihmsen et al. 2014: courant 0.4), or
   /// max_step when the fluid is at rest.

@@ -13,19 +13,79 @@ std::string sph_unsupported(const MassSpringSystem& system) {
   return "";
 }
 
-SphStepper::SphStepper(const MassSpringSystem& system)
+SphStepper::SphStepper(const MassSpringSystem& system, double courant)
     : m_system(system),
       m_fluid(*[&] {
         if (const std::string why = sph_unsupported(system); !why.empty())
           throw std::invalid_argument(why);
         return system.fluid();
       }()),
+      m_courant(courant),
       m_search(m_fluid.support()) {
+  HOOKE_ASSERT(courant >= 0.0 && std::isfinite(courant), "CFL number " << courant);
   const Index nf = m_fluid.num_fluid(), n = system.num_particles();
+  if (courant > 0.0) m_sub[0] = m_sub[1] = State(n);
   m_rho = Vec::Constant(nf, m_fluid.rest_density());
   m_p = Vec::Zero(nf);
   m_a = Vec::Zero(3 * n);
   m_force = Vec::Zero(3 * n);
+}
+
+StepSummary SphStepper::step(const State& s0, double h, State& s1) {
+  if (m_courant == 0.0) {
+    StepSummary s = substep(s0, h, s1);
+    m_last.substeps = 1;
+    return s;
+  }
+  // Substeps until t0 + h, each of the remaining time over the fewest pieces the CFL step at its
+  // start allows; a substep count beyond kMaxSubsteps means the speeds have run away.
+  constexpr long long kMaxSubsteps = 1000000;
+  StepSummary total;
+  FluidStepStats agg;
+  const State* from = &s0;
+  double done = 0.0;
+  for (int k = 0;; ++k) {
+    const double remaining = h - done;
+    const double limit = cfl_limit(*from);
+    const double pieces = std::ceil(remaining / limit * (1.0 - 1e-12));
+    if (!(pieces < double(kMaxSubsteps))) {
+      std::ostringstream os;
+      os << "CFL: the CFL step " << limit << " s would split the remaining " << remaining
+         << " s into more than " << kMaxSubsteps << " substeps (largest speed "
+         << max_fluid_speed(*from) << " m/s); the fluid has exploded";
+      total.status = Status::Fatal;
+      total.message = os.str();
+      return total;
+    }
+    const bool last = pieces <= 1.0;
+    const double hs = last ? remaining : remaining / pieces;
+    State& to = last ? s1 : m_sub[k & 1];
+    const StepSummary s = substep(*from, hs, to);
+    total.iterations += s.iterations;
+    total.residual = std::max(total.residual, s.residual);
+    agg.max_density_error = std::max(agg.max_density_error, m_last.max_density_error);
+    agg.mean_density_error = std::max(agg.mean_density_error, m_last.mean_density_error);
+    agg.pressure_iterations += m_last.pressure_iterations;
+    agg.pressure_residual = std::max(agg.pressure_residual, m_last.pressure_residual);
+    agg.max_speed = m_last.max_speed;
+    ++agg.substeps;
+    if (s.status == Status::Fatal) {
+      m_last = agg;
+      total.status = s.status;
+      total.message = s.message;
+      return total;
+    }
+    if (s.status != Status::Converged && total.status == Status::Converged) {
+      total.status = s.status;  // NotConverged: the run decides (run.allow_not_converged)
+      total.message = s.message;
+    }
+    if (last) break;
+    done += hs;
+    from = &to;
+  }
+  s1.t = s0.t + h;
+  m_last = agg;
+  return total;
 }
 
 double SphStepper::max_fluid_speed(const State& s) const {

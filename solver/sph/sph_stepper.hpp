@@ -15,13 +15,24 @@ std::string sph_unsupported(const MassSpringSystem& system);
 /// the external and viscous accelerations, the symplectic Euler update and the checks that stop
 /// an exploding fluid. A pressure method (wcsph.hpp, iisph.hpp) derives from it and writes
 /// step(); all buffers are sized once here, so a step does not allocate once warm.
+///
+/// A step of size h either advances by h at once (courant = 0: the caller's steps, which the
+/// stability studies need in order to cross the CFL limit on purpose), or (courant > 0) as the
+/// fewest equal substeps of at most the method's CFL step (cfl_limit) at each substep's start:
+/// n = ceil(remaining / limit), one substep of remaining / n, and again. The step lands on
+/// t + h exactly.
 class SphStepper : public Stepper {
  public:
-  /// Figures of the last step (densities at its start, speed at its end).
+  StepSummary step(const State& s0, double h, State& s1) final;
+  /// The longest substep the CFL condition allows at state s with this stepper's courant (s);
+  /// infinity when nothing bounds it (a fluid at rest without a sound speed). Used when courant
+  /// > 0.
+  virtual double cfl_limit(const State& s) const = 0;
+  /// Figures of the last step (densities at the start of its substeps, speed at its end).
   const FluidStepStats& last_fluid_stats() const { return m_last; }
-  /// Densities at the start of the last step (kg/m^3), num_fluid entries.
+  /// Densities at the start of the last substep (kg/m^3), num_fluid entries.
   const Vec& densities() const { return m_rho; }
-  /// Pressures of the last step (Pa), num_fluid entries.
+  /// Pressures of the last substep (Pa), num_fluid entries.
   const Vec& pressures() const { return m_p; }
   const FluidModel& fluid() const { return m_fluid; }
   /// The largest speed of a fluid particle in state s (m/s).
@@ -30,8 +41,12 @@ class SphStepper : public Stepper {
   std::string report() const override;
 
  protected:
-  /// Throws std::invalid_argument if sph_unsupported(system) is not "".
-  explicit SphStepper(const MassSpringSystem& system);
+  /// Throws std::invalid_argument if sph_unsupported(system) is not "". courant: the CFL number
+  /// of the substeps (0: none), finite and >= 0.
+  SphStepper(const MassSpringSystem& system, double courant);
+  /// One substep of size h from s0 into s1 (the pressure method).
+  virtual StepSummary substep(const State& s0, double h, State& s1) = 0;
+
   /// Neighbours and densities at x (3n); false (with the message in `s`) if the search failed.
   bool prepare(ConstRef x, StepSummary& s);
   /// m_a = the external accelerations f/m of the system's forces plus the viscous ones at
@@ -46,6 +61,8 @@ class SphStepper : public Stepper {
 
   const MassSpringSystem& m_system;
   const FluidModel& m_fluid;
+  const double m_courant;
+  State m_sub[2];  // the states between CFL substeps
   NeighbourSearch m_search;
   Vec m_rho, m_p;    // num_fluid
   Vec m_a, m_force;  // 3n

@@ -11,13 +11,21 @@ OptionError WcsphOptions::validate() const {
   if (!(gamma >= 1.0) || !std::isfinite(gamma)) return option_error("gamma", gamma, "must be >= 1");
   if (!(max_density_error > 0.0))
     return option_error("max_density_error", max_density_error, "must be positive");
+  if (!(courant >= 0.0) || !std::isfinite(courant))
+    return option_error("courant", courant, "must be >= 0 (0: no CFL substeps)");
   return {};
 }
 
-WcsphStepper::WcsphStepper(const MassSpringSystem& system, Options options)
-    : SphStepper(system), m_options(options) {
-  if (const OptionError e = m_options.validate(); !e.ok())
+namespace {
+const WcsphOptions& checked(const WcsphOptions& o) {
+  if (const OptionError e = o.validate(); !e.ok())
     throw std::invalid_argument("wcsph: " + e.message);
+  return o;
+}
+}  // namespace
+
+WcsphStepper::WcsphStepper(const MassSpringSystem& system, Options options)
+    : SphStepper(system, checked(options).courant), m_options(options) {
   m_B = m_fluid.rest_density() * m_options.sound_speed * m_options.sound_speed / m_options.gamma;
 }
 
@@ -25,7 +33,7 @@ double WcsphStepper::cfl_step(const State& s, double courant) const {
   return courant * m_fluid.options().spacing / (m_options.sound_speed + max_fluid_speed(s));
 }
 
-StepSummary WcsphStepper::step(const State& s0, double h, State& s1) {
+StepSummary WcsphStepper::substep(const State& s0, double h, State& s1) {
   const auto t0 = Clock::now();
   StepSummary s;
   if (!prepare(s0.x, s)) return s;

@@ -15,6 +15,10 @@ struct WcsphOptions {
   /// A step whose largest relative density error (at its start) exceeds this fails with
   /// Status::Fatal: the fluid is being crushed, as it is beyond the CFL limit. > 0.
   double max_density_error = 0.5;
+  /// CFL number of the substeps a step is split into (SphStepper): each at most
+  /// courant dx / (c0 + max|v|), stable up to about 0.4. 0: steps of the caller's h, unsplit
+  /// (what the stability studies need to cross the limit); scenes default to 0.4. >= 0.
+  double courant = 0.0;
   OptionError validate() const;
 };
 
@@ -28,7 +32,8 @@ class WcsphStepper final : public SphStepper {
   using Options = WcsphOptions;
   WcsphStepper(const MassSpringSystem& system, Options options);
   const char* name() const override { return "wcsph"; }
-  StepSummary step(const State& s0, double h, State& s1) override;
+  StepSummary substep(const State& s0, double h, State& s1) override;
+  double cfl_limit(const State& s) const override { return cfl_step(s, m_options.courant); }
   const Options& options() const { return m_options; }
   /// The step courant * dx / (c0 + max|v|) at state s (s): the CFL condition of WCSPH
   /// (Monaghan 1992), stable for courant up to about 0.4.

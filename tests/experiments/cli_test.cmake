@@ -70,6 +70,19 @@ function(count_lines path var)
   set(${var} ${n} PARENT_SCOPE)
 endfunction()
 
+# What a run that stopped with exit 3 keeps: its log.csv with at least the row of step 0, and no
+# final.csv (which only a finished run writes).
+function(expect_failed_run_kept_its_log)
+  expect_file("${OUT}/log.csv")
+  count_lines("${OUT}/log.csv" n)
+  if(n LESS 2)
+    message(FATAL_ERROR "log.csv was not kept: ${n} lines${report}")
+  endif()
+  if(EXISTS "${OUT}/final.csv")
+    message(FATAL_ERROR "a failed run must not write final.csv${report}")
+  endif()
+endfunction()
+
 # The resolved scene without the lines that name where it was written (header comment, output.dir).
 function(resolved_body path var)
   file(READ "${path}" text)
@@ -151,14 +164,27 @@ elseif(CASE STREQUAL "diverge")
   endif()
   expect_contains("${err}" "log.csv" "stderr")
   expect_file("${OUT}/scene.toml")
-  expect_file("${OUT}/log.csv")
-  count_lines("${OUT}/log.csv" n)
-  if(n LESS 2)
-    message(FATAL_ERROR "log.csv was not kept: ${n} lines${report}")
+  expect_failed_run_kept_its_log()
+
+elseif(CASE STREQUAL "fluid_explode")
+  # WCSPH without CFL substeps at 25 times its CFL step: the fluid explodes, and the run stops
+  # with exit 3 naming the limit it crossed, keeping its log.
+  hooke_exec(run "${SCENE}" --out "${OUT}" --no-progress --set integrator.courant=0
+             --set time.dt=0.004 --set time.duration=0.5)
+  expect_rc(3)
+  if(NOT err MATCHES "^error: [^\n]*step [0-9]+ failed \\(t = [^\n]*method wcsph[^\n]*fatal: (CFL|density): ")
+    message(FATAL_ERROR "expected 'error: FILE: step N failed (t = ..., method wcsph ...): fatal: "
+                        "CFL: ...' or '... density: ...' on stderr${report}")
   endif()
-  if(EXISTS "${OUT}/final.csv")
-    message(FATAL_ERROR "a diverged run must not write final.csv${report}")
-  endif()
+  expect_contains("${err}" "integrator.courant" "stderr")
+  expect_failed_run_kept_its_log()
+
+elseif(CASE STREQUAL "fluid_info")
+  hooke_exec(info "${SCENE}")
+  expect_rc(0)
+  expect_contains("${out}" "fluid:      800 particles (2D, spacing 0.0125 m" "stdout")
+  expect_contains("${out}" "boundary:   " "stdout")
+  expect_contains("${out}" "CFL step:   " "stdout")
 
 elseif(CASE STREQUAL "diverge_ode")
   hooke_exec(run "${SCENE}" --out "${OUT}" --no-progress --set integrator.method=rk4

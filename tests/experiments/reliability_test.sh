@@ -2,8 +2,9 @@
 # End-to-end reliability checks of the hooke command, one CASE per CTest test:
 #   reliability_test.sh CASE HOOKE SCENES_DIR OUT
 # Cases:
-#   stop_resume  For rk4, implicit on pcg (warm start), bdf2 (multistep history) and
-#                implicit-midpoint on cholmod: a run stopped by --stop-after (exit 130, checkpoint
+#   stop_resume  For rk4, implicit on pcg (warm start), bdf2 (multistep history),
+#                implicit-midpoint on cholmod, and the 2D dam break by wcsph and iisph (warm
+#                start): a run stopped by --stop-after (exit 130, checkpoint
 #                written, no final.csv) and resumed (twice for bdf2: stop, resume with another
 #                --stop-after, resume) gives a final.csv identical byte for byte to an
 #                uninterrupted run, the same log.csv (every column but wall_time: no step missing
@@ -65,21 +66,19 @@ run() {  # run OUTDIR ARGS...: hooke run with stderr kept in $OUT/last.err; sets
 
 case "$CASE" in
 stop_resume)
-  cloth="$SCENES/hanging_cloth_16.toml"
-  common=(--set time.duration=0.1 --set output.every=7 --set output.png=false)
-  for cfg in "rk4" "implicit pcg" "bdf2 pcg" "implicit-midpoint cholmod"; do
-    set -- $cfg
-    args=("${common[@]}" --set integrator.method="$1")
-    [ $# -gt 1 ] && args+=(--set integrator.linear_solver="$2" --set time.dt=0.002)
-    name=${cfg// /-}
-    run x run "$cloth" --out "$OUT/$name-ref" "${args[@]}"
+  # stopped NAME SCENE ARGS...: an uninterrupted run against one stopped after step 13 (and for
+  # bdf2 again after 29) and resumed.
+  stopped() {
+    local name=$1 scene=$2
+    shift 2
+    run x run "$scene" --out "$OUT/$name-ref" "$@"
     expect_rc 0 $rc "$name: uninterrupted run"
-    run x run "$cloth" --out "$OUT/$name" "${args[@]}" --stop-after 13
+    run x run "$scene" --out "$OUT/$name" "$@" --stop-after 13
     expect_rc 130 $rc "$name: --stop-after 13"
     [ -f "$OUT/$name/checkpoint.bin" ] && [ ! -e "$OUT/$name/final.csv" ] ||
       fail "$name: a stopped run must leave checkpoint.bin and no final.csv"
     ok
-    if [ "$1" = bdf2 ]; then
+    if [ "${name%%-*}" = bdf2 ]; then
       run x resume "$OUT/$name" --stop-after 29
       expect_rc 130 $rc "$name: resume --stop-after 29"
     fi
@@ -92,6 +91,20 @@ stop_resume)
     [ "$(ls "$OUT/$name/frames" | wc -l)" = "$(ls "$OUT/$name-ref/frames" | wc -l)" ] ||
       fail "$name: frame count differs"
     ok
+  }
+  cloth="$SCENES/hanging_cloth_16.toml"
+  common=(--set time.duration=0.1 --set output.every=7 --set output.png=false)
+  for cfg in "rk4" "implicit pcg" "bdf2 pcg" "implicit-midpoint cholmod"; do
+    set -- $cfg
+    args=("${common[@]}" --set integrator.method="$1")
+    [ $# -gt 1 ] && args+=(--set integrator.linear_solver="$2" --set time.dt=0.002)
+    stopped "${cfg// /-}" "$cloth" "${args[@]}"
+  done
+  # The fluid methods, with CFL substeps: IISPH's checkpoint carries its warm start (the last
+  # pressures), and the neighbour lists depend on the positions alone.
+  for m in wcsph iisph; do
+    stopped "$m" "$SCENES/dam_break_2d.toml" --set time.duration=0.03 --set output.every=7 \
+      --set output.png=false --set integrator.method=$m
   done
   ;;
 signals)

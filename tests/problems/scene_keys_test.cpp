@@ -59,6 +59,18 @@ const char* kParticles =
     "[mesh]\ntype = 'particles'\npositions = [[0, 5, 0], [1, 5, 0], [0, 6, 0]]\n"
     "springs = [[0, 1, 100], [1, 2, 100]]\npins = [0]\n";
 
+/// A small 3D fluid with every [fluid] table (single tables, so that --set reaches their keys):
+/// a block of water in a tank, and an obstacle.
+const char* kFluid =
+    "[fluid]\nspacing = 0.02\n[fluid.block]\nlower = [0, 0, 0]\nupper = [0.1, 0.2, 0.1]\n"
+    "[fluid.tank]\nlower = [0, 0, 0]\nupper = [0.4, 0.3, 0.1]\n[fluid.obstacle]\n"
+    "lower = [0.3, 0, 0]\nupper = [0.34, 0.06, 0.1]\n[forces]\ngravity = [0, -9.81, 0]\n"
+    "[integrator]\nmethod = 'wcsph'\nsound_speed = 20\n";
+
+bool fluid_method(const std::string& variant) {
+  return !variant.empty() && has_method(variant) && method_info(variant).kind == MethodKind::Fluid;
+}
+
 /// The scene text and --set items under which `k` applies in `variant`.
 std::pair<std::string, std::vector<std::string>> setting(const SceneKey& k,
                                                          const std::string& variant) {
@@ -75,6 +87,9 @@ std::pair<std::string, std::vector<std::string>> setting(const SceneKey& k,
     }
   } else if (starts_with(k.name, "ode.")) {
     if (!variant.empty()) sets.push_back("ode.problem=" + variant);
+  } else if (starts_with(k.name, "fluid.") || fluid_method(variant)) {
+    text = kFluid;
+    if (!variant.empty()) sets.push_back("integrator.method=" + variant);
   } else {
     text = kParticles;
     if (!variant.empty()) sets.push_back("integrator.method=" + variant);

@@ -1,11 +1,16 @@
 // Claims of solver/sph/sph_stepper.* shared by every pressure method: a run gives the same bits
-// on one and two threads (each particle's sums run in its own neighbour order); the methods of
-// the registry, which know nothing of pressure, refuse a fluid.
+// on one and two threads (each particle's sums run in its own neighbour order); CFL substeps are
+// the steps taken one by one; the fluid methods of the registry step fluids only, and the other
+// methods, which know nothing of pressure, refuse a fluid.
 #include "hooke/sph/sph_stepper.hpp"
 
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
+#include <string>
+#include <vector>
 
 #include "hooke/registry.hpp"
 #include "hooke/sph/iisph.hpp"
@@ -52,17 +57,84 @@ TEST(SphStepper, SameBitsOnOneOrTwoThreads) {
 #endif
 }
 
-TEST(SphStepper, EveryRegisteredMethodRefusesAFluid) {
-  // The registry's methods would step the particles under gravity alone: they must say so.
+TEST(SphStepper, OnlyTheFluidMethodsStepAFluidAndTheyStepNothingElse) {
+  // The other methods would step the particles under gravity alone: they must say so.
   auto scene = test::tank_2d(0.01, 0.2, 0.2, 0.1, 0.1, FluidOptions{});
-  int refused = 0;
+  MassSpringSystem springs(Vec::Ones(2), std::vector<char>(2, 0));
+  springs.finalize();
+  int fluid_methods = 0, refused = 0;
   for (const auto& m : methods()) {
     const std::string why = method_unsupported(m.name, *scene.system);
-    EXPECT_NE(why.find("SPH"), std::string::npos) << m.name << ": '" << why << "'";
-    refused += !why.empty();
+    if (m.kind == MethodKind::Fluid) {
+      ++fluid_methods;
+      EXPECT_EQ(why, "") << m.name;
+      EXPECT_NE(method_unsupported(m.name, springs).find("has no fluid"), std::string::npos)
+          << m.name;
+      EXPECT_THROW(make_stepper(m.name, springs), std::invalid_argument) << m.name;
+    } else {
+      ++refused;
+      EXPECT_NE(why.find("fluid methods (" + fluid_method_names() + ")"), std::string::npos)
+          << m.name << ": '" << why << "'";
+    }
   }
-  EXPECT_EQ(refused, int(methods().size()));
+  EXPECT_EQ(fluid_methods, 2);
+  EXPECT_EQ(fluid_method_names(), "wcsph, iisph");
   EXPECT_GE(refused, 10);
+}
+
+TEST(SphStepper, CflSubstepsLandOnTheStepAndAreTheStepsTakenOneByOne) {
+  for (const char* method : {"wcsph", "iisph"}) {
+    SCOPED_TRACE(method);
+    // A column of water collapsing in a wide tank, moving after 40 steps.
+    auto scene = test::tank_2d(0.01, 0.4, 0.3, 0.1, 0.2, FluidOptions{});
+    auto warm = make(method, *scene.system);
+    ASSERT_EQ(test::run_fluid(*warm, scene.state, 2e-4, 40 * 2e-4).status, Status::Converged);
+    const State s0 = scene.state;
+    // The same method with substeps (courant 0.4) and without (each step as given).
+    std::unique_ptr<SphStepper> sub, single;
+    if (std::string(method) == "wcsph") {
+      WcsphOptions o;
+      o.sound_speed = 30;
+      single = std::make_unique<WcsphStepper>(*scene.system, o);
+      o.courant = 0.4;
+      sub = std::make_unique<WcsphStepper>(*scene.system, o);
+    } else {
+      IisphOptions o;
+      o.max_iterations = 1000;
+      single = std::make_unique<IisphStepper>(*scene.system, o);
+      o.courant = 0.4;
+      sub = std::make_unique<IisphStepper>(*scene.system, o);
+    }
+    const double h = 7.5 * sub->cfl_limit(s0);
+    State s1 = s0;
+    ASSERT_EQ(sub->step(s0, h, s1).status, Status::Converged);
+    EXPECT_EQ(s1.t, s0.t + h);
+    const int substeps = sub->last_fluid_stats().substeps;
+    EXPECT_GE(substeps, 8);
+    EXPECT_LE(substeps, 12);
+    // The same substeps one by one: the fewest equal pieces of the time left that the CFL step
+    // at each piece's start allows.
+    State from = s0, to = s0;
+    double done = 0.0;
+    int taken = 0;
+    double largest_error = 0.0;
+    while (true) {
+      const double remaining = h - done;
+      const double pieces = std::ceil(remaining / sub->cfl_limit(from) * (1.0 - 1e-12));
+      const double hs = pieces <= 1.0 ? remaining : remaining / pieces;
+      ASSERT_LE(hs, sub->cfl_limit(from) * (1.0 + 1e-12));
+      ASSERT_EQ(single->step(from, hs, to).status, Status::Converged);
+      largest_error = std::max(largest_error, single->last_fluid_stats().max_density_error);
+      ++taken;
+      if (pieces <= 1.0) break;
+      done += hs;
+      std::swap(from, to);
+    }
+    EXPECT_EQ(taken, substeps);
+    EXPECT_TRUE(to.x == s1.x);
+    EXPECT_TRUE(to.v == s1.v);
+    EXPECT_EQ(sub->last_fluid_stats().max_density_error, largest_error);
+  }
 }
 
 }  // namespace
