@@ -17,9 +17,13 @@
 // of the scene linearised at its initial state (experiments/natural_frequency.hpp, eigenvalues of
 // M^-1/2 K M^-1/2 by Lanczos); both are computed, not assumed.
 // Run:    hooke stability [--full] [--cases two_particle,...] [--methods rk4,...] [--out DIR]
+// Fluids: the 2D dam break (dam_break_2d) by WCSPH without CFL substeps over its speed of sound
+// c0 (the map's k for that case), against Monaghan's CFL step 0.4 dx / (c0 + sqrt(2 g H)); a run
+// fails when the stepper stops it (a particle moving more than the kernel support in a step, or a
+// density error above 50%).
 // Writes: DIR/stability.csv (case,label,method,k,omega_max,h_theory,h_stable,h_unstable,bound,
-//         runs,wall_s,reason) and, through experiments/plot/stability.py, DIR/stability_<case>.png
-//         and DIR/stability_<case>.md.
+//         runs,wall_s,reason,parameter) and, through experiments/plot/stability.py,
+//         DIR/stability_<case>.png and DIR/stability_<case>.md.
 #include "experiments/stability_map.hpp"
 
 #include <algorithm>
@@ -38,6 +42,7 @@
 #include "experiments/plot_script.hpp"
 #include "experiments/study_output.hpp"
 #include "experiments/trajectory.hpp"
+#include "hooke/forces/gravity.hpp"
 #include "hooke/integrators/stability.hpp"
 #include "hooke/registry.hpp"
 
@@ -53,7 +58,10 @@ std::vector<StabilityCase> stability_cases(bool full, const std::string& scenes_
               {{"springs.stiffness", 1.0}},
               1.0,
               1.0,
-              "two 1 kg particles on one spring, stretched 10% and released (omega = sqrt(2k/m))"};
+              "two 1 kg particles on one spring, stretched 10% and released (omega = sqrt(2k/m))",
+              false,
+              {},
+              "k (N/m)"};
   cases[1] = {"hanging_cloth",
               scenes_dir + "/hanging_cloth_16.toml",
               cloth_sets,
@@ -64,14 +72,50 @@ std::vector<StabilityCase> stability_cases(bool full, const std::string& scenes_
               0.0,
               "1 kg cloth, 1 m x 1 m, " + cloth_n + " x " + cloth_n +
                   " particles, two corners pinned, gravity and drag; structural k, shear k/5, "
-                  "flexion k/50"};
+                  "flexion k/50",
+              false,
+              {},
+              "k (N/m)"};
   cases[2] = cases[1];
   cases[2].name = "stiff_flexion";
   cases[2].stiffness[2].second = 1.0;
   cases[2].description =
       "the hanging cloth with flexion springs as stiff as the structural ones (k, k/5, k)";
+  StabilityCase dam;
+  dam.name = "dam_break_2d";
+  dam.scene = scenes_dir + "/dam_break_2d.toml";
+  dam.sets = {"integrator.courant=0"};  // steps of h unsplit: the CFL limit is what is measured
+  dam.stiffness = {{"integrator.sound_speed", 1.0}};
+  dam.duration = 0.05;
+  dam.description =
+      "2D dam break (a = 0.25 m, 800 particles at dx = a / 20), WCSPH without CFL substeps; k is "
+      "the speed of sound c0 (m/s), the Tait stiffness B = rho0 c0^2 / 7";
+  dam.fluid = true;
+  dam.k_values =
+      full ? std::vector<double>{10, 20, 40, 80, 160, 320, 640} : std::vector<double>{10, 40, 160};
+  dam.parameter = "c0 (m/s)";
+  cases.push_back(dam);
   return cases;
 }
+
+namespace {
+/// Monaghan's CFL step for WCSPH at courant 0.4 with speed of sound c0 (m/s): 0.4 dx / (c0 + v),
+/// v = sqrt(2 g H) the speed of a fall from the fluid's height H in the scene's initial state.
+double fluid_cfl_step(const Scene& scene, double c0) {
+  const FluidModel& fluid = *scene.system->fluid();
+  double lo = INFINITY, hi = -INFINITY;
+  for (Index i = 0; i < fluid.num_fluid(); ++i) {
+    lo = std::min(lo, scene.initial.x[3 * i + 1]);
+    hi = std::max(hi, scene.initial.x[3 * i + 1]);
+  }
+  double g = 0.0;
+  for (const auto& f : scene.system->forces())
+    if (const auto* gravity = dynamic_cast<const Gravity*>(f.get()))
+      g = gravity->acceleration().norm();
+  const double dx = fluid.options().spacing;
+  return 0.4 * dx / (c0 + std::sqrt(2.0 * g * (hi - lo + dx)));
+}
+}  // namespace
 
 Scene load_stability_scene(const StabilityCase& c, const StudyMethod& m, double k, double h,
                            double duration) {
@@ -144,8 +188,11 @@ int run_stability(const StabilityOptions& options, const std::string& scenes_dir
   const auto start = Clock::now();
   const std::vector<StabilityCase> cases =
       select_cases(stability_cases(options.full, scenes_dir), options.cases);
-  std::vector<StudyMethod> study =
-      available_study_methods(study_methods(), options.methods, std::cerr);
+  // The mass-spring methods of the studies, and the fluid method whose stability depends on a
+  // speed of sound (IISPH's does not: its step is bounded by the flow's speed alone).
+  std::vector<StudyMethod> all = study_methods();
+  all.push_back({"wcsph", "wcsph", {}});
+  std::vector<StudyMethod> study = available_study_methods(all, options.methods, std::cerr);
   if (options.methods.empty())
     study.erase(std::remove_if(study.begin(), study.end(),
                                [](const StudyMethod& m) { return !m.in_stability_map; }),
@@ -157,20 +204,35 @@ int run_stability(const StabilityOptions& options, const std::string& scenes_dir
   StudyOutput out(options.out_dir, "stability", {"stability.csv"});
   OutputFile& csv = out.file("stability.csv");
   csv.print(
-      "case,label,method,k,omega_max,h_theory,h_stable,h_unstable,bound,runs,wall_s,reason\n");
-  const std::size_t rows = cases.size() * ks.size() * study.size();
-  std::size_t row = 0;
+      "case,label,method,k,omega_max,h_theory,h_stable,h_unstable,bound,runs,wall_s,reason,"
+      "parameter\n");
+  // The rows: each case with its k values and the methods of its kind.
+  auto case_ks = [&](const StabilityCase& c) {
+    return options.k.empty() && !c.k_values.empty() ? c.k_values : ks;
+  };
+  auto runs_case = [](const StabilityCase& c, const StudyMethod& m) {
+    return (method_info(m.method).kind == MethodKind::Fluid) == c.fluid;
+  };
+  std::size_t rows = 0, row = 0;
+  for (const auto& c : cases)
+    for (const auto& m : study) rows += runs_case(c, m) ? case_ks(c).size() : 0;
   const StabilitySettings& s = options.settings;
   for (const auto& c : cases) {
     std::set<std::string> skipped;  // methods that cannot run this case at all
-    for (double k : ks) {
-      const Scene base = load_stability_scene(c, {"symplectic-euler", "symplectic-euler", {}}, k,
-                                              1e-3, c.duration);
-      const double omega = largest_natural_frequency(*base.system, base.initial);
+    const auto first = std::find_if(study.begin(), study.end(),
+                                    [&](const StudyMethod& m) { return runs_case(c, m); });
+    if (first == study.end()) continue;
+    for (double k : case_ks(c)) {
+      const Scene base = load_stability_scene(
+          c, c.fluid ? *first : StudyMethod{"symplectic-euler", "symplectic-euler", {}}, k, 1e-3,
+          c.duration);
+      const double omega = c.fluid ? NAN : largest_natural_frequency(*base.system, base.initial);
       for (const auto& m : study) {
-        if (skipped.count(m.label)) continue;
+        if (skipped.count(m.label) || !runs_case(c, m)) continue;
         double h_theory = NAN;
-        if (method_info(m.method).kind == MethodKind::Explicit) {
+        if (c.fluid) {
+          h_theory = fluid_cfl_step(base, k);
+        } else if (method_info(m.method).kind == MethodKind::Explicit) {
           auto stepper = make_explicit_stepper(m.method);
           h_theory = imaginary_axis_limit(*stepper) / omega;
         }
@@ -185,9 +247,10 @@ int run_stability(const StabilityOptions& options, const std::string& scenes_dir
         const char* bound = b.h_stable == 0.0          ? "below"
                             : std::isinf(b.h_unstable) ? "above"
                                                        : "bracketed";
-        csv.print("%s,%s,%s,%.6g,%.9g,%.9g,%.9g,%.9g,%s,%d,%.4g,%s\n", c.name.c_str(),
+        csv.print("%s,%s,%s,%.6g,%.9g,%.9g,%.9g,%.9g,%s,%d,%.4g,%s,%s\n", c.name.c_str(),
                   m.label.c_str(), m.method.c_str(), k, omega, h_theory, b.h_stable, b.h_unstable,
-                  bound, b.runs, b.wall, csv_quoted(b.why).c_str());
+                  bound, b.runs, b.wall, csv_quoted(b.why).c_str(),
+                  csv_quoted(c.parameter).c_str());
         csv.flush();
         std::fprintf(stderr,
                      "stability: %-14s k = %-8.3g %-22s h_stable = %-10.4g (theory %-10.4g) %2d "
@@ -225,11 +288,12 @@ Command add_stability_command(CLI::App& app) {
       "theoretical explicit limits; writes stability.csv and stability_<case>.png");
   cmd->add_flag("--full", a->stab.full, "paper size: 16 x 16 cloth, k in half decades");
   add_list(cmd, "--cases", a->cases,
-           "comma-separated: two_particle,hanging_cloth,stiff_flexion (default: all)");
+           "comma-separated: two_particle,hanging_cloth,stiff_flexion,dam_break_2d (default: all)");
   add_list(cmd, "--methods", a->methods,
            "comma-separated study labels or method names (default: all)");
   add_list(cmd, "--k", a->k,
-           "comma-separated stiffness values in N/m (default 1e1..1e7 by decades)");
+           "comma-separated stiffness values in N/m, for dam_break_2d speeds of sound in m/s "
+           "(default 1e1..1e7 by decades; dam_break_2d: 10, 40, 160 m/s)");
   cmd->add_option("--h-min", st.h_min, "smallest step tried (s, default 1e-5)");
   cmd->add_option("--h-max", st.h_max, "largest step tried (s, default 1e-1)");
   cmd->add_option("--bisections", st.bisections, "bisections of the bracket in log h (default 4)");
@@ -248,7 +312,8 @@ Command add_stability_command(CLI::App& app) {
       "exceeds "
       "strain-bound (1 for two_particle: its particles meet). h is scanned down from h-max by half "
       "decades to the first stable run, then the "
-      "bracket is bisected. The theoretical explicit limit is y / omega_max (see `hooke info`).");
+      "bracket is bisected. The theoretical explicit limit is y / omega_max (see `hooke info`); "
+      "for dam_break_2d (WCSPH, k = c0) the CFL step 0.4 dx / (c0 + sqrt(2 g H)).");
   return {cmd, [a] {
             a->stab.cases = split_list(a->cases);
             a->stab.methods = split_list(a->methods);

@@ -21,11 +21,20 @@ struct StabilityCase {
   /// 1: the particles meet (l = 0), which its exact motion (strain <= 0.1) never does.
   double strain_bound = 0.0;
   std::string description;  ///< one line for tables and the paper
+  /// A [fluid] case: the map's k is then the speed of sound c0 (m/s) of the fluid methods (only
+  /// they run it; the other cases run only the mass-spring methods), and the theory the CFL step
+  /// 0.4 dx / (c0 + sqrt(2 g H)) for the fluid's height H.
+  bool fluid = false;
+  /// The case's own values of k (empty: the map's); --k replaces them.
+  std::vector<double> k_values;
+  /// What k is, with its unit, for stability.csv's parameter column and the plots.
+  std::string parameter = "k (N/m)";
 };
 
 /// The shipped cases: the two-particle spring (springs.stiffness = k, strain bound 1), the hanging
 /// cloth (hanging_cloth_16 at 8 x 8 particles, or 16 x 16 if full; structural k, shear k/5, flexion
-/// k/50) and the hard case, the same cloth with flexion springs as stiff as the structural ones.
+/// k/50), the hard case, the same cloth with flexion springs as stiff as the structural ones, and
+/// the 2D dam break by WCSPH without CFL substeps, over its speed of sound.
 /// scenes_dir holds the shipped scene files.
 std::vector<StabilityCase> stability_cases(bool full, const std::string& scenes_dir);
 
@@ -92,7 +101,8 @@ struct StabilityOptions {
 };
 
 /// `hooke stability`: the map for every case, method and k; writes OUT/stability.csv (one row per
-/// case, method and k) and runs experiments/plot/stability.py for OUT/stability_<case>.png.
+/// case, method and k; its parameter column says what k is) and runs experiments/plot/stability.py
+/// for OUT/stability_<case>.png.
 int run_stability(const StabilityOptions& options, const std::string& scenes_dir);
 
 }  // namespace hooke

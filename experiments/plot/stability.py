@@ -2,7 +2,8 @@
 
 Usage: /usr/bin/python3 experiments/plot/stability.py OUT_DIR
 Reads OUT_DIR/stability.csv; writes, per case, OUT_DIR/stability_<case>.png (largest stable h
-against k, log-log, one line per method, the theoretical explicit limits y / omega_max dashed) and
+against k, log-log, one line per method, the theoretical explicit limits y / omega_max dashed; for
+a fluid case k is the speed of sound c0 and the dashed line the CFL step) and
 OUT_DIR/stability_<case>.md (the same numbers as a table: k across, methods down).
 """
 import math
@@ -18,6 +19,9 @@ def main(out_dir):
     labels = [r["label"] for r in rows]
     for case in dict.fromkeys(r["case"] for r in rows):
         sub = [r for r in rows if r["case"] == case]
+        # What k is (stability.csv's parameter column): a stiffness, or a fluid's speed of sound.
+        parameter = sub[0].get("parameter") or "k (N/m)"
+        fluid = parameter.startswith("c0")
         fig, ax = plt.subplots(figsize=(10, 5.5))
         order = list(dict.fromkeys(r["label"] for r in sub))
         h_lo = min((num(r["h_unstable"]) for r in sub if num(r["h_unstable"]) > 0), default=1e-5)
@@ -42,8 +46,9 @@ def main(out_dir):
                     ax.plot(num(r["k"]), num(r["h_unstable"]) / 2, marker="v", ms=10, mfc="none", color=st["color"])
             theory = [num(r["h_theory"]) for r in pts]
             if any(t > 0 for t in theory):
+                what = "CFL 0.4 dx / (c0 + v)" if fluid else "theory y / omega_max"
                 ax.plot(k, [t if t > 0 else math.nan for t in theory], "--", lw=2.2, alpha=0.55,
-                        color=st["color"], label=f"{label}: theory y / omega_max")
+                        color=st["color"], label=f"{label}: {what}")
         h_max = max(num(r["h_stable"]) for r in sub)
         ax.axhline(h_max, color="0.5", lw=0.8, ls=":")
         note = ""
@@ -53,7 +58,7 @@ def main(out_dir):
             fig.text(0.01, 0.01, "\n".join(textwrap.wrap(note, 160)), fontsize=7, ha="left", va="bottom")
         ax.set_xscale("log")
         ax.set_yscale("log")
-        ax.set_xlabel("stiffness k (N/m)")
+        ax.set_xlabel("speed of sound " + parameter if fluid else "stiffness " + parameter)
         ax.set_ylabel("largest stable time step h (s)")
         ax.set_title(f"Stability map: {case}  (hollow triangles: stable at the largest / unstable at the smallest h tried)",
                      fontsize=9)
@@ -79,10 +84,11 @@ def main(out_dir):
                     t = num(r["h_theory"])
                     cells.append(g3(num(r["h_stable"])) + (f" ({g3(t)})" if t > 0 else ""))
             table.append([label] + cells)
-        omega = [g3(num(next(x for x in sub if x["k"] == kk)["omega_max"])) for kk in ks]
-        table.append(["omega_max (rad/s)"] + omega)
+        if not fluid:  # a fluid has no natural frequency: its limit is the CFL step (in brackets)
+            omega = [g3(num(next(x for x in sub if x["k"] == kk)["omega_max"])) for kk in ks]
+            table.append(["omega_max (rad/s)"] + omega)
         write_text(os.path.join(out_dir, f"stability_{case}.md"),
-                   markdown_table(["method \\ k (N/m)"] + [g3(num(kk)) for kk in ks], table))
+                   markdown_table([f"method \\ {parameter}"] + [g3(num(kk)) for kk in ks], table))
     print(f"stability.py: wrote {out_dir}/stability_*.png and stability_*.md")
 
 

@@ -542,7 +542,7 @@ elseif(CASE STREQUAL "stability")
              --bisections 3 --out "${OUT}")
   expect_rc(0)
   expect_csv("${OUT}/stability.csv"
-             "case,label,method,k,omega_max,h_theory,h_stable,h_unstable,bound,runs,wall_s,reason" 3)
+             "case,label,method,k,omega_max,h_theory,h_stable,h_unstable,bound,runs,wall_s,reason,parameter" 3)
   file(READ "${OUT}/stability.csv" text)
   expect_contains("${text}" "two_particle,symplectic-euler,symplectic-euler,10000,141.42" "stability.csv")
   expect_contains("${text}" ",bracketed," "stability.csv")
