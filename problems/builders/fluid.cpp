@@ -87,6 +87,32 @@ double tank_count(const SceneBox& inside, double dx, int dimension, int layers) 
   return outer - inner;
 }
 
+/// Refuses (MemoryBudgetError at fluid.spacing) a fluid whose run would not fit the memory
+/// budget, from the particle counts of its boxes, before anything of that size is allocated.
+void check_fluid_size(TableReader& fluid, const FluidOptions& o,
+                      const std::vector<SceneBox>& blocks, const std::optional<SceneBox>& tank,
+                      int tank_layers, const std::vector<SceneBox>& obstacles) {
+  const int d = o.dimension;
+  const double dx = o.spacing;
+  double num_fluid = 0.0, num_boundary = 0.0;
+  for (const SceneBox& b : blocks) num_fluid += lattice_count(b, dx, d);
+  if (tank) num_boundary += tank_count(*tank, dx, d, tank_layers);
+  for (const SceneBox& b : obstacles) num_boundary += lattice_count(b, dx, d);
+  const double particles = num_fluid + num_boundary;
+  const double bytes = fluid_run_bytes(num_fluid, num_boundary, d, o.support_factor);
+  const double limit = scene_memory_limit();
+  if (particles > 2147483647.0 || bytes > limit) {
+    std::ostringstream os;
+    os.precision(3);
+    os << "a fluid of " << num_fluid << " particles with " << num_boundary
+       << " boundary particles would need about " << bytes / kGiB
+       << " GiB, above the memory budget of " << limit / kGiB
+       << " GiB (default: the smaller of 64 GiB and physical memory; HOOKE_MAX_MEMORY_GIB sets it)";
+    if (particles > 2147483647.0) os << " and above 2^31 - 1 particles";
+    throw MemoryBudgetError(fluid.file(), fluid.path("spacing"), os.str(), particles, 0.0, bytes);
+  }
+}
+
 }  // namespace
 
 double fluid_run_bytes(double num_fluid, double num_boundary, int dimension,
@@ -166,24 +192,7 @@ void build_fluid(TableReader& fluid, const Vec3& gravity, Scene& scene) {
                              " .. " + fmt(ob.upper, d) + ": water would start inside a solid");
   }
 
-  // The memory of a run, before anything of that size is allocated.
-  double num_fluid = 0.0, num_boundary = 0.0;
-  for (const SceneBox& b : blocks) num_fluid += lattice_count(b, dx, d);
-  if (tank) num_boundary += tank_count(*tank, dx, d, tank_layers);
-  for (const SceneBox& b : obstacles) num_boundary += lattice_count(b, dx, d);
-  const double particles = num_fluid + num_boundary;
-  const double bytes = fluid_run_bytes(num_fluid, num_boundary, d, o.support_factor);
-  const double limit = scene_memory_limit();
-  if (particles > 2147483647.0 || bytes > limit) {
-    std::ostringstream os;
-    os.precision(3);
-    os << "a fluid of " << num_fluid << " particles with " << num_boundary
-       << " boundary particles would need about " << bytes / kGiB
-       << " GiB, above the memory budget of " << limit / kGiB
-       << " GiB (default: the smaller of 64 GiB and physical memory; HOOKE_MAX_MEMORY_GIB sets it)";
-    if (particles > 2147483647.0) os << " and above 2^31 - 1 particles";
-    throw MemoryBudgetError(fluid.file(), fluid.path("spacing"), os.str(), particles, 0.0, bytes);
-  }
+  check_fluid_size(fluid, o, blocks, tank, tank_layers, obstacles);
 
   std::vector<Vec3> water, boundary;
   for (const SceneBox& b : blocks) {
