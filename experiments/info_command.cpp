@@ -39,7 +39,7 @@ void print_fluid_info(const Scene& scene, std::ostream& out) {
   out << "fluid:      " << nf << " particles (" << o.dimension << "D, spacing " << o.spacing
       << " m, rest density " << o.rest_density << " kg/m^3, " << fluid.particle_mass()
       << " kg each)\n";
-  out << "boundary:   " << nb << " particles (tank walls and obstacles, Akinci et al. 2012)\n";
+  out << "boundary:   " << nb << " particles (tank walls and obstacles, Adami et al. 2012)\n";
   out << "kernel:     " << to_string(o.kernel) << ", support " << fluid.support() << " m ("
       << o.support_factor << " spacings); viscosity " << o.viscosity << " m^2/s\n";
   out << "forces:    ";

@@ -899,7 +899,8 @@ void add_xpbd_keys(std::vector<SceneKey>& t) {
 void add_fluid_keys(std::vector<SceneKey>& t) {
   auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   const std::string layers =
-      "layers of boundary particles (Akinci et al. 2012 volumes) inside its surface";
+      "layers of boundary particles (the dummy particles of Adami et al. 2012, mass rho0 "
+      "dx^dimension) inside its surface, at least ceil(fluid.support_factor)";
   add(K("fluid.dimension", T::Integer)
           .def("3")
           .between(2, 3)
@@ -950,10 +951,11 @@ void add_fluid_keys(std::vector<SceneKey>& t) {
           .meaning("upper corner of the inside of the tank (the walls' height is its y)"));
   add(K("fluid.tank.layers", T::Integer)
           .computed("ceil(fluid.support_factor)")
-          .between(1, 10)
+          .between(2, 10)
           .example("3")
-          .meaning("layers of boundary particles (Akinci et al. 2012 volumes) in the walls and "
-                   "floor"));
+          .meaning("layers of boundary particles (the dummy particles of Adami et al. 2012, mass "
+                   "rho0 dx^dimension) in the walls and floor, at least "
+                   "ceil(fluid.support_factor)"));
   add(K("fluid.obstacle.lower", T::Vector3)
           .unit("m")
           .example("[0.3, 0, 0]")
@@ -964,7 +966,7 @@ void add_fluid_keys(std::vector<SceneKey>& t) {
           .meaning("upper corner of the solid box"));
   add(K("fluid.obstacle.layers", T::Integer)
           .computed("ceil(fluid.support_factor)")
-          .between(1, 10)
+          .between(2, 10)
           .example("3")
           .meaning(layers + " (all of it when thinner)"));
 }

@@ -76,6 +76,17 @@ double lattice_count(const SceneBox& b, double dx, int dimension) {
   return n;
 }
 
+/// `layers` of a tank or obstacle: the walls' dummy particles must cover the kernel's support
+/// (FluidModel), so at least ceil(support_factor).
+int read_layers(TableReader& t, int least, double support_factor) {
+  const int layers = int(t.integer("layers", least, 2, 10));
+  if (layers < least)
+    t.fail("layers", std::to_string(layers) + " layers are thinner than the kernel's support (" +
+                         fmt(support_factor) + " spacings): at least " + std::to_string(least) +
+                         " are needed");
+  return layers;
+}
+
 /// The same box grown by `layers` cells on every side but the top (+y) in the dimension's axes.
 double tank_count(const SceneBox& inside, double dx, int dimension, int layers) {
   double outer = 1.0, inner = 1.0;
@@ -136,8 +147,9 @@ void build_fluid(TableReader& fluid, const Vec3& gravity, Scene& scene) {
   fluid.check(o.validate());
   const int d = o.dimension;
   const double dx = o.spacing;
-  // Layers of boundary particles: enough to fill the kernel's support seen from the first fluid
-  // row (one spacing from the first layer).
+  // Layers of boundary particles: at least enough to fill the kernel's support seen from the
+  // first fluid row (one spacing from the first layer), as the walls' dummy particles of mass
+  // rho0 dx^d assume (FluidModel).
   const int default_layers = int(std::ceil(o.support_factor - 1e-9));
 
   std::vector<TableReader> block_tables = fluid.tables("block");
@@ -155,14 +167,14 @@ void build_fluid(TableReader& fluid, const Vec3& gravity, Scene& scene) {
   int tank_layers = default_layers;
   if (auto t = fluid.table("tank")) {
     tank = read_box(*t, d, dx, fluid.path("spacing"), "tank's inside", z_plane);
-    tank_layers = int(t->integer("layers", default_layers, 1, 10));
+    tank_layers = read_layers(*t, default_layers, o.support_factor);
     t->finish();
   }
   std::vector<SceneBox> obstacles;
   std::vector<int> obstacle_layers;
   for (TableReader& t : fluid.tables("obstacle")) {
     obstacles.push_back(read_box(t, d, dx, fluid.path("spacing"), "obstacle", z_plane));
-    obstacle_layers.push_back(int(t.integer("layers", default_layers, 1, 10)));
+    obstacle_layers.push_back(read_layers(t, default_layers, o.support_factor));
     t.finish();
   }
 

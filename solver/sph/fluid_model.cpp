@@ -1,5 +1,6 @@
 #include "hooke/sph/fluid_model.hpp"
 
+#include <algorithm>
 #include <cmath>
 
 namespace hooke {
@@ -24,28 +25,13 @@ OptionError FluidOptions::validate() const {
   return {};
 }
 
-FluidModel::FluidModel(FluidOptions options, Index num_fluid, ConstRef boundary_x)
+FluidModel::FluidModel(FluidOptions options, Index num_fluid, Index num_boundary)
     : m_options(options), m_num_fluid(num_fluid) {
   const OptionError e = m_options.validate();
   HOOKE_ASSERT(e.ok(), e.message);
   HOOKE_ASSERT(num_fluid >= 1, num_fluid << " fluid particles");
-  HOOKE_ASSERT(boundary_x.size() % 3 == 0, "boundary positions of size " << boundary_x.size());
-  const Index nb = boundary_x.size() / 3;
-  m_psi.resize(nb);
-  if (nb == 0) return;
-  NeighbourSearch search(support());
-  HOOKE_ASSERT(search.update(boundary_x, nb) == Status::Converged,
-               "boundary particles: " << search.error());
-  with_kernel([&](const auto& kernel) {
-    for (Index b = 0; b < nb; ++b) {
-      double sum = kernel.W0();
-      const Vec3 xb = position(boundary_x, b);
-      for (const int* k = search.begin(b); k != search.end(b); ++k)
-        sum += kernel.W((xb - position(boundary_x, *k)).norm());
-      m_psi[b] = m_options.rest_density / sum;
-    }
-    return 0;
-  });
+  HOOKE_ASSERT(num_boundary >= 0, num_boundary << " boundary particles");
+  m_psi = Vec::Constant(num_boundary, particle_mass());
 }
 
 double FluidModel::particle_mass() const {
@@ -75,19 +61,68 @@ void FluidModel::compute_density(const NeighbourSearch& nb, ConstRef x, ConstRef
 
 void FluidModel::add_pressure_acceleration(const NeighbourSearch& nb, ConstRef x, ConstRef masses,
                                            ConstRef rho, ConstRef p, VecRef a) const {
+  const double inv_rho0_2 = 1.0 / (rest_density() * rest_density());
   with_kernel([&](const auto& kernel) {
     parallel_for(m_num_fluid, kParallelParticles, [&](long long i) {
       const Vec3 xi = position(x, i);
       const double qi = p[i] / (rho[i] * rho[i]);
-      Vec3 ai = Vec3::Zero();
+      Vec3 ai = Vec3::Zero(), wall_grad = Vec3::Zero();
+      double sum_w = kernel.W0(), sum_wp = kernel.W0() * p[i];
       for (const int* it = nb.begin(i); it != nb.end(i); ++it) {
         const Index j = *it;
         const Vec3 xij = xi - position(x, j);
-        const Vec3 g = kernel.gradW(xij, xij.norm());
-        if (j < m_num_fluid)
+        const double r = xij.norm();
+        const Vec3 g = kernel.gradW(xij, r);
+        if (j < m_num_fluid) {
           ai -= masses[j] * (qi + p[j] / (rho[j] * rho[j])) * g;
-        else
-          ai -= m_psi[j - m_num_fluid] * qi * g;
+          const double w = kernel.W(r);
+          sum_w += w;
+          sum_wp += w * p[j];
+        } else {
+          wall_grad += m_psi[j - m_num_fluid] * g;
+        }
+      }
+      // The walls' mirrored pressure: the Shepard average of the fluid's around i.
+      ai -= (qi + sum_wp / sum_w * inv_rho0_2) * wall_grad;
+      a.segment<3>(3 * i) += ai;
+    });
+    return 0;
+  });
+}
+
+void FluidModel::add_wall_support(const NeighbourSearch& nb, ConstRef x, ConstRef rho,
+                                  ConstRef body, VecRef a) const {
+  if (num_boundary() == 0) return;
+  const double inv_rho0_2 = 1.0 / (rest_density() * rest_density());
+  with_kernel([&](const auto& kernel) {
+    parallel_for(m_num_fluid, kParallelParticles, [&](long long i) {
+      const Vec3 xi = position(x, i), gi = position(body, i);
+      // The hydrostatic part of the pressure at x_i extrapolated from the fluid around it,
+      // sum_j w_ij rho_j g . (x_i - x_j) (the pressures' part is add_pressure_acceleration's).
+      double sum_w = kernel.W0(), sum_wh = 0.0;
+      bool near_wall = false;
+      for (const int* it = nb.begin(i); it != nb.end(i); ++it) {
+        const Index j = *it;
+        if (j >= m_num_fluid) {
+          near_wall = true;
+          continue;
+        }
+        const Vec3 xij = xi - position(x, j);
+        const double w = kernel.W(xij.norm());
+        sum_w += w;
+        sum_wh += w * rho[j] * gi.dot(xij);
+      }
+      if (!near_wall) return;
+      const double at_i = sum_wh / sum_w;
+      Vec3 ai = Vec3::Zero();
+      for (const int* it = nb.begin(i); it != nb.end(i); ++it) {
+        const Index j = *it;
+        if (j < m_num_fluid) continue;
+        const Vec3 xij = xi - position(x, j);
+        // ... and on to the wall particle: + rho_i g . (x_b - x_i); a wall never pulls.
+        const double rise = std::max(0.0, at_i - rho[i] * gi.dot(xij));
+        if (rise > 0.0)
+          ai -= (m_psi[j - m_num_fluid] * rise * inv_rho0_2) * kernel.gradW(xij, xij.norm());
       }
       a.segment<3>(3 * i) += ai;
     });

@@ -32,11 +32,23 @@ struct FluidOptions {
 
 /// A fluid of particles with static boundary particles, as smoothed particle hydrodynamics
 /// models it (Monaghan 2005, "Smoothed particle hydrodynamics", Rep. Prog. Phys. 68). The
-/// particles of a system are ordered: [0, num_fluid) fluid, [num_fluid, n) boundary. A
-/// boundary particle b carries the Akinci et al. 2012 ("Versatile rigid-fluid coupling for
-/// incompressible SPH", ACM TOG 31(4), eqs. 4-5) mass psi_b = rho0 / sum_k W_bk over the boundary
-/// particles k around it (itself included), computed once from its rest position: a sampling
-/// of any density then contributes rho0 per unit of covered kernel.
+/// particles of a system are ordered: [0, num_fluid) fluid, [num_fluid, n) boundary. The
+/// boundary particles are the dummy particles of Adami, Hu and Adams 2012 ("A generalized wall
+/// boundary condition for smoothed particle hydrodynamics", J. Comput. Phys. 231): solid walls
+/// sampled at the fluid's spacing, at least as thick as the kernel's support, each of mass
+/// psi_b = rho0 dx^d, so that a fluid particle next to a wall sees a full kernel of mass at rest
+/// density. They take part in the density and continuity sums like fluid at rest, and push with
+/// the pressure of Adami et al. (eq. 27) extrapolated from the fluid around the particle they push
+/// on: p_b = p~_i + max(0, h_i + rho_i a_i . (x_b - x_i)), where p~_i = sum_j W_ij p_j / sum_j W_ij
+/// is the Shepard average of the fluid's pressures around i (i included), h_i = sum_j W_ij rho_j
+/// a_i . (x_i - x_j) / sum_j W_ij carries that average hydrostatically to x_i, and a_i is i's body
+/// acceleration (gravity): the fluid's pressure mirrored into the wall (add_pressure_acceleration)
+/// plus its hydrostatic rise into a wall beneath (add_wall_support). Still water then rests on a
+/// floor with the hydrostatic pressure down to the first row. (The one-term wall force of Akinci
+/// et al. 2012, psi_b p_i / rho_i^2, is the variational one but holds the water up only with the
+/// first row's pressure some 70% above rho0 g H, and slows a dam break's front by 5%; mirroring
+/// p_i itself rather than its Shepard average pumps energy into the first row until still water
+/// at Monaghan's alpha = 0.02 boils.)
 ///
 /// The SPH sums (density, pressure and viscous accelerations, the density change of a velocity
 /// field) are here, shared by the pressure methods (wcsph.hpp, iisph.hpp). Each reads a
@@ -45,9 +57,9 @@ struct FluidOptions {
 /// depend on the thread count.
 class FluidModel {
  public:
-  /// num_fluid: fluid particles (>= 1); boundary_x: the 3 nb positions of the boundary
-  /// particles (m), nb >= 0. Throws InternalError if the options are not valid.
-  FluidModel(FluidOptions options, Index num_fluid, ConstRef boundary_x);
+  /// num_fluid: fluid particles (>= 1); num_boundary: boundary particles (>= 0). Throws
+  /// InternalError if the options are not valid.
+  FluidModel(FluidOptions options, Index num_fluid, Index num_boundary);
 
   const FluidOptions& options() const { return m_options; }
   int dimension() const { return m_options.dimension; }
@@ -59,23 +71,30 @@ class FluidModel {
   double rest_density() const { return m_options.rest_density; }
   /// rho0 dx^d (kg): the mass of a fluid particle of the regular sampling.
   double particle_mass() const;
-  /// psi_b (kg) of each boundary particle, nb vector.
+  /// psi_b = rho0 dx^d (kg) of each boundary particle, nb vector.
   const Vec& boundary_psi() const { return m_psi; }
 
   /// rho_i = sum_j m_j W_ij (fluid, itself included) + sum_b psi_b W_ib, for i < num_fluid.
   /// x: 3n positions; masses: n; rho: at least num_fluid entries (kg/m^3).
   void compute_density(const NeighbourSearch& nb, ConstRef x, ConstRef masses, VecRef rho) const;
-  /// a_i += -sum_j m_j (p_i / rho_i^2 + p_j / rho_j^2) gradW_ij - sum_b psi_b p_i / rho_i^2
-  /// gradW_ib (the symmetric, momentum-conserving gradient; boundary as in Akinci et al. 2012,
-  /// eq. 10), for fluid i. a: 3n; rho, p: num_fluid entries (Pa).
+  /// a_i += -sum_j m_j (p_i / rho_i^2 + p_j / rho_j^2) gradW_ij - sum_b psi_b (p_i / rho_i^2 +
+  /// p~_i / rho0^2) gradW_ib: the symmetric, momentum-conserving gradient, with the walls at the
+  /// fluid's Shepard-averaged pressure p~_i around i (rho_b = rho0), for fluid i. a: 3n; rho, p:
+  /// num_fluid entries (Pa).
   void add_pressure_acceleration(const NeighbourSearch& nb, ConstRef x, ConstRef masses,
                                  ConstRef rho, ConstRef p, VecRef a) const;
+  /// a_i += -sum_b psi_b max(0, h_i + rho_i a_i . (x_b - x_i)) / rho0^2 gradW_ib: the rest of the
+  /// walls' push, the hydrostatic rise of their pressure over p~_i (class comment) under the body
+  /// accelerations `body` (3n). Independent of the fluid's pressures, so implicit methods count
+  /// it with the other non-pressure accelerations.
+  void add_wall_support(const NeighbourSearch& nb, ConstRef x, ConstRef rho, ConstRef body,
+                        VecRef a) const;
   /// a_i += the viscous acceleration of FluidOptions::viscosity (nothing if it is 0).
   void add_viscous_acceleration(const NeighbourSearch& nb, ConstRef x, ConstRef v, ConstRef masses,
                                 ConstRef rho, VecRef a) const;
   /// div_i = sum_j m_j (u_i - u_j) . gradW_ij + sum_b psi_b u_i . gradW_ib: the rate of change
   /// of rho_i (kg/m^3/s) that the velocity field u (3n; boundary particles at rest) gives, the
-  /// SPH continuity equation (Monaghan 2005, eq. 4.4) with Akinci's boundary term.
+  /// SPH continuity equation (Monaghan 2005, eq. 4.4) with the walls at rest.
   void density_change(const NeighbourSearch& nb, ConstRef x, ConstRef masses, ConstRef u,
                       VecRef div) const;
   /// Calls f(kernel) with this fluid's SphKernel<Shape>, so pair loops are compiled per shape.

@@ -14,7 +14,7 @@ FluidSystem make_fluid_system(const std::vector<Vec3>& fluid, const std::vector<
   out.state = State(n);
   for (Index i = 0; i < nf; ++i) out.state.x.segment<3>(3 * i) = fluid[size_t(i)];
   for (Index b = 0; b < nb; ++b) out.state.x.segment<3>(3 * (nf + b)) = boundary[size_t(b)];
-  auto model = std::make_shared<FluidModel>(options, nf, out.state.x.tail(3 * nb));
+  auto model = std::make_shared<FluidModel>(options, nf, nb);
   std::vector<char> pinned(size_t(n), 0);
   std::fill(pinned.begin() + nf, pinned.end(), char(1));
   const Vec masses = Vec::Constant(n, model->particle_mass());

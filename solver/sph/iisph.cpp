@@ -37,7 +37,8 @@ IisphStepper::IisphStepper(const MassSpringSystem& system, Options options)
   const Index nf = m_fluid.num_fluid(), n = system.num_particles();
   m_v_adv = Vec::Zero(3 * n);
   m_ap = Vec::Zero(3 * n);
-  m_source = m_diag = m_Ap = m_div = Vec::Zero(nf);
+  m_source = m_diag = m_Ap = m_div = m_shepard = Vec::Zero(nf);
+  m_d = m_wall_grad = Vec::Zero(3 * nf);
 }
 
 double IisphStepper::cfl_step(const State& s, double courant, double max_step) const {
@@ -60,28 +61,52 @@ void IisphStepper::compute_diagonal(ConstRef x, double h) {
   const Index nf = m_fluid.num_fluid();
   const Vec& masses = m_system.masses();
   const Vec& psi = m_fluid.boundary_psi();
+  const double inv_rho0_2 = 1.0 / (m_fluid.rest_density() * m_fluid.rest_density());
   m_fluid.with_kernel([&](const auto& kernel) {
+    // The walls push on i with p_i / rho_i^2 + p~_i / rho0^2 (FluidModel::
+    // add_pressure_acceleration), p~_i = sum_j W_ij p_j / sum_j W_ij the Shepard average of the
+    // pressures around i: per particle, the Shepard sum and beta_i = sum_b psi_b gradW_ib.
     parallel_for(nf, kParallelParticles, [&](long long i) {
       const Vec3 xi = x.segment<3>(3 * i);
-      const double inv_rho2 = 1.0 / (m_rho[i] * m_rho[i]);
-      // d_i: the pressure acceleration of particle i per unit of its own pressure.
-      Vec3 sum_grad = Vec3::Zero();
+      Vec3 fluid_grad = Vec3::Zero(), wall_grad = Vec3::Zero();
+      double sum_w = kernel.W0();
       for (const int* it = m_search.begin(i); it != m_search.end(i); ++it) {
         const Index j = *it;
         const Vec3 xij = xi - x.segment<3>(3 * j);
-        const double mass = j < nf ? masses[j] : psi[j - nf];
-        sum_grad += mass * kernel.gradW(xij, xij.norm());
+        const double r = xij.norm();
+        if (j < nf) {
+          fluid_grad += masses[j] * kernel.gradW(xij, r);
+          sum_w += kernel.W(r);
+        } else {
+          wall_grad += psi[j - nf] * kernel.gradW(xij, r);
+        }
       }
-      const Vec3 d = -inv_rho2 * sum_grad;
+      const double inv_rho2 = 1.0 / (m_rho[i] * m_rho[i]);
+      m_shepard[i] = sum_w;
+      m_wall_grad.segment<3>(3 * i) = wall_grad;
+      // d_ii: the pressure acceleration of particle i per unit of its own pressure.
+      m_d.segment<3>(3 * i) =
+          -inv_rho2 * fluid_grad - (inv_rho2 + kernel.W0() / sum_w * inv_rho0_2) * wall_grad;
+    });
+    // a_ii = h^2 [sum_j m_j (d_ii - d_ji) . gradW_ij + sum_b psi_b d_ii . gradW_ib], d_ji the
+    // acceleration of j per unit pressure at i: m_i / rho_i^2 gradW_ij from the pair, and
+    // -(W_ij / sum_k W_jk) / rho0^2 beta_j from the walls' pressure j sees.
+    parallel_for(nf, kParallelParticles, [&](long long i) {
+      const Vec3 xi = x.segment<3>(3 * i), d = m_d.segment<3>(3 * i);
+      const double inv_rho2 = 1.0 / (m_rho[i] * m_rho[i]);
       double aii = 0.0;
       for (const int* it = m_search.begin(i); it != m_search.end(i); ++it) {
         const Index j = *it;
         const Vec3 xij = xi - x.segment<3>(3 * j);
-        const Vec3 g = kernel.gradW(xij, xij.norm());
-        if (j < nf)
-          aii += masses[j] * (d - masses[i] * inv_rho2 * g).dot(g);
-        else
+        const double r = xij.norm();
+        const Vec3 g = kernel.gradW(xij, r);
+        if (j < nf) {
+          const Vec3 dji = masses[i] * inv_rho2 * g -
+                           kernel.W(r) / m_shepard[j] * inv_rho0_2 * m_wall_grad.segment<3>(3 * j);
+          aii += masses[j] * (d - dji).dot(g);
+        } else {
           aii += psi[j - nf] * d.dot(g);
+        }
       }
       m_diag[i] = h * h * aii;
     });

@@ -30,11 +30,13 @@ struct IisphOptions {
 };
 
 /// Implicit incompressible SPH (Ihmsen et al. 2014, "Implicit incompressible SPH", IEEE TVCG
-/// 20(3)), in the form of Koschier et al. 2019 (sec. 4.2.2): the non-pressure accelerations give
-/// an advected velocity v*, and the pressures solve the pressure Poisson equation
+/// 20(3)), in the form of Koschier et al. 2019 (sec. 4.2.2): the non-pressure accelerations
+/// (gravity, viscosity and the walls' hydrostatic support, FluidModel::add_wall_support) give an
+/// advected velocity v*, and the pressures solve the pressure Poisson equation
 ///   (A p)_i = h^2 sum_j m_j (a_i - a_j) . gradW_ij + h^2 sum_b psi_b a_i . gradW_ib
 ///           = rho0 - rho*_i,   a = FluidModel's pressure acceleration of p,
-/// rho*_i = rho_i + h drho_i/dt(v*), by relaxed Jacobi p_i += omega (s_i - (A p)_i) / A_ii,
+/// rho*_i = rho_i + h drho_i/dt(v*), by relaxed Jacobi p_i += omega (s_i - (A p)_i) / A_ii (A_ii
+/// exact, the walls' Shepard-averaged pressure included; A is not symmetric: pressure_system.hpp),
 /// matrix-free, warm-started from half the last step's pressures, with p clamped at 0 after each
 /// update (a particle at the free surface cannot pull: with the clamp the problem is a linear
 /// complementarity problem, not a linear system). Then v1 = v* + h a(p), x1 = x0 + h v1.
@@ -65,8 +67,9 @@ class IisphStepper final : public SphStepper {
   void apply(ConstRef x, double h);
 
   Options m_options;
-  Vec m_v_adv, m_ap;                  // 3n
-  Vec m_source, m_diag, m_Ap, m_div;  // num_fluid
+  Vec m_v_adv, m_ap;                             // 3n
+  Vec m_source, m_diag, m_Ap, m_div, m_shepard;  // num_fluid
+  Vec m_d, m_wall_grad;                          // 3 num_fluid: d_ii, sum_b psi_b gradW_ib
 };
 
 }  // namespace hooke

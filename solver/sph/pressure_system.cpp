@@ -1,6 +1,8 @@
 #include "hooke/sph/pressure_system.hpp"
 
 #include <Eigen/SparseCore>
+#include <utility>
+#include <vector>
 
 namespace hooke {
 
@@ -26,39 +28,64 @@ PressureSystem assemble_pressure_system(const FluidModel& fluid, const Neighbour
       out.active.push_back(i);
     }
   const Index na = Index(out.active.size());
-  // C restricted to the active columns, row 3 i + a for the force on fluid particle i.
-  std::vector<Eigen::Triplet<double, int>> entries;
+  // E and F restricted to the active columns, row 3 i + a for the force on fluid particle i.
+  std::vector<Eigen::Triplet<double, int>> e_entries, f_entries;
   const Vec& psi = fluid.boundary_psi();
+  const double rho0 = fluid.rest_density();
   fluid.with_kernel([&](const auto& kernel) {
+    std::vector<std::pair<Index, double>> shepard;  // (fluid j, W_ij) around i
     for (Index i = 0; i < nf; ++i) {
       const Vec3 xi = x.segment<3>(3 * i);
-      Vec3 self = Vec3::Zero();
+      Vec3 fluid_self = Vec3::Zero(), wall_grad = Vec3::Zero();
+      double sum_w = kernel.W0();
+      shepard.assign(1, {i, kernel.W0()});
       for (const int* it = search.begin(i); it != search.end(i); ++it) {
         const Index j = *it;
         const Vec3 xij = xi - x.segment<3>(3 * j);
-        const Vec3 g = kernel.gradW(xij, xij.norm());
+        const double r = xij.norm();
+        const Vec3 g = kernel.gradW(xij, r);
         if (j < nf) {
-          self += masses[j] * g;
+          fluid_self += masses[j] * g;
+          sum_w += kernel.W(r);
+          shepard.emplace_back(j, kernel.W(r));
           if (column[size_t(j)] >= 0)
-            for (int a = 0; a < 3; ++a)
-              entries.emplace_back(int(3 * i + a), int(column[size_t(j)]),
-                                   masses[i] * masses[j] * g[a]);
+            for (int a = 0; a < 3; ++a) {
+              const Eigen::Triplet<double, int> t(int(3 * i + a), int(column[size_t(j)]),
+                                                  masses[i] * masses[j] * g[a]);
+              e_entries.push_back(t);
+              f_entries.push_back(t);
+            }
         } else {
-          self += psi[j - nf] * g;
+          wall_grad += psi[j - nf] * g;
         }
       }
       if (column[size_t(i)] >= 0)
         for (int a = 0; a < 3; ++a)
-          entries.emplace_back(int(3 * i + a), int(column[size_t(i)]), masses[i] * self[a]);
+          e_entries.emplace_back(int(3 * i + a), int(column[size_t(i)]),
+                                 masses[i] * (fluid_self[a] + wall_grad[a]));
+      // F: the fluid's own term on i's column, and the walls' mirrored pressure p_i / rho_i^2 +
+      // sum_j (W_ij / sum_k W_ik) p_j / rho0^2 with p_j = rho_j^2 q_j on every column j around i.
+      if (column[size_t(i)] >= 0)
+        for (int a = 0; a < 3; ++a)
+          f_entries.emplace_back(int(3 * i + a), int(column[size_t(i)]),
+                                 masses[i] * (fluid_self[a] + wall_grad[a]));
+      if (wall_grad.isZero()) continue;
+      for (const auto& [j, w] : shepard) {
+        if (column[size_t(j)] < 0) continue;
+        const double c = masses[i] * w / sum_w * rho[j] * rho[j] / (rho0 * rho0);
+        for (int a = 0; a < 3; ++a)
+          f_entries.emplace_back(int(3 * i + a), int(column[size_t(j)]), c * wall_grad[a]);
+      }
     }
     return 0;
   });
-  SparseMatrix C(int(3 * nf), int(na));
-  C.setFromTriplets(entries.begin(), entries.end());
+  SparseMatrix E(int(3 * nf), int(na)), F(int(3 * nf), int(na));
+  E.setFromTriplets(e_entries.begin(), e_entries.end());
+  F.setFromTriplets(f_entries.begin(), f_entries.end());
   Vec inv_m(3 * nf);
   for (Index i = 0; i < nf; ++i) inv_m.segment<3>(3 * i).setConstant(1.0 / masses[i]);
-  const SparseMatrix MinvC = inv_m.asDiagonal() * C;
-  out.S = SparseMatrix(C.transpose() * MinvC);
+  const SparseMatrix MinvF = inv_m.asDiagonal() * F;
+  out.S = SparseMatrix(E.transpose() * MinvF);
   out.rhs.resize(na);
   for (Index k = 0; k < na; ++k) {
     const Index i = out.active[size_t(k)];

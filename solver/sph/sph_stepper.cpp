@@ -28,6 +28,7 @@ SphStepper::SphStepper(const MassSpringSystem& system, double courant)
   m_rho = Vec::Constant(nf, m_fluid.rest_density());
   m_p = Vec::Zero(nf);
   m_a = Vec::Zero(3 * n);
+  m_body = Vec::Zero(3 * n);
   m_force = Vec::Zero(3 * n);
 }
 
@@ -121,8 +122,10 @@ void SphStepper::mask_acceleration() { m_a.array() *= m_system.moving().array();
 
 void SphStepper::external_acceleration(ConstRef x, ConstRef v) {
   m_system.compute_forces(x, v, m_force);
-  m_a = m_system.free_inverse_mass().cwiseProduct(m_force);
+  m_body = m_system.free_inverse_mass().cwiseProduct(m_force).cwiseProduct(m_system.moving());
+  m_a = m_body;
   m_fluid.add_viscous_acceleration(m_search, x, v, m_system.masses(), m_rho, m_a);
+  m_fluid.add_wall_support(m_search, x, m_rho, m_body, m_a);
   mask_acceleration();
 }
 

@@ -49,8 +49,9 @@ class SphStepper : public Stepper {
 
   /// Neighbours and densities at x (3n); false (with the message in `s`) if the search failed.
   bool prepare(ConstRef x, StepSummary& s);
-  /// m_a = the external accelerations f/m of the system's forces plus the viscous ones at
-  /// (x, v), zero for particles that do not move.
+  /// m_body = the body accelerations f/m of the system's forces at (x, v); m_a = m_body plus
+  /// the viscous accelerations and the walls' hydrostatic support (FluidModel::add_wall_support);
+  /// both zero for particles that do not move.
   void external_acceleration(ConstRef x, ConstRef v);
   /// s1 = (x0 + h v1, v1) with v1 = v0 + h m_a on moving particles (symplectic Euler), the step's
   /// figures in m_last, and the checks: Fatal if the densities at the step's start exceeded
@@ -64,8 +65,8 @@ class SphStepper : public Stepper {
   const double m_courant;
   State m_sub[2];  // the states between CFL substeps
   NeighbourSearch m_search;
-  Vec m_rho, m_p;    // num_fluid
-  Vec m_a, m_force;  // 3n
+  Vec m_rho, m_p;            // num_fluid
+  Vec m_a, m_body, m_force;  // 3n
   FluidStepStats m_last;
   StepperStats m_stats;
 };

@@ -53,10 +53,14 @@ struct StillWater {
   long long escaped = 0;          ///< particle-steps outside [0, width] x [0, inf)
   long long steps = 0, pressure_iterations = 0;
   StepSummary last;  ///< the first step that did not converge, else Converged
-  /// The row-mean of (p - rho0 g (depth - y)) / (rho0 g depth) in rows of one spacing, bottom up,
-  /// at the end.
-  std::vector<double> pressure_rows;
-
+  /// The time average over the window of (p - rho0 g (depth - y)) / (rho0 g depth), bottom up:
+  /// per row of one spacing, the mean over the particles in it; and per probe at height
+  /// y = (r + 1/2) dx, the pressure the SPH interpolation gives there, sum_j V_j p_j W(x - x_j) /
+  /// sum_j V_j W(x - x_j) over the fluid particles (V_j = m_j / rho_j), averaged over probes at a
+  /// quarter, half and three quarters of the width. The probes read the pressure field as SPH
+  /// defines it, smoothed over the kernel: a particle's own pressure also carries the modes the
+  /// pressure gradient cannot see (rows alternating by a few percent of rho0 g H at rest).
+  std::vector<double> pressure_rows, pressure_probes;
   /// Runs `stepper` (on a tank_2d scene of water `depth` deep in a tank `width` wide) with steps
   /// of h: `settle` s to come to rest, then `window` s in which the figures above are gathered.
   static StillWater run(SphStepper& stepper, State& state, double h, double settle, double window,
@@ -65,12 +69,50 @@ struct StillWater {
     w.last = run_fluid(stepper, state, h, state.t + settle);
     if (w.last.status != Status::Converged) return w;
     const Index nf = stepper.fluid().num_fluid();
+    const double rho0 = stepper.fluid().rest_density(), p_bottom = rho0 * kG * depth;
+    // Per-row and per-probe sums over every step of the window: the time average, in which the
+    // acoustic oscillations of the pressures cancel.
+    std::vector<double> count(size_t(depth / dx) + 2, 0.0);
+    w.pressure_rows.assign(count.size(), 0.0);
+    const size_t probes = size_t(std::lround(depth / dx));
+    w.pressure_probes.assign(probes, 0.0);
+    const double H = stepper.fluid().support();
     w.last = run_fluid(stepper, state, h, state.t + window, [&](const State& st) {
       double top = -1e9;
       for (Index i = 0; i < nf; ++i) {
         const Vec3 xi = st.x.segment<3>(3 * i);
         top = std::max(top, xi.y());
         if (xi.x() < 0 || xi.x() > width || xi.y() < 0) ++w.escaped;
+        // The pressures of the last step belong to its start, the positions of which are gone:
+        // pair them with the row the particle is in now (it moves far less than a spacing).
+        const size_t row = size_t(std::max(0.0, xi.y() / dx));
+        if (row < count.size()) {
+          w.pressure_rows[row] +=
+              (stepper.pressures()[i] - rho0 * kG * (depth - xi.y())) / p_bottom;
+          count[row] += 1;
+        }
+      }
+      const Vec& p = stepper.pressures();
+      const Vec& rho = stepper.densities();
+      const double m = stepper.fluid().particle_mass();  // make_fluid_system's masses
+      for (size_t r = 0; r < probes; ++r) {
+        const double y = (double(r) + 0.5) * dx;
+        double sum = 0.0;
+        for (const double x : {0.25 * width, 0.5 * width, 0.75 * width}) {
+          double num = 0.0, den = 0.0;
+          stepper.fluid().with_kernel([&](const auto& kernel) {
+            for (Index j = 0; j < nf; ++j) {
+              const double d = (st.x.segment<3>(3 * j) - Vec3(x, y, st.x[2])).norm();
+              if (d >= H) continue;
+              const double vw = m / rho[j] * kernel.W(d);
+              num += vw * p[j];
+              den += vw;
+            }
+            return 0;
+          });
+          sum += den > 0.0 ? num / den : 0.0;
+        }
+        w.pressure_probes[r] += (sum / 3.0 - rho0 * kG * (depth - y)) / p_bottom;
       }
       w.lowest_surface = std::min(w.lowest_surface, top + dx / 2);
       w.highest_surface = std::max(w.highest_surface, top + dx / 2);
@@ -79,18 +121,9 @@ struct StillWater {
       w.pressure_iterations += stepper.last_fluid_stats().pressure_iterations;
       ++w.steps;
     });
-    const double rho0 = stepper.fluid().rest_density(), p_bottom = rho0 * kG * depth;
-    std::vector<double> count(size_t(depth / dx) + 2, 0.0);
-    w.pressure_rows.assign(count.size(), 0.0);
-    for (Index i = 0; i < nf; ++i) {
-      const double y = state.x[3 * i + 1];
-      const size_t row = size_t(std::max(0.0, y / dx));
-      if (row >= count.size()) continue;
-      w.pressure_rows[row] += (stepper.pressures()[i] - rho0 * kG * (depth - y)) / p_bottom;
-      count[row] += 1;
-    }
     for (size_t r = 0; r < count.size(); ++r)
       if (count[r] > 0) w.pressure_rows[r] /= count[r];
+    for (double& probe : w.pressure_probes) probe /= double(std::max(1LL, w.steps));
     return w;
   }
   /// The claims of still water: no particle through a wall, the surface within half a spacing
@@ -99,6 +132,13 @@ struct StillWater {
     EXPECT_EQ(escaped, 0);
     EXPECT_GE(lowest_surface, depth - dx / 2);
     EXPECT_LE(highest_surface, depth + dx / 2);
+  }
+  /// The pressure claim: every probe within `fraction` of rho0 g H of the hydrostatic
+  /// rho0 g (H - y), time-averaged over the window.
+  void expect_hydrostatic(double fraction) const {
+    ASSERT_FALSE(pressure_probes.empty());
+    for (size_t r = 0; r < pressure_probes.size(); ++r)
+      EXPECT_LE(std::abs(pressure_probes[r]), fraction) << "probe " << r << " from the bottom";
   }
   /// Prints the figures, prefixed by `label`.
   void print(const char* label, double depth, double dx, double final_mean_error,
@@ -111,6 +151,8 @@ struct StillWater {
         steps > 0 ? double(pressure_iterations) / double(steps) : 0.0, final_speed);
     std::printf("[ %-9s] row-mean (p - rho0 g (H - y)) / (rho0 g H), bottom to top:", label);
     for (const double r : pressure_rows) std::printf(" %.3f", r);
+    std::printf("\n[ %-9s] probes (p - rho0 g (H - y)) / (rho0 g H), bottom to top:", label);
+    for (const double r : pressure_probes) std::printf(" %.3f", r);
     std::printf("\n");
   }
 };

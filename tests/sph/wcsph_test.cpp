@@ -91,15 +91,15 @@ TEST(SphValidation, WcsphStillWaterStaysStill) {
   options.sound_speed = c0;
   WcsphStepper stepper(*scene.system, options);
   const double t_ref = std::sqrt(depth / kG), h = 0.4 * dx / c0;
-  // Settle for 10 t_ref, then 100 t_ref in which the water must stay still. The pressure profile
-  // is printed, not yet asserted: the rows next to the floor carry the squeeze of the boundary
-  // force (see issue 22's notes).
+  // Settle for 10 t_ref, then 100 t_ref in which the water must stay still, with the pressure
+  // field hydrostatic to 2% of rho0 g H at every depth.
   const auto w =
       test::StillWater::run(stepper, scene.state, h, 10 * t_ref, 100 * t_ref, dx, width, depth);
   ASSERT_EQ(w.last.status, Status::Converged) << w.last.message;
   const double at_rest = stepper.last_fluid_stats().mean_density_error;
   w.print("wcsph", depth, dx, at_rest, stepper.last_fluid_stats().max_speed);
   w.expect_still(dx, depth);
+  w.expect_hydrostatic(0.02);
   EXPECT_LT(w.largest_mean_error, 0.01);
 }
 
