@@ -29,6 +29,14 @@
 //                      (-pc_type gamg, Chebyshev / point-block Jacobi smoothing)
 //   implicit-petsc-boomeramg  the same with hypre's BoomerAMG on the coupled matrix
 //                      (-pc_type hypre) (the PETSc rows exist in builds with PETSc)
+// Fluids (their size is fluid particles, the springs column 0): a 3D cube of water (spacing
+// 1 cm, cubic spline, 2 spacings of support) at rest in a tank of 2 wall layers, from 1e4 to
+// 1.1e6 particles; one neighbour search per step.
+//   wcsph              Tait equation, c0 = 30 m/s, h = 1e-4 s (Monaghan's 0.4 dx / c0 = 1.3e-4);
+//                      an iteration is a step
+//   iisph              relaxed Jacobi, 10 iterations per step (water at rest needs fewer, and a
+//                      count that varied with the size would hide the scaling), h = 2e-3 s; an
+//                      iteration is a Jacobi iteration (with a tenth of the step's search)
 // Peak memory: VmHWM of this process, reset before each run (/proc/self/clear_refs) after the
 // freed heap is returned to the system (malloc_trim).
 #include "experiments/scaling_study.hpp"
@@ -64,6 +72,7 @@ namespace {
 struct MethodSpec {
   std::string label, integrator;  // integrator: the [integrator] section's keys
   double max_springs;             // larger grids are skipped (documented above)
+  double fluid_dt = 0.0;          // > 0: a fluid method, its size in particles, this step (s)
 };
 
 const std::vector<MethodSpec>& specs() {
@@ -102,6 +111,9 @@ const std::vector<MethodSpec>& specs() {
      "max_linear_iterations = 300\npetsc_options = \"-pc_type hypre -hooke_setup_cost 10\"\n",
      6.1e6},
 #endif
+    {"wcsph", "method = \"wcsph\"\nsound_speed = 30.0\ncourant = 0\n", 1.1e6, 1e-4},
+    {"iisph", "method = \"iisph\"\ncourant = 0\nmin_iterations = 10\nmax_iterations = 10\n", 1.1e6,
+     2e-3},
   };
   return s;
 }
@@ -136,6 +148,19 @@ std::string cloth_text(long long side, const std::string& integrator) {
   return os.str();
 }
 
+/// A cube of water side^3 particles (1 cm apart) at rest in a tank as wide and 1.5 times as high.
+std::string fluid_text(long long side, const MethodSpec& m) {
+  const double L = 0.01 * double(side);
+  std::ostringstream os;
+  os << std::setprecision(17) << "[fluid]\ndimension = 3\nspacing = 0.01\nviscosity = 1e-4\n"
+     << "[[fluid.block]]\nlower = [0, 0, 0]\nupper = [" << L << ", " << L << ", " << L << "]\n"
+     << "[fluid.tank]\nlower = [0, 0, 0]\nupper = [" << L << ", " << 1.5 * L << ", " << L << "]\n"
+     << "[forces]\ngravity = [0.0, -9.81, 0.0]\n[integrator]\n"
+     << m.integrator << "[time]\ndt = " << m.fluid_dt << "\nduration = 1.0\n"
+     << "[run]\nallow_not_converged = true\n";
+  return os.str();
+}
+
 struct Row {
   std::string method;
   int threads = 1;
@@ -155,10 +180,12 @@ Row run_one(const MethodSpec& m, long long side, int threads, int steps) {
   omp_set_num_threads(threads);
   reset_peak_memory();
   const auto t_setup = Clock::now();
-  const Scene scene = load_scene_from_string(cloth_text(side, m.integrator),
-                                             "scaling-" + m.label + "-" + std::to_string(side));
+  const Scene scene =
+      load_scene_from_string(m.fluid_dt > 0 ? fluid_text(side, m) : cloth_text(side, m.integrator),
+                             "scaling-" + m.label + "-" + std::to_string(side));
   r.springs = static_cast<long long>(scene.edges.size());
-  r.particles = scene.system->num_particles();
+  r.particles =
+      scene.is_fluid() ? scene.system->fluid()->num_fluid() : scene.system->num_particles();
   Simulation sim(*scene.system,
                  make_stepper(scene.integrator.method, *scene.system, scene.integrator.options),
                  scene.initial);
@@ -226,8 +253,12 @@ int run_scaling(const ScalingOptions& options) {
         std::find(options.methods.begin(), options.methods.end(), m.label) == options.methods.end())
       continue;
     for (const double target : springs) {
-      const long long side = std::max(3LL, std::llround(std::sqrt(target / 6.0)));
-      if (6.0 * double(side) * double(side) > 1.05 * m.max_springs) continue;
+      // Cloths: about 6 springs per particle; fluids: `target` particles in a cube.
+      const bool fluid = m.fluid_dt > 0;
+      const long long side = fluid ? std::max(4LL, std::llround(std::cbrt(target)))
+                                   : std::max(3LL, std::llround(std::sqrt(target / 6.0)));
+      const double size = fluid ? std::pow(double(side), 3) : 6.0 * double(side) * double(side);
+      if (size > 1.05 * m.max_springs) continue;
       for (const int t : options.threads) {
         const Row r = run_one(m, side, t, options.steps);
         std::ostringstream row;
@@ -239,8 +270,9 @@ int run_scaling(const ScalingOptions& options) {
         csv.write(row.str());
         csv.flush();
         std::cout << std::left << std::setw(22) << r.method << " threads " << r.threads
-                  << "  springs " << std::setw(9) << r.springs << " step " << std::setw(10)
-                  << r.step_s << " s  iteration " << std::setw(10) << r.iteration_s << " s  peak "
+                  << (fluid ? "  particles " : "  springs ") << std::setw(9)
+                  << (fluid ? r.particles : r.springs) << " step " << std::setw(10) << r.step_s
+                  << " s  iteration " << std::setw(10) << r.iteration_s << " s  peak "
                   << std::setw(8) << r.peak_mib << " MiB  " << r.status << std::endl;
         if (const int code = out.interrupted(std::to_string(++rows) + " rows"); code != 0)
           return code;
@@ -267,14 +299,16 @@ Command add_scaling_command(CLI::App& app) {
   auto* cmd = app.add_subcommand(
       "scaling",
       "Scaling study: time per step and per iteration against springs (cloth grids of 1e4 "
-      "to 1e6 springs; 6e6, and 2.4e7 for implicit-petsc, with --full) per method, on 1 and 2 "
+      "to 1e6 springs; 6e6, and 2.4e7 for implicit-petsc, with --full) or fluid particles "
+      "(wcsph, iisph: a 3D cube of water, 1e4 to 1.1e6) per method, on 1 and 2 "
       "threads, with peak memory; "
       "writes scaling.csv, scaling.png and scaling.md (fitted exponents)");
   cmd->add_flag("--full", a->scal.full,
                 "add 3e6 and 6e6 springs (1000 x 1000 particles), and 2.4e7 (2000 x 2000) for "
                 "implicit-petsc");
   add_list(cmd, "--springs", a->springs,
-           "comma-separated spring counts (default 1e4,3e4,1e5,3e5,1e6)");
+           "comma-separated spring counts, fluid particles for wcsph and iisph (default "
+           "1e4,3e4,1e5,3e5,1e6)");
   add_list(cmd, "--methods", a->methods, "comma-separated: " + all + " (default: all)");
   add_list(cmd, "--threads", a->threads, "comma-separated thread counts (default 1,2)");
   cmd->add_option("--steps", a->scal.steps, "timed steps after one warm-up step (default 4)");

@@ -42,6 +42,7 @@
 
 #include "experiments/cli.hpp"
 #include "experiments/divergence.hpp"
+#include "experiments/fluid_work_precision.hpp"
 #include "experiments/plot_script.hpp"
 #include "experiments/study_output.hpp"
 #include "experiments/trajectory.hpp"
@@ -210,34 +211,80 @@ void sweep_method(const WorkPrecisionCase& c, const StudyMethod& m,
 
 int run_work_precision(const WorkPrecisionOptions& options, const std::string& scenes_dir) {
   const auto start = Clock::now();
-  std::vector<WorkPrecisionCase> cases =
-      select_cases(work_precision_cases(options.full, scenes_dir), options.cases);
-  if (options.duration > 0.0)
+  // The fluid cases and methods (fluid_work_precision.cpp) beside the mass-spring ones: --cases
+  // and --methods name either; naming only one kind leaves out the other.
+  const std::vector<FluidWorkPrecisionCase> fluid_all =
+      fluid_work_precision_cases(options.full, scenes_dir);
+  const std::vector<WorkPrecisionCase> spring_all = work_precision_cases(options.full, scenes_dir);
+  std::vector<std::string> spring_names, fluid_names, spring_methods, fluid_methods;
+  for (const std::string& name : options.cases) {
+    const bool fluid = std::any_of(fluid_all.begin(), fluid_all.end(),
+                                   [&](const FluidWorkPrecisionCase& c) { return c.name == name; });
+    const bool spring = std::any_of(spring_all.begin(), spring_all.end(),
+                                    [&](const WorkPrecisionCase& c) { return c.name == name; });
+    if (!fluid && !spring) {
+      std::string known;
+      for (const auto& c : spring_all) known += c.name + ", ";
+      for (const auto& c : fluid_all) known += c.name + ", ";
+      throw InputError("<command line>", "--cases",
+                       "unknown case '" + name + "' (cases: " + known.substr(0, known.size() - 2) +
+                           (options.full ? "" : "; dam_break_2d_fine with --full") + ")");
+    }
+    (fluid ? fluid_names : spring_names).push_back(name);
+  }
+  for (const std::string& m : options.methods) {
+    const bool fluid = std::any_of(methods().begin(), methods().end(), [&](const MethodInfo& info) {
+      return info.name == m && info.kind == MethodKind::Fluid;
+    });
+    (fluid ? fluid_methods : spring_methods).push_back(m);
+  }
+  const bool spring_wanted = (options.cases.empty() || !spring_names.empty()) &&
+                             (options.methods.empty() || !spring_methods.empty());
+  const bool fluid_wanted = (options.cases.empty() || !fluid_names.empty()) &&
+                            (options.methods.empty() || !fluid_methods.empty());
+  std::vector<WorkPrecisionCase> cases;
+  if (spring_wanted) cases = select_cases(spring_all, spring_names);
+  std::vector<FluidWorkPrecisionCase> fluid_cases;
+  if (fluid_wanted) fluid_cases = select_cases(fluid_all, fluid_names);
+  if (options.duration > 0.0) {
     for (WorkPrecisionCase& c : cases) c.duration = options.duration;
+    for (FluidWorkPrecisionCase& c : fluid_cases) c.duration = options.duration;
+  }
   const std::vector<StudyMethod> study =
-      available_study_methods(study_methods(), options.methods, std::cerr);
+      spring_wanted ? available_study_methods(study_methods(), spring_methods, std::cerr)
+                    : std::vector<StudyMethod>{};
   const std::vector<double> rtols = sweep_rtols(options);
   const int S = std::max(1, options.samples);
 
-  StudyOutput out(options.out_dir, "workprecision", {"workprecision.csv", "reference.csv"});
+  StudyOutput out(options.out_dir, "workprecision",
+                  {"workprecision.csv", "reference.csv", "fluid.csv", "fronts.csv"});
   OutputFile& csv = out.file("workprecision.csv");
   OutputFile& refcsv = out.file("reference.csv");
+  OutputFile& fluid_csv = out.file("fluid.csv");
+  OutputFile& fronts_csv = out.file("fronts.csv");
   csv.print(
       "case,label,method,h,rtol,wall_s,steps,rms_err_final,max_err_final,rms_err_traj,max_"
       "err_traj,status,repeats,resolved_final,resolved_traj\n");
   refcsv.print("case,rtol,wall_s,err_rms_final,err_rms_traj,err_max_traj,how\n");
+  fluid_csv.print("%s", kFluidWorkPrecisionHeader);
+  fronts_csv.print("%s", kFluidFrontsHeader);
   std::size_t done = 0;
+  const std::size_t total = cases.size() * study.size() + fluid_cases.size();
+  const auto progress = [&] {
+    return std::to_string(++done) + " of " + std::to_string(total) + " (case, method) sweeps";
+  };
   for (const auto& c : cases) {
     const std::optional<Reference> ref = case_reference(c, options.reference_rtol, S, refcsv);
     if (!ref) return 3;
     for (const auto& m : study) {
       sweep_method(c, m, rtols, S, std::max(1, options.repeat), *ref, csv);
-      if (const int code = out.interrupted(std::to_string(++done) + " of " +
-                                           std::to_string(cases.size() * study.size()) +
-                                           " (case, method) sweeps");
-          code != 0)
-        return code;
+      if (const int code = out.interrupted(progress()); code != 0) return code;
     }
+  }
+  for (const auto& c : fluid_cases) {
+    sweep_fluid_case(c, fluid_methods, options.full, std::max(1, options.repeat), scenes_dir,
+                     fluid_csv, fronts_csv);
+    if (const int code = out.interrupted(progress()); code != 0) return code;
   }
   const std::string wrote = out.finish(std::to_string(done) + " (case, method) sweeps");
   std::printf("workprecision: wrote %s (%.1f s)\n", wrote.c_str(), seconds_since(start));
@@ -264,9 +311,11 @@ Command add_workprecision_command(CLI::App& app) {
   cmd->add_flag("--full", a->wp.full,
                 "paper size: 16 x 16 cloths, 6 step sizes 1e-2..3e-5, longer runs");
   add_list(cmd, "--cases", a->cases,
-           "comma-separated: chain,hanging_cloth,stiff_cloth (default: all)");
+           "comma-separated: chain,hanging_cloth,stiff_cloth,dam_break_2d (with --full also "
+           "dam_break_2d_fine; default: all)");
   add_list(cmd, "--methods", a->methods,
-           "comma-separated study labels or method names (default: all)");
+           "comma-separated study labels or method names, wcsph and iisph for the fluid cases "
+           "(default: all)");
   add_list(cmd, "--rtols", a->rtols,
            "comma-separated tolerances of cvode, ida and the *-adaptive methods (default "
            "1e-3,1e-5,1e-7)");

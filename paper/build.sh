@@ -47,6 +47,11 @@ echo "step-convergence 256,$(( ($(date +%s%N) - t0) / 1000000 ))e-3" >> "$out/ti
 run energy
 # The implicit step's linear backends as the cloth grows (1e4 to 1e6 springs; 6e6 with --full).
 run scaling --methods implicit-pcg,implicit-pcg-nodal,implicit-petsc,implicit-petsc-gamg --threads 2
+# The SPH methods on a 3D cube of water, 1e4 to 1e6 particles, 1 and 2 threads.
+t0=$(date +%s%N)
+echo "paper: hooke scaling --methods wcsph,iisph ..."
+"$hooke" scaling --methods wcsph,iisph --out "$out/scaling-sph"
+echo "scaling sph,$(( ($(date +%s%N) - t0) / 1000000 ))e-3" >> "$out/timings.csv"
 
 {
   echo "| property | value |"

@@ -33,7 +33,9 @@ def main(out_dir):
     for m in methods:
         st = style(m, methods)
         for t in threads:
-            pts = sorted((num(r["springs"]), num(r["iteration_s"]), num(r["step_s"]),
+            # The size: springs for cloths, fluid particles for fluids (springs 0).
+            pts = sorted((num(r["springs"]) or num(r["particles"]), num(r["iteration_s"]),
+                          num(r["step_s"]),
                           num(r.get("factor_nnz") or "0"))
                          for r in rows if r["method"] == m and int(r["threads"]) == t)
             if not pts:
@@ -51,11 +53,12 @@ def main(out_dir):
     axes[1].set_title("time per step (h = 0.01 s)")
     axes[1].set_ylabel("seconds per step")
     for ax in axes:
-        ax.set_xlabel("springs")
+        ax.set_xlabel("springs (fluids: particles)")
     axes[1].legend(loc="upper left", ncol=1)
     fig.tight_layout()
     save_figure(fig, os.path.join(out_dir, "scaling.png"))
-    md = ["Fitted exponent p of time per iteration ~ springs^p (least squares, log-log):\n",
+    md = ["Fitted exponent p of time per iteration ~ size^p, the size springs (cloths) or "
+          "particles (fluids) (least squares, log-log):\n",
           markdown_table(["method", "threads", "sizes", "smallest", "largest", "exponent p",
                           "s / iteration at largest", "factor entries: exponent"], fits),
           "\nEvery run (seconds per step, split; peak resident memory of the run):\n",

@@ -15,6 +15,15 @@ OUT_DIR/tolerance_<case>.png: is the error control honest? The largest position 
 trajectory against the requested rtol, one line per method, beside the lines error = rtol and
 error = 10 rtol (the cases' sizes are about 1 m, and atol = 1e-3 rtol x size); errors the
 reference cannot resolve are left out.
+
+Fluid cases (OUT_DIR/fluid.csv, the dam break by WCSPH over its speed of sound and IISPH over its
+tolerance): OUT_DIR/fluid_<case>.png, wall time against the time-averaged mean density error, one
+line per method, each point annotated with its c0 or tolerance and its surge-front speed over the
+experiment's; and OUT_DIR/fluid_<case>.md, every run as a table row and, at each IISPH point whose
+density error WCSPH's sweep spans, WCSPH's wall time there (log-log interpolation) over IISPH's.
+OUT_DIR/front.png (from OUT_DIR/fronts.csv): the surge front Z = x / a against T = t sqrt(2 g / a)
+of WCSPH at c0 = 31.3 m/s and IISPH at tolerance 1e-3 (the shipped scene's settings) for every
+fluid case (resolution), beside Martin and Moyce's and Koshizuka and Oka's experiments.
 """
 import math
 import os
@@ -92,6 +101,120 @@ def main(out_dir):
         write_text(os.path.join(out_dir, f"workprecision_{case}.md"), text)
         plot_tolerance(out_dir, case, sub, labels)
     print(f"work_precision.py: wrote {out_dir}/workprecision_*.png and workprecision_*.md")
+    plot_fluid(out_dir)
+
+
+def interpolate_loglog(points, x):
+    """y at x on the log-log polyline through (x, y) points (None outside their span)."""
+    pts = sorted(p for p in points if p[0] > 0 and p[1] > 0)
+    for (x0, y0), (x1, y1) in zip(pts, pts[1:]):
+        if x0 <= x <= x1:
+            if x1 == x0:
+                return y0
+            w = (math.log(x) - math.log(x0)) / (math.log(x1) - math.log(x0))
+            return math.exp(math.log(y0) + w * (math.log(y1) - math.log(y0)))
+    return None
+
+
+def plot_fluid(out_dir):
+    path = os.path.join(out_dir, "fluid.csv")
+    rows = read_csv(path) if os.path.exists(path) else []
+    labels = [r["method"] for r in rows]
+    for case in dict.fromkeys(r["case"] for r in rows):
+        sub = [r for r in rows if r["case"] == case and r["status"] == "ok"]
+        fig, ax = plt.subplots(figsize=(8.5, 5.2))
+        for method in dict.fromkeys(r["method"] for r in sub):
+            mine = [r for r in sub if r["method"] == method]
+            st = style(method, labels)
+            ax.plot([num(r["mean_density_error"]) for r in mine], [num(r["wall_s"]) for r in mine],
+                    "-", lw=1.2, ms=5, label=f"{method} (over {mine[0]['parameter']})", **st)
+            for r in mine:
+                tag = (f"c0 {g3(num(r['value']))}" if r["parameter"] == "sound_speed"
+                       else f"tol {g3(num(r['value']))}")
+                ax.annotate(f"{tag}, front x{num(r['front_speed_ratio']):.3f}",
+                            (num(r["mean_density_error"]), num(r["wall_s"])),
+                            textcoords="offset points", xytext=(4, 3), fontsize=5,
+                            color=st.get("color", "k"))
+        ax.set_xscale("log")
+        ax.set_yscale("log")
+        ax.set_xlabel("mean density error (time average of mean max(rho - rho0, 0) / rho0)")
+        ax.set_ylabel("wall time (s), median of the repeats")
+        ax.set_title(f"{case}: wall time against density error "
+                     "(labels: parameter, surge-front speed / Martin and Moyce's)")
+        ax.legend(loc="upper right")
+        fig.tight_layout()
+        save_figure(fig, os.path.join(out_dir, f"fluid_{case}.png"))
+        plt.close(fig)
+
+        table = [[r["method"], r["parameter"], g3(num(r["value"])), g3(num(r["wall_s"])), r["steps"],
+                  r["substeps"], g3(num(r["particle_steps_per_s"])),
+                  g3(num(r["mean_density_error"])), g3(num(r["max_density_error"])),
+                  g3(num(r["pressure_iterations_per_substep"])), f"{num(r['front_speed_ratio']):.3f}",
+                  f"{num(r['lead_min']):.2f}..{num(r['lead_max']):.2f}", r["status"]]
+                 for r in rows if r["case"] == case]
+        text = markdown_table(["method", "parameter", "value", "wall (s)", "steps", "substeps",
+                               "particle-steps/s", "mean density error", "max density error",
+                               "pressure iterations / substep", "front speed / MM52",
+                               "lead in T", "status"], table)
+        wc = [(num(r["mean_density_error"]), num(r["wall_s"])) for r in sub if r["method"] == "wcsph"]
+        matched = []
+        for r in sub:
+            if r["method"] != "iisph":
+                continue
+            e, w = num(r["mean_density_error"]), num(r["wall_s"])
+            w_wc = interpolate_loglog(wc, e)
+            if w_wc is not None and w > 0:
+                matched.append([g3(num(r["value"])), g3(e), g3(w), g3(w_wc), f"{w_wc / w:.2f}"])
+        if matched:
+            text += ("\nAt matched mean density error, WCSPH's wall time (interpolated on its c0 "
+                     "sweep) over IISPH's:\n\n")
+            text += markdown_table(["IISPH tolerance", "mean density error", "IISPH wall (s)",
+                                    "WCSPH wall (s)", "WCSPH / IISPH"], matched)
+        write_text(os.path.join(out_dir, f"fluid_{case}.md"), text)
+    if rows:
+        print(f"work_precision.py: wrote {out_dir}/fluid_*.png and fluid_*.md")
+    plot_fronts(out_dir)
+
+
+def plot_fronts(out_dir):
+    path = os.path.join(out_dir, "fronts.csv")
+    rows = read_csv(path) if os.path.exists(path) else []
+    if not rows:
+        return
+    fig, ax = plt.subplots(figsize=(7.5, 5.0))
+    shown = set()
+    for source, marker in (("MM52", "o"), ("KO96", "s")):
+        pts = [r for r in rows if r["label"] == source]
+        first = pts[:len({r["T"] for r in pts})]  # the same points are written per case
+        if first:
+            ax.plot([num(r["T"]) for r in first], [num(r["Z"]) for r in first], marker, mfc="none",
+                    color="k" if source == "MM52" else "0.5", ms=5, ls="none",
+                    label={"MM52": "Martin and Moyce 1952 (a = 2 1/4 in)",
+                           "KO96": "Koshizuka and Oka 1996"}[source])
+    cases = list(dict.fromkeys(r["case"] for r in rows))
+    runs = ["wcsph-31.3", "iisph-0.001"]
+    labels = [f"{c} {m}" for c in cases for m in runs]
+    for case in cases:
+        for run in runs:
+            pts = [r for r in rows if r["case"] == case and r["label"] == run]
+            if not pts or (case, run) in shown:
+                continue
+            shown.add((case, run))
+            st = style(f"{case} {run}", labels)
+            st.pop("marker", None)
+            ax.plot([num(r["T"]) for r in pts], [num(r["Z"]) for r in pts], "-", lw=1.3,
+                    label=f"{run.split('-')[0].upper()}, {case}", **st)
+    ax.set_xlim(0, 3.6)
+    ax.set_ylim(1, 4.2)
+    ax.axvspan(1.4, 3.0, color="0.93", zorder=0, label="front speed compared over 1.4 <= T <= 3")
+    ax.set_xlabel("T = t sqrt(2 g / a)")
+    ax.set_ylabel("Z = x_front / a")
+    ax.set_title("Dam break (n^2 = 2): surge front against the experiments")
+    ax.legend(loc="upper left", fontsize=7)
+    fig.tight_layout()
+    save_figure(fig, os.path.join(out_dir, "front.png"))
+    plt.close(fig)
+    print(f"work_precision.py: wrote {out_dir}/front.png")
 
 
 def plot_tolerance(out_dir, case, sub, labels):

@@ -81,7 +81,8 @@ def stability(cases=(), methods=(), k=(), full=False, plot=False, out=None):
 
 def workprecision(cases=(), methods=(), repeat=3, full=False, plot=False, out=None):
     """`hooke workprecision`: error against wall time per case and method; the rows of
-    workprecision.csv and of reference.csv."""
+    workprecision.csv and of reference.csv (the fluid cases' rows are in fluid.csv, kept in
+    `out`)."""
     return _study(lambda d: _hooke._workprecision(list(cases), list(methods), repeat, full, plot,
                                                   d), out, ["workprecision.csv", "reference.csv"])
 

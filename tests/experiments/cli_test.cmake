@@ -306,14 +306,15 @@ elseif(CASE STREQUAL "factor_over_budget")
 elseif(CASE STREQUAL "scaling")
   # Two small grids, every method, 1 and 2 threads: one CSV row each, all "ok", and the plot
   # script's figure and table of fitted exponents. An unknown method is an input error.
-  # 10 methods (13 with the PETSc backend) x 2 sizes x 2 thread counts, and the header.
+  # 10 methods (13 with the PETSc backend) x 2 sizes x 2 thread counts, the 2 fluid methods at as
+  # many particles (cubes of 13^3 and 20^3), and the header.
   set(methods symplectic-euler xpbd fast-mass-spring fast-mass-spring-jacobi vbd vbd-chebyshev
               implicit-pcg implicit-pcg-cholmod implicit-pcg-nodal implicit-cholmod)
   if(WITH_PETSC)
     list(APPEND methods implicit-petsc implicit-petsc-gamg implicit-petsc-boomeramg)
   endif()
   list(LENGTH methods n_methods)
-  math(EXPR rows "4 * ${n_methods} + 1")
+  math(EXPR rows "4 * ${n_methods} + 8 + 1")
   hooke_exec(scaling --springs 2000,8000 --steps 1 --out "${OUT}")
   expect_rc(0)
   expect_csv("${OUT}/scaling.csv"
@@ -325,6 +326,9 @@ elseif(CASE STREQUAL "scaling")
   endif()
   foreach(m IN LISTS methods)
     expect_contains("${text}" "${m},2,7846,1369," "scaling.csv")
+  endforeach()
+  foreach(m IN ITEMS wcsph iisph)
+    expect_contains("${text}" "${m},2,0,8000," "scaling.csv")
   endforeach()
   expect_file("${OUT}/scaling.png")
   file(READ "${OUT}/scaling.md" md)
@@ -587,6 +591,29 @@ elseif(CASE STREQUAL "workprecision")
   hooke_exec(workprecision --cases chain --methods rk4,nosuch --out "${OUT}/bad")
   expect_rc(2)
   expect_contains("${err}" "--methods: unknown study method 'nosuch'" "stderr")
+  # The fluid case: IISPH over its four tolerances on the dam break, every run complete with a
+  # front compared with Martin and Moyce, and the plot's table of them.
+  hooke_exec(workprecision --cases dam_break_2d --methods iisph --repeat 1 --out "${OUT}/fluid")
+  expect_rc(0)
+  expect_csv("${OUT}/fluid/fluid.csv"
+             "case,label,method,parameter,value,wall_s,steps,substeps,fluid_particles,particle_steps_per_s,mean_density_error,max_density_error,pressure_iterations_per_substep,front_speed,front_speed_ratio,lead_min,lead_max,status,repeats" 5)
+  file(STRINGS "${OUT}/fluid/fluid.csv" fluid_rows REGEX "^dam_break_2d,iisph-")
+  foreach(row IN LISTS fluid_rows)
+    if(NOT row MATCHES "^dam_break_2d,iisph-[0-9.e-]+,iisph,tolerance,[0-9.e-]+,[0-9.e-]+,80,[0-9]+,800,.*,[01]\\.[0-9]+,[0-9.]+,[0-9.]+,ok,1$")
+      message(FATAL_ERROR "fluid run incomplete or without a front: '${row}'${report}")
+    endif()
+  endforeach()
+  expect_file("${OUT}/fluid/fluid_dam_break_2d.md")
+  # Each run's front after every 5 ms step (80 to t = 0.4 s), after both experiments' points.
+  file(STRINGS "${OUT}/fluid/fronts.csv" front_rows REGEX "^dam_break_2d,iisph-0.001,")
+  list(LENGTH front_rows n_front)
+  if(NOT n_front EQUAL 80)
+    message(FATAL_ERROR "fronts.csv: ${n_front} points of iisph-0.001, expected 80${report}")
+  endif()
+  expect_contains("${front_rows}" "dam_break_2d,iisph-0.001,3.54" "fronts.csv")
+  expect_file("${OUT}/fluid/front.png")
+  # Naming only fluid cases leaves the mass-spring study out: no reference row.
+  expect_csv("${OUT}/fluid/reference.csv" "case,rtol,wall_s,err_rms_final,err_rms_traj,err_max_traj,how" 1)
 
 elseif(CASE STREQUAL "resolution")
   hooke_exec(resolution --n 4,6 --duration 0.5 --out "${OUT}" --no-plot)

@@ -1,9 +1,9 @@
 // The 2D dam break of Martin and Moyce (1952, Phil. Trans. R. Soc. A 244, table 2, a = 2 1/4 in):
 // a water column a wide and 2a high released at one end of a tank. The surge front Z = x / a
-// against T = t sqrt(2 g / a) is compared with the experiment (tests/data/, with its sources):
-// the front speed dZ/dT over 1.4 <= T <= 3.0 (least-squares slopes of both) within 5%, and the
-// simulated front at most 0.35 ahead in T (Z_sim(T) between Z_exp(T) and Z_exp(T + 0.35)); the
-// gate of the experiment is not lifted instantly, so simulations lead it by a near-constant
+// against T = t sqrt(2 g / a) is compared with the experiment (problems/scenes/data/, with its
+// sources): the front speed dZ/dT over 1.4 <= T <= 3.0 (least-squares slopes of both) within 5%,
+// and the simulated front at most 0.35 ahead in T (Z_sim(T) between Z_exp(T) and Z_exp(T + 0.35));
+// the gate of the experiment is not lifted instantly, so simulations lead it by a near-constant
 // offset. WCSPH and IISPH at coarse resolution (dx = a / 20), with the viscosity of the shipped
 // scene (problems/scenes/dam_break_2d.toml).
 #include <gtest/gtest.h>
@@ -15,6 +15,7 @@
 #include <vector>
 
 #include "hooke/sph/iisph.hpp"
+#include "hooke/sph/surge_front.hpp"
 #include "hooke/sph/wcsph.hpp"
 #include "sph/sph_scenes.hpp"
 
@@ -23,9 +24,7 @@ namespace {
 
 using test::kG;
 
-struct Point {
-  double T, Z;
-};
+using Point = FrontPoint;
 
 /// The rows of `source` in the reference file.
 std::vector<Point> experiment(const std::string& source) {
@@ -43,30 +42,6 @@ std::vector<Point> experiment(const std::string& source) {
     if (name == source) out.push_back({std::stod(T), std::stod(Z)});
   }
   return out;
-}
-
-/// Least-squares slope dZ/dT of the points with T in [lo, hi].
-double slope(const std::vector<Point>& points, double lo, double hi) {
-  double n = 0, st = 0, sz = 0, stt = 0, stz = 0;
-  for (const auto& p : points)
-    if (p.T >= lo && p.T <= hi) {
-      n += 1;
-      st += p.T;
-      sz += p.Z;
-      stt += p.T * p.T;
-      stz += p.T * p.Z;
-    }
-  return (n * stz - st * sz) / (n * stt - st * st);
-}
-
-/// Z at T by linear interpolation of the (T-sorted) points.
-double interpolate(const std::vector<Point>& points, double T) {
-  for (size_t k = 1; k < points.size(); ++k)
-    if (T <= points[k].T) {
-      const double w = (T - points[k - 1].T) / (points[k].T - points[k - 1].T);
-      return points[k - 1].Z + w * (points[k].Z - points[k - 1].Z);
-    }
-  return points.back().Z;
 }
 
 /// The dam break at spacing a / resolution with kinematic viscosity nu (m^2/s): the front Z(T)
@@ -99,20 +74,16 @@ std::vector<Point> surge_front(int resolution, const typename Stepper::Options& 
 void compare_with_experiment(const std::vector<Point>& sim, const char* label) {
   const auto mm52 = experiment("MM52");
   ASSERT_GE(mm52.size(), 10u);
-  const double exp_slope = slope(mm52, 1.4, 3.0), sim_slope = slope(sim, 1.4, 3.0);
+  const double exp_slope = front_slope(mm52, 1.4, 3.0), sim_slope = front_slope(sim, 1.4, 3.0);
   int compared = 0, behind = 0, too_far_ahead = 0;
-  double lead_min = 1e9, lead_max = -1e9;
   for (const auto& p : sim) {
     if (p.T < 1.4 || p.T > 3.0) continue;
     ++compared;
-    if (p.Z < interpolate(mm52, p.T)) ++behind;
-    if (p.Z > interpolate(mm52, p.T + 0.35)) ++too_far_ahead;
-    // The lead in T: the experiment's time at which it reaches the simulated front.
-    double T_exp = p.T;
-    while (T_exp < 4.0 && interpolate(mm52, T_exp) < p.Z) T_exp += 1e-3;
-    lead_min = std::min(lead_min, T_exp - p.T);
-    lead_max = std::max(lead_max, T_exp - p.T);
+    if (p.Z < front_at(mm52, p.T)) ++behind;
+    if (p.Z > front_at(mm52, p.T + 0.35)) ++too_far_ahead;
   }
+  // The lead in T: when the experiment reaches the simulated front.
+  const auto [lead_min, lead_max] = front_lead(sim, mm52, 1.4, 3.0);
   std::printf(
       "[ dam break] %s: dZ/dT %.3f (experiment %.3f, ratio %.3f), lead in T %.2f..%.2f, "
       "%d samples\n",
