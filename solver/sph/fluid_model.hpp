@@ -121,6 +121,7 @@ struct FluidStepStats {
   int pressure_iterations = 0;      ///< iterations of the pressure solve (0: none)
   double pressure_residual = 0.0;   ///< its final mean density error (implicit methods)
   int substeps = 0;                 ///< substeps the step took (1 without CFL substeps)
+  long long lost = 0;  ///< fluid particles that have left the walls' domain (SphStepper)
 };
 
 /// The fluid's density errors (FluidStepStats's first two fields) for densities rho

@@ -117,7 +117,7 @@ void IisphStepper::compute_diagonal(ConstRef x, double h) {
 void IisphStepper::apply(ConstRef x, double h) {
   m_ap.setZero();
   m_fluid.add_pressure_acceleration(m_search, x, m_system.masses(), m_rho, m_p, m_ap);
-  m_ap.array() *= m_system.moving().array();
+  m_ap.array() *= m_moving.array();
   m_fluid.density_change(m_search, x, m_system.masses(), m_ap, m_div);
   m_Ap = h * h * m_div;
 }

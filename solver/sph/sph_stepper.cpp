@@ -30,6 +30,7 @@ SphStepper::SphStepper(const MassSpringSystem& system, double courant)
   m_a = Vec::Zero(3 * n);
   m_body = Vec::Zero(3 * n);
   m_force = Vec::Zero(3 * n);
+  m_moving = system.moving();
 }
 
 StepSummary SphStepper::step(const State& s0, double h, State& s1) {
@@ -69,6 +70,7 @@ StepSummary SphStepper::step(const State& s0, double h, State& s1) {
     agg.pressure_iterations += m_last.pressure_iterations;
     agg.pressure_residual = std::max(agg.pressure_residual, m_last.pressure_residual);
     agg.max_speed = m_last.max_speed;
+    agg.lost = m_last.lost;
     ++agg.substeps;
     if (s.status == Status::Fatal) {
       m_last = agg;
@@ -92,14 +94,33 @@ StepSummary SphStepper::step(const State& s0, double h, State& s1) {
 double SphStepper::max_fluid_speed(const State& s) const {
   double max_speed2 = 0.0;
   for (Index i = 0; i < m_fluid.num_fluid(); ++i)
-    max_speed2 = std::max(max_speed2, s.v.segment<3>(3 * i).squaredNorm());
+    if (!lost(s.x, i)) max_speed2 = std::max(max_speed2, s.v.segment<3>(3 * i).squaredNorm());
   return std::sqrt(max_speed2);
+}
+
+bool SphStepper::lost(ConstRef x, Index i) const {
+  const Index nf = m_fluid.num_fluid(), n = x.size() / 3;
+  if (n == nf) return false;
+  if (!m_domain_known) {
+    // The boundary particles never move: their box, from any state, once.
+    const auto P =
+        Eigen::Map<const Eigen::Matrix<double, 3, Eigen::Dynamic>>(x.data() + 3 * nf, 3, n - nf);
+    m_domain_lower = P.rowwise().minCoeff().array() - m_fluid.support();
+    m_domain_upper = P.rowwise().maxCoeff().array() + m_fluid.support();
+    m_domain_known = true;
+  }
+  const Vec3 xi = x.segment<3>(3 * i);
+  // Open at the top (+y): spray above the walls comes back.
+  return xi.x() < m_domain_lower.x() || xi.x() > m_domain_upper.x() ||
+         xi.y() < m_domain_lower.y() || xi.z() < m_domain_lower.z() || xi.z() > m_domain_upper.z();
 }
 
 std::string SphStepper::report() const {
   std::ostringstream os;
   os << format_stats(m_stats) << "; last step: max density error " << m_last.max_density_error
      << ", mean " << m_last.mean_density_error;
+  if (m_last.lost > 0)
+    os << "; " << m_last.lost << " fluid particles lost (left the walls' domain)";
   return os.str();
 }
 
@@ -115,14 +136,19 @@ bool SphStepper::prepare(ConstRef x, StepSummary& s) {
   m_last = {};
   m_last.max_density_error = max_error;
   m_last.mean_density_error = mean_error;
+  for (Index i = 0; i < m_fluid.num_fluid(); ++i) {
+    const bool gone = lost(x, i);
+    m_moving.segment<3>(3 * i).setConstant(gone ? 0.0 : m_system.moving()[3 * i]);
+    m_last.lost += gone ? 1 : 0;
+  }
   return true;
 }
 
-void SphStepper::mask_acceleration() { m_a.array() *= m_system.moving().array(); }
+void SphStepper::mask_acceleration() { m_a.array() *= m_moving.array(); }
 
 void SphStepper::external_acceleration(ConstRef x, ConstRef v) {
   m_system.compute_forces(x, v, m_force);
-  m_body = m_system.free_inverse_mass().cwiseProduct(m_force).cwiseProduct(m_system.moving());
+  m_body = m_system.free_inverse_mass().cwiseProduct(m_force).cwiseProduct(m_moving);
   m_a = m_body;
   m_fluid.add_viscous_acceleration(m_search, x, v, m_system.masses(), m_rho, m_a);
   m_fluid.add_wall_support(m_search, x, m_rho, m_body, m_a);
@@ -131,10 +157,16 @@ void SphStepper::external_acceleration(ConstRef x, ConstRef v) {
 
 void SphStepper::finish_step(const State& s0, double h, State& s1, double max_density_error,
                              StepSummary& s) {
-  s1.v = s0.v + h * m_a;
-  s1.x = s0.x + h * s1.v.cwiseProduct(m_system.moving());
+  // Lost particles stop where they are (m_moving); the others move by symplectic Euler.
+  s1.v = (s0.v + h * m_a).cwiseProduct(m_moving);
+  s1.x = s0.x + h * s1.v;
   s1.t = s0.t + h;
-  m_last.max_speed = max_fluid_speed(s1);
+  // Every fluid particle's speed, one that left the domain in this very step included: an
+  // explosion that throws the fluid out of the tank still fails the checks below.
+  double max_speed2 = 0.0;
+  for (Index i = 0; i < m_fluid.num_fluid(); ++i)
+    max_speed2 = std::max(max_speed2, s1.v.segment<3>(3 * i).squaredNorm());
+  m_last.max_speed = std::sqrt(max_speed2);
   ++m_stats.steps;
   m_stats.last_residual = m_last.max_density_error;
   if (!(m_last.max_density_error <= max_density_error)) {

@@ -21,6 +21,13 @@ std::string sph_unsupported(const MassSpringSystem& system);
 /// fewest equal substeps of at most the method's CFL step (cfl_limit) at each substep's start:
 /// n = ceil(remaining / limit), one substep of remaining / n, and again. The step lands on
 /// t + h exactly.
+///
+/// A fluid particle that has left the walls' domain (below the lowest boundary particle, or
+/// beyond the outermost ones sideways, by more than the kernel support; the top is open) is
+/// lost: spray that would otherwise fall for ever, its speed setting the CFL step of the whole
+/// fluid. It is no longer moved (its velocity set to zero where it is), which depends on the
+/// positions alone, so a resumed run loses the same particles. Fluids without boundary
+/// particles lose none.
 class SphStepper : public Stepper {
  public:
   StepSummary step(const State& s0, double h, State& s1) final;
@@ -35,8 +42,10 @@ class SphStepper : public Stepper {
   /// Pressures of the last substep (Pa), num_fluid entries.
   const Vec& pressures() const { return m_p; }
   const FluidModel& fluid() const { return m_fluid; }
-  /// The largest speed of a fluid particle in state s (m/s).
+  /// The largest speed of a fluid particle in state s (m/s), lost particles left out.
   double max_fluid_speed(const State& s) const;
+  /// Whether fluid particle i at positions x has left the walls' domain (class comment).
+  bool lost(ConstRef x, Index i) const;
   StepperStats stats() const override { return m_stats; }
   std::string report() const override;
 
@@ -47,7 +56,8 @@ class SphStepper : public Stepper {
   /// One substep of size h from s0 into s1 (the pressure method).
   virtual StepSummary substep(const State& s0, double h, State& s1) = 0;
 
-  /// Neighbours and densities at x (3n); false (with the message in `s`) if the search failed.
+  /// Neighbours, densities and the moving mask at x (3n); false (with the message in `s`) if
+  /// the search failed.
   bool prepare(ConstRef x, StepSummary& s);
   /// m_body = the body accelerations f/m of the system's forces at (x, v); m_a = m_body plus
   /// the viscous accelerations and the walls' hydrostatic support (FluidModel::add_wall_support);
@@ -67,6 +77,10 @@ class SphStepper : public Stepper {
   NeighbourSearch m_search;
   Vec m_rho, m_p;            // num_fluid
   Vec m_a, m_body, m_force;  // 3n
+  Vec m_moving;  // 3n: the system's moving mask without the lost fluid particles (prepare)
+  // The walls' box grown by the support (lost()), from the first state seen.
+  mutable Vec3 m_domain_lower = Vec3::Zero(), m_domain_upper = Vec3::Zero();
+  mutable bool m_domain_known = false;
   FluidStepStats m_last;
   StepperStats m_stats;
 };

@@ -137,5 +137,33 @@ TEST(SphStepper, CflSubstepsLandOnTheStepAndAreTheStepsTakenOneByOne) {
   }
 }
 
+TEST(SphStepper, AParticleThatLeavesTheWallsIsLostAndStopsWhereItIs) {
+  for (const char* method : {"wcsph", "iisph"}) {
+    SCOPED_TRACE(method);
+    // Water in a tank 0.2 m wide; one particle of the block moved far below the floor (spray
+    // that fell out), falling at 5 m/s, and one high above the open top, rising at 1 m/s.
+    auto scene = test::tank_2d(0.01, 0.2, 0.3, 0.2, 0.1, FluidOptions{});
+    auto stepper = make(method, *scene.system);
+    const Index below = 0, above = 1;
+    State& s0 = scene.state;
+    s0.x.segment<3>(3 * below) = Vec3(0.1, -0.5, 0.0);
+    s0.v.segment<3>(3 * below) = Vec3(0.0, -5.0, 0.0);
+    s0.x.segment<3>(3 * above) = Vec3(0.1, 2.0, 0.0);
+    s0.v.segment<3>(3 * above) = Vec3(0.0, 1.0, 0.0);
+    EXPECT_TRUE(stepper->lost(s0.x, below));
+    EXPECT_FALSE(stepper->lost(s0.x, above));  // the tank is open at the top
+    EXPECT_DOUBLE_EQ(stepper->max_fluid_speed(s0), 1.0);
+    State s1 = s0;
+    const double h = 1e-4;
+    ASSERT_EQ(stepper->step(s0, h, s1).status, Status::Converged);
+    EXPECT_EQ(stepper->last_fluid_stats().lost, 1);
+    EXPECT_TRUE(s1.x.segment<3>(3 * below) == s0.x.segment<3>(3 * below));
+    EXPECT_TRUE(s1.v.segment<3>(3 * below).isZero());
+    // The particle above falls freely under gravity (symplectic Euler).
+    EXPECT_NEAR(s1.v[3 * above + 1], 1.0 - test::kG * h, 1e-12);
+    EXPECT_NE(stepper->report().find("1 fluid particles lost"), std::string::npos);
+  }
+}
+
 }  // namespace
 }  // namespace hooke
