@@ -118,6 +118,10 @@ class FastMassSpringStepper final : public Stepper {
   StepSummary step(const State& s0, double h, State& s1) override;
   /// Iterations, factorizations (or matrix refreshes), local / global / factor times, factor size.
   StepperStats stats() const override;
+  /// The h of the current factor (empty before the first step): a resumed run factors at it
+  /// when its first step is within round-off of it, as the uninterrupted run reused it.
+  std::vector<double> history() const override;
+  void restore_history(const std::vector<double>& history) override;
   /// The counters above, and the worst step_residual() of the run with its step: a fixed
   /// iteration count does not converge a step, and this line says how far from it the run was.
   std::string report() const override;
@@ -128,8 +132,9 @@ class FastMassSpringStepper final : public Stepper {
 
   /// The objective g(x) of the step from s0 with size h (J, up to a constant), x a 3n vector.
   double objective(const State& s0, double h, ConstRef x) const;
-  /// Numeric factorizations so far (one per distinct h or stiffness revision in a row; with
-  /// global_solver = "jacobi", the matrix value refreshes, which happen at the same times).
+  /// Numeric factorizations so far (one per distinct h or stiffness revision in a row, an h
+  /// within a relative kSameStep of the factored one counting as the same; with global_solver =
+  /// "jacobi", the matrix value refreshes, which happen at the same times).
   int factorizations() const { return m_factorizations; }
   /// Seconds spent in the last factorization.
   double last_factor_seconds() const { return m_last_factor_seconds; }
@@ -184,9 +189,11 @@ class FastMassSpringStepper final : public Stepper {
     size_t set, spring;
   };
   std::vector<PinLink> m_pin_links;
-  std::unique_ptr<CholmodSolver> m_chol;  // null with global_solver = "jacobi"
-  Vec m_inv_diag;                         // 1 / A_rr (global_solver = "jacobi")
+  std::unique_ptr<CholmodSolver> m_chol;      // null with global_solver = "jacobi"
+  Vec m_inv_diag;                             // 1 / A_rr (global_solver = "jacobi")
+  static constexpr double kSameStep = 1e-12;  // relative: the same h for the factor (prepare)
   double m_factored_h = 0.0;
+  bool m_factor_ready = false;  // the factor of m_factored_h is computed (not just restored)
   unsigned long long m_factored_revision = ~0ULL;
   int m_factorizations = 0;
   double m_last_factor_seconds = 0.0;
