@@ -116,6 +116,7 @@ FluidRunFigures run_fluid_case(const Scene& scene) {
   const auto& sph = dynamic_cast<const SphStepper&>(*stepper);
   State s = scene.initial, next = scene.initial;
   const long long N = scene.time.steps();
+  f.front.reserve(size_t(N));
   double sum_mean = 0.0;
   const auto start = Clock::now();
   for (long long k = 1; k <= N; ++k) {

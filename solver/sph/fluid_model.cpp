@@ -67,23 +67,31 @@ void FluidModel::add_pressure_acceleration(const NeighbourSearch& nb, ConstRef x
       const Vec3 xi = position(x, i);
       const double qi = p[i] / (rho[i] * rho[i]);
       Vec3 ai = Vec3::Zero(), wall_grad = Vec3::Zero();
-      double sum_w = kernel.W0(), sum_wp = kernel.W0() * p[i];
+      bool near_wall = false;
       for (const int* it = nb.begin(i); it != nb.end(i); ++it) {
         const Index j = *it;
         const Vec3 xij = xi - position(x, j);
-        const double r = xij.norm();
-        const Vec3 g = kernel.gradW(xij, r);
+        const Vec3 g = kernel.gradW(xij, xij.norm());
         if (j < m_num_fluid) {
           ai -= masses[j] * (qi + p[j] / (rho[j] * rho[j])) * g;
-          const double w = kernel.W(r);
-          sum_w += w;
-          sum_wp += w * p[j];
         } else {
           wall_grad += m_psi[j - m_num_fluid] * g;
+          near_wall = true;
         }
       }
-      // The walls' mirrored pressure: the Shepard average of the fluid's around i.
-      ai -= (qi + sum_wp / sum_w * inv_rho0_2) * wall_grad;
+      if (near_wall) {
+        // The walls' mirrored pressure: the Shepard average of the fluid's around i (a second
+        // pass, for the few particles next to a wall).
+        double sum_w = kernel.W0(), sum_wp = kernel.W0() * p[i];
+        for (const int* it = nb.begin(i); it != nb.end(i); ++it) {
+          const Index j = *it;
+          if (j >= m_num_fluid) continue;
+          const double w = kernel.W((xi - position(x, j)).norm());
+          sum_w += w;
+          sum_wp += w * p[j];
+        }
+        ai -= (qi + sum_wp / sum_w * inv_rho0_2) * wall_grad;
+      }
       a.segment<3>(3 * i) += ai;
     });
     return 0;
