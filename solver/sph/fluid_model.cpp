@@ -105,22 +105,19 @@ void FluidModel::add_wall_support(const NeighbourSearch& nb, ConstRef x, ConstRe
   with_kernel([&](const auto& kernel) {
     parallel_for(m_num_fluid, kParallelParticles, [&](long long i) {
       const Vec3 xi = position(x, i), gi = position(body, i);
+      // Only particles with a wall neighbour are pushed (most have none: no kernel values).
+      if (std::none_of(nb.begin(i), nb.end(i), [&](int j) { return j >= m_num_fluid; })) return;
       // The hydrostatic part of the pressure at x_i extrapolated from the fluid around it,
       // sum_j w_ij rho_j g . (x_i - x_j) (the pressures' part is add_pressure_acceleration's).
       double sum_w = kernel.W0(), sum_wh = 0.0;
-      bool near_wall = false;
       for (const int* it = nb.begin(i); it != nb.end(i); ++it) {
         const Index j = *it;
-        if (j >= m_num_fluid) {
-          near_wall = true;
-          continue;
-        }
+        if (j >= m_num_fluid) continue;
         const Vec3 xij = xi - position(x, j);
         const double w = kernel.W(xij.norm());
         sum_w += w;
         sum_wh += w * rho[j] * gi.dot(xij);
       }
-      if (!near_wall) return;
       const double at_i = sum_wh / sum_w;
       Vec3 ai = Vec3::Zero();
       for (const int* it = nb.begin(i); it != nb.end(i); ++it) {

@@ -59,16 +59,15 @@ PressureSystem assemble_pressure_system(const FluidModel& fluid, const Neighbour
           wall_grad += psi[j - nf] * g;
         }
       }
-      if (column[size_t(i)] >= 0)
-        for (int a = 0; a < 3; ++a)
-          e_entries.emplace_back(int(3 * i + a), int(column[size_t(i)]),
-                                 masses[i] * (fluid_self[a] + wall_grad[a]));
-      // F: the fluid's own term on i's column, and the walls' mirrored pressure p_i / rho_i^2 +
+      // i's own column, the same in E and F; then F's walls at the Shepard-averaged pressure:
       // sum_j (W_ij / sum_k W_ik) p_j / rho0^2 with p_j = rho_j^2 q_j on every column j around i.
       if (column[size_t(i)] >= 0)
-        for (int a = 0; a < 3; ++a)
-          f_entries.emplace_back(int(3 * i + a), int(column[size_t(i)]),
-                                 masses[i] * (fluid_self[a] + wall_grad[a]));
+        for (int a = 0; a < 3; ++a) {
+          const Eigen::Triplet<double, int> t(int(3 * i + a), int(column[size_t(i)]),
+                                              masses[i] * (fluid_self[a] + wall_grad[a]));
+          e_entries.push_back(t);
+          f_entries.push_back(t);
+        }
       if (wall_grad.isZero()) continue;
       for (const auto& [j, w] : shepard) {
         if (column[size_t(j)] < 0) continue;
