@@ -20,6 +20,7 @@
 #include <memory>
 #include <utility>
 
+#include "bench/bench_main.hpp"
 #include "bench/cloth_fixture.hpp"
 #include "hooke/linear/cholmod_solver.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
@@ -177,4 +178,4 @@ const int registered = [] {
 
 }  // namespace
 
-BENCHMARK_MAIN();
+HOOKE_BENCHMARK_MAIN();

@@ -4,6 +4,7 @@
 // arrays: 2 ints + 3 doubles each).
 #include <benchmark/benchmark.h>
 
+#include "bench/bench_main.hpp"
 #include "bench/cloth_fixture.hpp"
 
 namespace {
@@ -46,4 +47,4 @@ BENCHMARK(BM_AssembleJacobians)
     ->Arg(100000)
     ->Arg(1000000)
     ->Unit(benchmark::kMillisecond);
-BENCHMARK_MAIN();
+HOOKE_BENCHMARK_MAIN();

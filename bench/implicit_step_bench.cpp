@@ -13,6 +13,7 @@
 
 #include <memory>
 
+#include "bench/bench_main.hpp"
 #include "bench/cloth_fixture.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/simulation.hpp"
@@ -76,4 +77,4 @@ const int registered = [] {
 
 }  // namespace
 
-BENCHMARK_MAIN();
+HOOKE_BENCHMARK_MAIN();

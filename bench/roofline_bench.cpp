@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "bench/bench_main.hpp"
 #include "bench/cloth_fixture.hpp"
 #include "bench/implicit_operator.hpp"
 #include "bench/triad.hpp"
@@ -260,4 +261,4 @@ const int registered = [] {
 
 }  // namespace
 
-BENCHMARK_MAIN();
+HOOKE_BENCHMARK_MAIN();

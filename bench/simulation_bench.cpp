@@ -9,6 +9,7 @@
 
 #include <string>
 
+#include "bench/bench_main.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
 #include "problems/scene.hpp"
@@ -37,4 +38,4 @@ BENCHMARK(BM_ClothStep)->ArgsProduct({{0, 1}, {0, 1}})->Unit(benchmark::kMicrose
 
 }  // namespace
 
-BENCHMARK_MAIN();
+HOOKE_BENCHMARK_MAIN();

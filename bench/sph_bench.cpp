@@ -16,6 +16,7 @@
 #include <cmath>
 #include <memory>
 
+#include "bench/bench_main.hpp"
 #include "bench/triad.hpp"
 #include "hooke/sph/fluid_system.hpp"
 #include "hooke/sph/sampling.hpp"
@@ -137,4 +138,4 @@ BENCHMARK(BM_WcsphStep)
     ->UseRealTime();
 BENCHMARK(BM_DamBreak2D)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
 
-BENCHMARK_MAIN();
+HOOKE_BENCHMARK_MAIN();

@@ -13,14 +13,21 @@
 //    timed steps and reported as its own figure, setup_s. Counters: PCG iterations,
 //    factorizations and their seconds, solve and assembly seconds per step. The target is 0.64 s
 //    per step (10x a classic Jacobi-PCG's 6.4 s).
-// Prints OPENBLAS_CORETYPE, OPENBLAS_NUM_THREADS and OMP_NUM_THREADS.
+// Busy-core mode (issue 18): LocalGlobal411 and BackwardEuler256/pcg-nodal also run as
+// .../threads:T/busy:1 with T = 1 and 2 while a competing process spins on the last core
+// (bench/busy_core.hpp), one-thread and two-thread cases in one invocation: the two-thread run
+// should never be slower. threads:0 is the default thread count, on a quiet machine.
+// Prints OPENBLAS_CORETYPE, OPENBLAS_NUM_THREADS, OMP_NUM_THREADS and GOMP_SPINCOUNT.
 //   build/bench/hooke_bench_targets --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
+#include <omp.h>
 
 #include <chrono>
 #include <cstdlib>
 #include <string>
 
+#include "bench/bench_main.hpp"
+#include "bench/busy_core.hpp"
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/linear/conjugate_gradient.hpp"
 #include "hooke/registry.hpp"
@@ -37,7 +44,23 @@ std::string scene_path(const char* name) {
   return std::string(HOOKE_BENCH_SCENES_DIR) + "/" + name;
 }
 
+/// Sets the thread count of a case (state.range(0); 0 keeps the default) for its lifetime.
+class CaseThreads {
+ public:
+  explicit CaseThreads(const benchmark::State& state) : m_previous(omp_get_max_threads()) {
+    if (state.range(0) > 0) omp_set_num_threads(int(state.range(0)));
+  }
+  ~CaseThreads() { omp_set_num_threads(m_previous); }
+  CaseThreads(const CaseThreads&) = delete;
+  CaseThreads& operator=(const CaseThreads&) = delete;
+
+ private:
+  int m_previous;
+};
+
 void BM_LocalGlobal411(benchmark::State& state) {
+  const CaseThreads threads(state);
+  const hooke::bench::BusyCore busy(state.range(1) != 0);
   const hooke::Scene scene = hooke::load_scene(scene_path("target_local_global_411.toml"));
   const auto o = scene.integrator.options.as<hooke::FastMassSpringOptions>("fast-mass-spring");
   const double h = scene.time.dt;
@@ -67,6 +90,8 @@ void BM_LocalGlobal411(benchmark::State& state) {
 }
 
 void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int steps) {
+  const CaseThreads threads(state);
+  const hooke::bench::BusyCore busy(state.range(1) != 0);
   const hooke::Scene scene = hooke::load_scene(scene_path("target_backward_euler_256.toml"),
                                                {"integrator.linear_solver=" + linear_solver});
   const double h = scene.time.dt;
@@ -113,11 +138,16 @@ void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int
 }
 
 const int registered = [] {
-  for (const char* v : {"OPENBLAS_CORETYPE", "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS"}) {
+  for (const char* v :
+       {"OPENBLAS_CORETYPE", "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "GOMP_SPINCOUNT"}) {
     const char* value = std::getenv(v);
     benchmark::AddCustomContext(v, value ? value : "(unset)");
   }
   benchmark::RegisterBenchmark("Target/LocalGlobal411/Iteration", BM_LocalGlobal411)
+      ->Args({0, 0})
+      ->Args({1, 1})
+      ->Args({2, 1})
+      ->ArgNames({"threads", "busy"})
       ->UseManualTime()
       ->Iterations(3)
       ->Unit(benchmark::kMillisecond);
@@ -126,15 +156,17 @@ const int registered = [] {
   for (const auto& [solver, steps] : {std::pair<const char*, int>{"pcg-cholmod", 50},
                                       {"pcg-nodal", 50},
                                       {"cholmod", 3},
-                                      {"pcg", 2}})
-    benchmark::RegisterBenchmark(("Target/BackwardEuler256/Step/" + std::string(solver)).c_str(),
-                                 BM_BackwardEuler256, std::string(solver), steps)
-        ->UseManualTime()
-        ->Iterations(1)
-        ->Unit(benchmark::kMillisecond);
+                                      {"pcg", 2}}) {
+    auto* b = benchmark::RegisterBenchmark(
+        ("Target/BackwardEuler256/Step/" + std::string(solver)).c_str(), BM_BackwardEuler256,
+        std::string(solver), steps);
+    b->Args({0, 0});
+    if (std::string(solver) == "pcg-nodal") b->Args({1, 1})->Args({2, 1});
+    b->ArgNames({"threads", "busy"})->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
+  }
   return 0;
 }();
 
 }  // namespace
 
-BENCHMARK_MAIN();
+HOOKE_BENCHMARK_MAIN();

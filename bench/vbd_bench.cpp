@@ -13,10 +13,6 @@
 //   build/bench/hooke_bench_vbd --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 #include <omp.h>
-#include <sched.h>
-#include <signal.h>
-#include <sys/wait.h>
-#include <unistd.h>
 
 #include <algorithm>
 #include <map>
@@ -24,6 +20,8 @@
 #include <utility>
 #include <vector>
 
+#include "bench/bench_main.hpp"
+#include "bench/busy_core.hpp"
 #include "bench/triad.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
@@ -42,34 +40,6 @@ int threads(benchmark::State& state) {
   omp_set_num_threads(t);
   return t;
 }
-
-/// A child process spinning on the machine's last core while it lives (busy = true).
-class BusyCore {
- public:
-  explicit BusyCore(bool busy) {
-    if (!busy) return;
-    m_pid = fork();
-    if (m_pid == 0) {
-      cpu_set_t set;
-      CPU_ZERO(&set);
-      CPU_SET(int(sysconf(_SC_NPROCESSORS_ONLN)) - 1, &set);
-      sched_setaffinity(0, sizeof(set), &set);
-      volatile unsigned long long spin = 0;
-      for (;;) spin = spin + 1;
-    }
-  }
-  ~BusyCore() {
-    if (m_pid > 0) {
-      kill(m_pid, SIGKILL);
-      waitpid(m_pid, nullptr, 0);
-    }
-  }
-  BusyCore(const BusyCore&) = delete;
-  BusyCore& operator=(const BusyCore&) = delete;
-
- private:
-  pid_t m_pid = -1;
-};
 
 const hooke::Scene& scene() {
   static const hooke::Scene s =
@@ -107,7 +77,7 @@ void BM_VbdIteration(benchmark::State& state) {
   hooke::VbdStepper vbd(*scene().system, o);
   double seconds = 0.0;
   {
-    BusyCore busy(state.range(1) != 0);
+    hooke::bench::BusyCore busy(state.range(1) != 0);
     seconds = time_iterations(state, vbd, o.iterations);
   }
   // Links: an int and three doubles (32 bytes) per spring end; x read and written, x0 and y read.
@@ -128,7 +98,7 @@ void BM_LocalGlobalIteration(benchmark::State& state) {
   auto o = scene().integrator.options.as<hooke::FastMassSpringOptions>("fast-mass-spring");
   o.tolerance = 0.0;
   hooke::FastMassSpringStepper fms(*scene().system, o);
-  BusyCore busy(state.range(1) != 0);
+  hooke::bench::BusyCore busy(state.range(1) != 0);
   time_iterations(state, fms, o.iterations);
 }
 
@@ -146,4 +116,4 @@ BENCHMARK(BM_LocalGlobalIteration)
     ->UseManualTime()
     ->Unit(benchmark::kMillisecond);
 
-BENCHMARK_MAIN();
+HOOKE_BENCHMARK_MAIN();

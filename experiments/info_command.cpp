@@ -2,10 +2,15 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
 #include <iostream>
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
 
 #include "experiments/cli.hpp"
 #include "experiments/natural_frequency.hpp"
@@ -91,6 +96,16 @@ void print_fluid_info(const Scene& scene, std::ostream& out) {
 void print_scene_info(const Scene& scene, std::ostream& out) {
   out << std::setprecision(6);
   out << "scene:      " << scene.file << "\n";
+  // The threads a run gets and libgomp's wait policy (hooke/thread_policy.hpp: the program sets
+  // GOMP_SPINCOUNT unless the user set it or OMP_WAIT_POLICY).
+#ifdef _OPENMP
+  out << "threads:    " << omp_get_max_threads() << " (OpenMP";
+  for (const char* v : {"GOMP_SPINCOUNT", "OMP_WAIT_POLICY"})
+    if (const char* value = std::getenv(v)) out << ", " << v << "=" << value;
+  out << ")\n";
+#else
+  out << "threads:    1 (built without OpenMP)\n";
+#endif
   if (scene.is_ode()) {
     out << "kind:       first-order ODE test problem, dimension " << scene.ode->dimension() << "\n";
     out << "method:     " << scene.integrator.method << ", dt = " << scene.time.dt

@@ -22,6 +22,7 @@
 
 #include "experiments/cli.hpp"
 #include "hooke/config.hpp"
+#include "hooke/thread_policy.hpp"
 #include "problems/input_error.hpp"
 
 namespace hooke::cli {
@@ -41,6 +42,7 @@ Command add_energy_command(CLI::App& app);            // energy_drift.cpp
 }  // namespace hooke::cli
 
 int main(int argc, char** argv) {
+  hooke::adopt_thread_policy(argv);  // first: may execute the program again (thread_policy.hpp)
   using namespace hooke::cli;
   CLI::App app{"hooke " HOOKE_VERSION
                ": a solver for stiff mass-spring systems (strings, hair, cloth)"};

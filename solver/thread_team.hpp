@@ -15,7 +15,13 @@ namespace hooke {
 /// regions whose result does not depend on the thread count (the callers' determinism tests check
 /// that), so the choice changes timing only.
 ///
-/// Use: `const int t = team.threads();` run the region with num_threads(t) and time it, then
+/// The first repetition on each size is a warm-up and is not counted: it pays one-off costs (the
+/// first touch of buffers, a solver's first call, the thread team's start) that would otherwise
+/// hold a size back for many probes. Then all threads and one thread run in turn until each has a
+/// time.
+///
+/// Use: `const int t = team.threads();` run the region with num_threads(t) (or inside a
+/// ThreadCountScope(t), for a repetition made of several regions) and time it, then
 /// `team.record(t, seconds)`.
 class AdaptiveTeam {
  public:
@@ -28,9 +34,9 @@ class AdaptiveTeam {
   int threads() {
     const int all = available();
     if (all <= 1) return 1;
-    // Until both sizes have a time, try all threads first, then one.
-    if (m_time[1] < 0.0) return all;
-    if (m_time[0] < 0.0) return 1;
+    // Until both sizes have a counted time: all threads and one in turn, all threads first.
+    if (m_time[0] < 0.0 || m_time[1] < 0.0)
+      return m_seen[1] <= m_seen[0] && m_time[1] < 0.0 ? all : (m_time[0] < 0.0 ? 1 : all);
     // All threads only when they are clearly faster: where the two are about even (a busy second
     // core), one thread gives the same time without the barriers' stalls and their variance.
     const bool one_is_faster = !(m_time[1] < kMargin * m_time[0]);
@@ -39,10 +45,14 @@ class AdaptiveTeam {
   }
   /// Reports that a repetition on `threads` threads took `seconds` of wall time.
   void record(int threads, double seconds) {
-    double& t = m_time[threads > 1 ? 1 : 0];
-    // An exponential average over the last few repetitions: follows a change of load within a
-    // few probes and smooths single outliers.
-    t = t < 0.0 ? seconds : 0.7 * t + 0.3 * seconds;
+    const int k = threads > 1 ? 1 : 0;
+    if (m_seen[k]++ == 0) return;  // the warm-up
+    double& t = m_time[k];
+    const bool chosen = m_time[1 - k] < 0.0 || (k == 1) == (m_time[1] < kMargin * m_time[0]);
+    // An exponential average: over the last few repetitions for the size in use, which smooths
+    // single outliers; a probe of the other size counts half, so that a change of load shows
+    // within a few probes.
+    t = t < 0.0 ? seconds : (chosen ? 0.7 * t + 0.3 * seconds : 0.5 * t + 0.5 * seconds);
   }
   /// The smoothed wall time per repetition on one thread and on all (s); -1 until measured.
   double seconds_one() const { return m_time[0]; }
@@ -60,7 +70,35 @@ class AdaptiveTeam {
   static constexpr double kMargin = 0.95;
   int m_probe_every;
   long long m_count = 0;
+  long long m_seen[2] = {0, 0};
   double m_time[2] = {-1.0, -1.0};
+};
+
+/// Sets the OpenMP thread count of the regions the calling thread starts (omp_set_num_threads)
+/// for its lifetime and restores the previous count at its end: one repetition of a region
+/// made of several parallel loops (an iteration of an iterative method) runs on the team an
+/// AdaptiveTeam chose. Loops that test run_parallel() then run serially on a team of one, with
+/// no OpenMP region at all. Does nothing without OpenMP.
+class ThreadCountScope {
+ public:
+  explicit ThreadCountScope(int threads) {
+#ifdef _OPENMP
+    m_previous = omp_get_max_threads();
+    if (threads != m_previous) omp_set_num_threads(threads);
+#else
+    (void)threads;
+#endif
+  }
+  ~ThreadCountScope() {
+#ifdef _OPENMP
+    if (omp_get_max_threads() != m_previous) omp_set_num_threads(m_previous);
+#endif
+  }
+  ThreadCountScope(const ThreadCountScope&) = delete;
+  ThreadCountScope& operator=(const ThreadCountScope&) = delete;
+
+ private:
+  int m_previous = 1;
 };
 
 }  // namespace hooke

@@ -31,6 +31,12 @@ import csv  # noqa: E402
 import os  # noqa: E402
 import tempfile  # noqa: E402
 
+# hooke's OpenMP wait policy (solver/thread_policy.hpp), which libgomp reads when it is loaded:
+# set here, before the compiled module loads it, unless the user chose one (or libgomp is already
+# loaded by another module, when this has no effect).
+if "GOMP_SPINCOUNT" not in os.environ and "OMP_WAIT_POLICY" not in os.environ:
+    os.environ["GOMP_SPINCOUNT"] = "10000"
+
 from . import _hooke  # noqa: E402
 from ._hooke import (Scene, Simulation, System, linear_solvers, load_scene,  # noqa: E402,F401
                      methods, system)

@@ -5,6 +5,7 @@
 
 #include "hooke/linear/iterative_common.hpp"
 #include "hooke/linear/preconditioner.hpp"
+#include "hooke/thread_team.hpp"
 
 namespace hooke {
 
@@ -41,6 +42,9 @@ class ConjugateGradientSolver final : public LinearSolver {
   const SparseMatrix* m_A = nullptr;
   Vec m_r, m_z, m_p, m_Ap;
   linear_detail::CsrMirror m_csr;  // A by rows: the product A p, parallel and deterministic
+  // One or all threads per iteration, by their recent times (a busy core): the product and every
+  // preconditioner give the same bits on any thread count, so the choice changes timing only.
+  AdaptiveTeam m_team;
 };
 
 }  // namespace hooke

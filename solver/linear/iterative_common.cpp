@@ -82,7 +82,10 @@ void CsrMirror::multiply(ConstRef x, VecRef y) const {
     }
   };
   if (run_parallel(static_cast<long long>(value.size()), 200000)) {
-#pragma omp parallel for schedule(static)
+    // 64 blocks of rows handed out one at a time: a thread whose core another process shares
+    // takes fewer of them. Each row is one thread's sum in a fixed order: any thread count and
+    // any hand-out give the same bits.
+#pragma omp parallel for schedule(dynamic, 1)
     for (long long b = 0; b < 64; ++b) rows(n * b / 64, n * (b + 1) / 64);
   } else {
     rows(0, n);

@@ -27,18 +27,28 @@ namespace hooke {
 namespace {
 using I = std::int64_t;
 
-/// The split of the supernodal elimination tree that SupernodalSolver::bind() computes: two bins
-/// of disjoint subtrees (each subtree a contiguous range of supernodes in postorder) and the top,
-/// the supernodes above them, processed serially.
+/// The split of the supernodal elimination tree that SupernodalSolver::bind() computes: bins of
+/// disjoint subtrees (each subtree a contiguous range of supernodes in postorder), heaviest bin
+/// first, and the top, the supernodes above them, processed serially.
 struct SplitView {
   const I* top;      // per factor row: its index among the top's rows, or -1
   I top_rows;        // rows (columns) of the top supernodes
   const I* top_row;  // the factor row of each top row
   I top_count;       // top supernodes, ascending
   const I* top_supernode;
-  const I* range;  // subtree ranges [first, last], bin 0's then bin 1's, ascending
-  I bin_start[3];  // bin b's ranges: range[2r .. 2r+1] for r in [bin_start[b], bin_start[b+1])
+  const I* range;      // subtree ranges [first, last], bin 0's, then bin 1's, ...
+  I bins;              // bins (at most SupernodalSolver::kMaxBins)
+  const I* bin_start;  // bin b's ranges: range[2r .. 2r+1] for r in [bin_start[b], bin_start[b+1])
 };
+
+/// The index of the calling thread in its OpenMP team (0 outside one).
+inline int thread_index() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
 
 /// The factor repacked by bind() (see "Panels" in supernodal_kernels.inc): per supernode, its
 /// inverted diagonal block at value + inv_start[s] and its off-diagonal block at off_start[s].
@@ -48,9 +58,9 @@ struct Packed {
   const double* value;
 };
 
-/// One bin's scratch.
+/// One thread's scratch.
 struct Work {
-  double *D, *W, *T, *delta;
+  double *D, *W, *T;
 };
 }  // namespace
 
@@ -79,13 +89,16 @@ namespace sn_base {
 }  // namespace sn_base
 
 namespace {
-/// Splits the supernodal tree for two threads: descends from the roots, moving the heaviest
-/// subtree's root into the top while that subtree holds more than half of the work left below,
-/// then deals the remaining subtrees into two bins, heaviest first, lighter bin first. Needs the
-/// supernodes in a postorder of their tree (CHOLMOD's default, checked); otherwise everything
-/// goes into the top and the solve is serial.
+/// Splits the supernodal tree into bins of subtrees for threads that take them one at a time:
+/// descends from the roots, moving the heaviest subtree's root into the top while that subtree
+/// holds more than a quarter of the work left below, then deals the remaining subtrees into at
+/// most SupernodalSolver::kMaxBins bins, heaviest first, each to the lightest bin, and orders the
+/// bins heaviest first. With two threads on two free cores the bins pair up evenly; when one
+/// thread's core is shared, the other takes more of them. Needs the supernodes in a postorder of
+/// their tree (CHOLMOD's default, checked); otherwise everything goes into the top and the solve
+/// is serial.
 void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<I>& top_row,
-                std::vector<I>& top_supernode, std::vector<I>& range, I (&bin_start)[3]) {
+                std::vector<I>& top_supernode, std::vector<I>& range, std::vector<I>& bin_start) {
   const I ns = f.nsuper;
   std::vector<I> col2super(size_t(f.n)), parent(size_t(ns), -1), count(size_t(ns), 1);
   std::vector<double> work(size_t(ns), 0.0);
@@ -124,7 +137,7 @@ void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<
   }
   std::vector<char> in_top(size_t(ns), postordered ? 0 : 1);
   range.clear();
-  bin_start[0] = bin_start[1] = bin_start[2] = 0;
+  bin_start.assign(1, 0);
   if (postordered) {
     for (;;) {
       double total = 0.0;
@@ -134,7 +147,7 @@ void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<
         if (work[size_t(frontier[i])] > work[size_t(frontier[heaviest])]) heaviest = i;
       }
       const I x = frontier.empty() ? -1 : frontier[heaviest];
-      if (x < 0 || children[size_t(x)].empty() || work[size_t(x)] <= 0.5 * total) break;
+      if (x < 0 || children[size_t(x)].empty() || work[size_t(x)] <= 0.25 * total) break;
       in_top[size_t(x)] = 1;
       frontier.erase(frontier.begin() + std::ptrdiff_t(heaviest));
       frontier.insert(frontier.end(), children[size_t(x)].begin(), children[size_t(x)].end());
@@ -142,22 +155,26 @@ void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<
     std::sort(frontier.begin(), frontier.end(), [&](I a, I b) {
       return work[size_t(a)] > work[size_t(b)] || (work[size_t(a)] == work[size_t(b)] && a < b);
     });
-    std::vector<I> bins[2];
-    double load[2] = {0.0, 0.0};
+    const size_t nbins = std::min(frontier.size(), size_t(SupernodalSolver::kMaxBins));
+    std::vector<std::vector<I>> bins(nbins);
+    std::vector<double> load(nbins, 0.0);
     for (const I x : frontier) {
-      const int b = load[1] < load[0] ? 1 : 0;
+      const size_t b = size_t(std::min_element(load.begin(), load.end()) - load.begin());
       bins[b].push_back(x);
       load[b] += work[size_t(x)];
     }
-    for (int b = 0; b < 2; ++b) {
+    std::vector<size_t> order(nbins);
+    for (size_t b = 0; b < nbins; ++b) order[b] = b;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return load[a] > load[b]; });
+    for (const size_t b : order) {
       std::sort(bins[b].begin(), bins[b].end());
-      bin_start[b] = I(range.size() / 2);
       for (const I x : bins[b]) {
         range.push_back(x - count[size_t(x)] + 1);
         range.push_back(x);
       }
+      bin_start.push_back(I(range.size() / 2));
     }
-    bin_start[2] = I(range.size() / 2);
   }
   top.assign(size_t(f.n), -1);
   top_row.clear();
@@ -207,8 +224,14 @@ void SupernodalSolver::bind(const SupernodalFactorView& f) {
   for (I s = 0; s < f.nsuper; ++s)
     m_work_total += double(f.super[s + 1] - f.super[s]) * double(f.pi[s + 1] - f.pi[s]);
   if (m_y.size() < size_t(m_K * f.n)) m_y.resize(size_t(m_K * f.n));
-  m_stride = 2 * m_K * cols + m_K * rows_below + m_K * I(m_top_row.size());
-  if (m_scratch.size() < size_t(2 * m_stride)) m_scratch.resize(size_t(2 * m_stride));
+  // Scratch for every thread that can take a bin (at most one per bin, whatever the thread count
+  // at this call: a later solve may run on more threads), a delta per bin.
+  m_threads = std::max(1, int(m_bin_start.size()) - 1);
+  m_stride = 2 * m_K * cols + m_K * rows_below;
+  if (m_scratch.size() < size_t(m_threads * m_stride))
+    m_scratch.resize(size_t(m_threads * m_stride));
+  const size_t deltas = (m_bin_start.size() - 1) * size_t(m_K) * m_top_row.size();
+  if (m_delta.size() < deltas) m_delta.resize(deltas);
   m_cols_max = cols;
   m_rows_below_max = rows_below;
   if (m_packed.size() < size_t(packed)) m_packed.resize(size_t(packed));
@@ -264,7 +287,8 @@ SupernodalSolver::Shape SupernodalSolver::shape() const {
   };
   const double total = out.diagonal_entries + out.off_diagonal_entries;
   for (const I s : m_top_supernode) out.top_fraction += entries(s) / total;
-  for (int b = 0; b < 2; ++b)
+  out.bins = int(m_bin_start.size()) - 1;
+  for (size_t b = 0; b + 1 < m_bin_start.size(); ++b)
     for (I r = m_bin_start[b]; r < m_bin_start[b + 1]; ++r)
       for (I s = m_range[size_t(2 * r)]; s <= m_range[size_t(2 * r + 1)]; ++s)
         out.bin_fraction[b] += entries(s) / total;
@@ -279,25 +303,29 @@ void SupernodalSolver::solve(const double* b, double* x) {
                   I(m_top_supernode.size()),
                   m_top_supernode.data(),
                   m_range.data(),
-                  {m_bin_start[0], m_bin_start[1], m_bin_start[2]}};
-  Work work[2];
-  for (int w = 0; w < 2; ++w) {
+                  I(m_bin_start.size()) - 1,
+                  m_bin_start.data()};
+  Work work[kMaxBins];
+  for (int w = 0; w < m_threads; ++w) {
     double* base = m_scratch.data() + w * m_stride;
     work[w].D = base;
     work[w].W = base + m_K * m_cols_max;
     work[w].T = base + 2 * m_K * m_cols_max;
-    work[w].delta = work[w].T + m_K * m_rows_below_max;
   }
-  // Two threads pay off from about 1e5 factor entries (a 10k-spring cloth's factor has 7e4).
-  const bool parallel = run_parallel(static_cast<long long>(m_work_total), 100000);
+  // Threads pay off from about 1e5 factor entries (a 10k-spring cloth's factor has 7e4).
+  int threads = 1;
+#ifdef _OPENMP
+  if (run_parallel(static_cast<long long>(m_work_total), 100000))
+    threads = std::min(omp_get_max_threads(), m_threads);
+#endif
   const Packed pk{m_inv_start.data(), m_off_start.data(), m_packed.data()};
 #if HOOKE_SUPERNODAL_AVX2
   if (m_avx2) {
-    sn_avx2::solve_any(m_K, m_f, pk, split, parallel, b, x, m_y.data(), work);
+    sn_avx2::solve_any(m_K, m_f, pk, split, threads, b, x, m_y.data(), work, m_delta.data());
     return;
   }
 #endif
-  sn_base::solve_any(m_K, m_f, pk, split, parallel, b, x, m_y.data(), work);
+  sn_base::solve_any(m_K, m_f, pk, split, threads, b, x, m_y.data(), work, m_delta.data());
 }
 
 }  // namespace hooke

@@ -1,4 +1,5 @@
 #pragma once
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -43,13 +44,16 @@ class SupernodalSolver {
   /// x = A^-1 b; b and x are K n values, interleaved; x may alias b.
   void solve(const double* b, double* x);
   int rhs() const { return m_K; }
+  /// The most bins of subtrees the tree is split into (split_tree in the .cpp).
+  static constexpr int kMaxBins = 8;
   /// Shape of the bound factor, for cost accounting: supernodes, entries in the diagonal blocks'
   /// lower triangles and in the off-diagonal blocks (each read once per sweep).
   struct Shape {
     std::int64_t supernodes = 0;
     double diagonal_entries = 0.0, off_diagonal_entries = 0.0;
     double top_fraction = 0.0;  ///< share of the entries in the serial top of the tree split
-    double bin_fraction[2] = {0.0, 0.0};  ///< shares of the two parallel bins
+    int bins = 0;               ///< bins of subtrees the threads take in turn
+    std::array<double, kMaxBins> bin_fraction{};  ///< shares of the bins, heaviest first
   };
   Shape shape() const;
 
@@ -58,13 +62,14 @@ class SupernodalSolver {
   int m_K;
   bool m_avx2 = false;
   std::vector<double> m_y;  // permuted right-hand sides, K n interleaved
-  // Per thread (two): a supernode's own rows twice and its rows below, K contiguous columns each,
-  // and the updates to the top's rows.
-  std::vector<double> m_scratch;
+  // Per thread (m_threads, at most one per bin): a supernode's own rows twice and its rows below,
+  // K contiguous columns each; per bin, its updates to the top's rows.
+  std::vector<double> m_scratch, m_delta;
   std::int64_t m_stride = 0, m_cols_max = 0, m_rows_below_max = 0;
-  // The two-thread split of the supernodal tree (see split_tree in the .cpp).
-  std::vector<std::int64_t> m_top, m_top_row, m_top_supernode, m_range;
-  std::int64_t m_bin_start[3] = {0, 0, 0};
+  int m_threads = 1;
+  // The split of the supernodal tree into bins of subtrees and a serial top (split_tree in the
+  // .cpp): bin b's subtree ranges are m_range[2r .. 2r+1], r in [m_bin_start[b], m_bin_start[b+1]).
+  std::vector<std::int64_t> m_top, m_top_row, m_top_supernode, m_range, m_bin_start;
   double m_work_total = 0.0;
   // The factor repacked into 4-column panels: each supernode's inverted diagonal block and its
   // off-diagonal block (see supernodal_kernels.inc), and the dense scratch for one inversion.

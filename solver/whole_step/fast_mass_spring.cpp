@@ -401,6 +401,9 @@ bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
   for (int k = 0;; ++k) {
     // Local step at the current iterate x_k (its objective and gradient come with it).
     if (k == N && !test) break;
+    const int threads = m_team.threads();
+    const ThreadCountScope team(threads);
+    const auto t_iteration = Clock::now();
     const double E = local_step(m_x, test);
     if (test) {
       out.residual = error_estimate(m_x);
@@ -455,6 +458,7 @@ bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
       }
     }
     if (m_opt.on_iteration) m_opt.on_iteration(it, m_x);
+    m_team.record(threads, seconds_since(t_iteration));
   }
   out.iterations = it;
   return converged;
@@ -503,6 +507,9 @@ bool FastMassSpringStepper::iterate_lbfgs(StepSummary& out) {
   const int H = m_opt.lbfgs_history;
   int stored = 0, newest = -1;
   for (int k = 0; k < N; ++k) {
+    const int threads = m_team.threads();
+    const ThreadCountScope team(threads);
+    const auto t_iteration = Clock::now();
     if (lbfgs_direction(stored, newest, out.message) != Status::Converged) {
       out.status = Status::Fatal;
       return false;
@@ -520,7 +527,8 @@ bool FastMassSpringStepper::iterate_lbfgs(StepSummary& out) {
     ++it;
     double alpha = 1.0, g_trial = g;
     bool accepted = false;
-    for (int trial = 0; trial < 30; ++trial) {
+    int trials = 0;
+    for (int trial = 0; trial < 30; ++trial, ++trials) {
       m_Xtrial = m_X + alpha * m_D;
       scatter(m_Xtrial, m_x);
       g_trial = quadratic_terms(m_x) + local_step(m_x, test);
@@ -565,6 +573,8 @@ bool FastMassSpringStepper::iterate_lbfgs(StepSummary& out) {
     m_G.swap(m_Gnew);
     g = g_trial;
     if (m_opt.on_iteration) m_opt.on_iteration(it, m_x);
+    // Per evaluation of the objective: the line search's trial count varies between iterations.
+    m_team.record(threads, seconds_since(t_iteration) / double(1 + trials));
     if (test) {  // the accepted trial was the last local step: its gradient is at x_{k+1}
       out.residual = error_estimate(m_x);
       if (out.residual <= m_opt.tolerance) {

@@ -9,6 +9,7 @@
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/options.hpp"
+#include "hooke/thread_team.hpp"
 #include "hooke/whole_step/spring_potential_forces.hpp"
 
 namespace hooke {
@@ -211,6 +212,9 @@ class FastMassSpringStepper final : public Stepper {
 
   // Counters for report().
   long long m_steps = 0, m_iterations = 0, m_line_search_trials = 0, m_chebyshev_restarts = 0;
+  // One or all threads per iteration, by their recent times (a busy core): local steps, global
+  // solves and sweeps give the same bits on any thread count, so the choice changes timing only.
+  AdaptiveTeam m_team;
   Vec m_force;                    // 3n scratch of step_residual()
   double m_worst_residual = 0.0;  // the largest step_residual() so far, at step m_worst_step
   long long m_worst_step = 0;

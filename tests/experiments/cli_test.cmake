@@ -9,7 +9,8 @@
 #   diverge     two_particle with rk4 at dt = 0.05 (h omega = 7, far above rk4's 2.83): exit 3, the
 #               message names the step, log.csv is kept, final.csv is not written.
 #   diverge_ode decay with rk4 at dt = 10 (|R(-10)| = 291 per step): the state overflows, exit 3.
-#   info        `hooke info hanging_cloth` exits 0 and describes the 32 x 32 cloth.
+#   info        `hooke info hanging_cloth` exits 0 and describes the 32 x 32 cloth, with the OpenMP
+#               spin count hooke sets (or the user's).
 #   scenes      `hooke scenes` lists every shipped scene with its one-line description.
 #   bad_input   missing scene file, malformed --set and unknown subcommand: exit 2 with a message.
 #   stability   `hooke stability` at a tiny size (two_particle, two methods, one k): stability.csv has
@@ -199,8 +200,17 @@ elseif(CASE STREQUAL "diverge_ode")
   endif()
 
 elseif(CASE STREQUAL "info")
+  # libgomp's wait policy: hooke sets GOMP_SPINCOUNT (solver/thread_policy.hpp) unless the user
+  # chose a policy, and says which it runs with.
+  unset(ENV{OMP_WAIT_POLICY})
+  set(ENV{GOMP_SPINCOUNT} 123)
   hooke_exec(info hanging_cloth)
   expect_rc(0)
+  expect_contains("${out}" "GOMP_SPINCOUNT=123)" "stdout (the user's spin count)")
+  unset(ENV{GOMP_SPINCOUNT})
+  hooke_exec(info hanging_cloth)
+  expect_rc(0)
+  expect_contains("${out}" "GOMP_SPINCOUNT=10000)" "stdout (hooke's spin count)")
   expect_contains("${out}" "particles:  1024 (2 pinned)" "stdout")
   expect_contains("${out}" "omega_max:" "stdout")
   expect_contains("${out}" "rk4" "stdout")

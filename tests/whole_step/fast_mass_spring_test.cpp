@@ -11,10 +11,15 @@
 
 #include <gtest/gtest.h>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include <cmath>
 #include <memory>
 #include <random>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hooke/forces/hooke_spring.hpp"
@@ -178,6 +183,40 @@ TEST(FastMassSpring, PlainIterationsLowerTheObjectiveEveryTime) {
   }
   EXPECT_EQ(decreases, 59);
   EXPECT_EQ(fms.objective(s0, h, s1.x), g.back());
+}
+
+TEST(FastMassSpring, SameBitsOnOneOrTwoThreadsWhateverTheTeamRuns) {
+#ifndef _OPENMP
+  GTEST_SKIP() << "built without OpenMP";
+#else
+  // Local/global and L-BFGS iterations run on one or all threads, chosen per iteration by their
+  // recent times (AdaptiveTeam): sound only if every iteration gives the same bits on any thread
+  // count. A cloth whose factor is large enough for the parallel solves (>= 1e5 entries); on two
+  // threads the team's start alone runs iterations on both team sizes.
+  const Scene scene = hanging_cloth(64, 0.02);
+  const double h = 1e-2;
+  const int threads = omp_get_max_threads();
+  for (const char* acceleration : {"none", "lbfgs"}) {
+    State out[2];
+    for (int t = 1; t <= 2; ++t) {
+      omp_set_num_threads(t);
+      FastMassSpringStepper fms(*scene.system, with(acceleration, 12));
+      State s = scene.state, s1;
+      for (int k = 0; k < 2; ++k) {
+        ASSERT_EQ(fms.step(s, h, s1).status, Status::Converged) << acceleration;
+        std::swap(s, s1);
+      }
+      if (t == 2) {
+        EXPECT_GE(fms.factor_nonzeros(), 1e5) << "large enough for two threads";
+      }
+      out[t - 1] = s;
+    }
+    omp_set_num_threads(threads);
+    EXPECT_EQ((out[0].x - out[1].x).cwiseAbs().maxCoeff(), 0.0) << acceleration;
+    EXPECT_EQ((out[0].v - out[1].v).cwiseAbs().maxCoeff(), 0.0) << acceleration;
+    EXPECT_GT((out[0].x - scene.state.x).norm(), 0.0) << acceleration << ": the cloth moved";
+  }
+#endif
 }
 
 TEST(FastMassSpring, RefactorsWhenStepOrStiffnessChangesOnly) {
