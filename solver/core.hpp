@@ -3,6 +3,7 @@
 #include <Eigen/Core>
 #include <Eigen/Geometry>
 #include <Eigen/SparseCore>
+#include <algorithm>
 #include <chrono>
 #include <sstream>
 #include <stdexcept>
@@ -108,6 +109,38 @@ inline void parallel_for(long long n, long long threshold, Body&& body) {
   } else {
     for (long long i = 0; i < n; ++i) body(i);
   }
+}
+
+/// Calls body(begin, end) over [0, n) cut into blocks of kRangeBlock entries: blocks handed out
+/// one at a time to the threads when run_parallel(n, kRangeThreshold), else one call for all of
+/// [0, n). For element-wise vector work (copies, axpys, scalings of state vectors): each entry is
+/// computed the same way whoever computes it, so the result does not depend on the thread count,
+/// and a thread whose core another process shares takes fewer blocks.
+inline constexpr long long kRangeBlock = 1 << 15, kRangeThreshold = 1 << 17;
+template <typename Body>
+inline void parallel_ranges(long long n, Body&& body) {
+  if (run_parallel(n, kRangeThreshold)) {
+    const long long blocks = (n + kRangeBlock - 1) / kRangeBlock;
+#pragma omp parallel for schedule(dynamic, 1)
+    for (long long b = 0; b < blocks; ++b)
+      body(b * kRangeBlock, std::min(n, (b + 1) * kRangeBlock));
+  } else {
+    body(0LL, n);
+  }
+}
+
+/// True if every entry of a is finite; over blocks in parallel for long vectors.
+inline bool all_finite(const Eigen::Ref<const Eigen::VectorXd>& a) {
+  const long long n = a.size();
+  if (!run_parallel(n, kRangeThreshold)) return a.allFinite();
+  const long long blocks = (n + kRangeBlock - 1) / kRangeBlock;
+  bool finite = true;
+#pragma omp parallel for schedule(dynamic, 1) reduction(&& : finite)
+  for (long long b = 0; b < blocks; ++b) {
+    const long long b0 = b * kRangeBlock;
+    finite = finite && a.segment(b0, std::min(n, b0 + kRangeBlock) - b0).allFinite();
+  }
+  return finite;
 }
 
 }  // namespace hooke

@@ -67,8 +67,11 @@ StepSummary Simulation::commit(StepSummary s, double h) {
     return s;
   }
   if (m_stable_buffers) {
-    m_state.x = m_next.x;  // same sizes: Eigen copies into the existing storage
-    m_state.v = m_next.v;
+    // Same sizes: copied into the existing storage, over blocks in parallel.
+    parallel_ranges(m_state.x.size(), [&](long long b, long long e) {
+      m_state.x.segment(b, e - b) = m_next.x.segment(b, e - b);
+      m_state.v.segment(b, e - b) = m_next.v.segment(b, e - b);
+    });
     m_state.t = m_next.t;
   } else {
     std::swap(m_state, m_next);

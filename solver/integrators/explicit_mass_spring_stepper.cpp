@@ -6,7 +6,9 @@ namespace hooke {
 
 ExplicitMassSpringStepper::ExplicitMassSpringStepper(const MassSpringSystem& system,
                                                      std::unique_ptr<ExplicitStepper> method)
-    : m_ode(system), m_method(std::move(method)) {
+    : m_system(system), m_ode(system), m_method(std::move(method)) {
+  m_symplectic = dynamic_cast<const SymplecticEuler*>(m_method.get()) != nullptr;
+  if (m_symplectic) m_f.setZero(system.dofs());
   m_X0.setZero(m_ode.dimension());
   m_X1.setZero(m_ode.dimension());
   m_method->resize(m_ode.dimension());
@@ -17,11 +19,40 @@ StepSummary ExplicitMassSpringStepper::step(const State& s0, double h, State& s1
   const Index n3 = m_ode.position_dimension();
   HOOKE_ASSERT(s0.x.size() == n3 && s0.v.size() == n3,
                "state has " << s0.x.size() << " positions for " << n3 << " dofs");
-  m_X0.head(n3) = s0.x;
-  m_X0.tail(n3) = s0.v;
+  if (m_symplectic && !m_system.has_pin_motion()) {
+    // SymplecticEuler::step on MassSpringOde, entry by entry: p1 = p0 + h (f inv_mass), then
+    // q1 = q0 + h (p1 moving), with the same operations in the same order.
+    m_system.compute_forces(s0.x, s0.v, m_f);
+    s1.x.resize(n3);
+    s1.v.resize(n3);
+    const double* f = m_f.data();
+    const double* inv_mass = m_system.free_inverse_mass().data();
+    const double* moving = m_system.moving().data();
+    const double *x0 = s0.x.data(), *v0 = s0.v.data();
+    double *x1 = s1.x.data(), *v1 = s1.v.data();
+    parallel_ranges(n3, [&](long long b, long long e) {
+      for (long long i = b; i < e; ++i) {
+        const double v = v0[i] + h * (f[i] * inv_mass[i]);
+        v1[i] = v;
+        x1[i] = x0[i] + h * (v * moving[i]);
+      }
+    });
+    s1.t = s0.t + h;
+    return {};
+  }
+  // Copies in and out over blocks in parallel (core.hpp's parallel_ranges): at a million
+  // particles each is 24 MB, which one thread alone streams at a fraction of the bandwidth.
+  parallel_ranges(n3, [&](long long b, long long e) {
+    m_X0.segment(b, e - b) = s0.x.segment(b, e - b);
+    m_X0.segment(n3 + b, e - b) = s0.v.segment(b, e - b);
+  });
   m_method->step(m_ode, s0.t, h, m_X0, m_X1);
-  s1.x = m_X1.head(n3);
-  s1.v = m_X1.tail(n3);
+  s1.x.resize(n3);
+  s1.v.resize(n3);
+  parallel_ranges(n3, [&](long long b, long long e) {
+    s1.x.segment(b, e - b) = m_X1.segment(b, e - b);
+    s1.v.segment(b, e - b) = m_X1.segment(n3 + b, e - b);
+  });
   s1.t = s0.t + h;
   return {};
 }

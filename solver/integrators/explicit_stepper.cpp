@@ -1,5 +1,7 @@
 #include "hooke/integrators/explicit_stepper.hpp"
 
+#include <algorithm>
+
 namespace hooke {
 
 ExplicitRungeKutta::ExplicitRungeKutta(const char* name, std::vector<std::vector<double>> a,
@@ -151,15 +153,23 @@ void SymplecticEuler::step(OdeSystem& ode, double t, double h, ConstRef X0, VecR
   HOOKE_ASSERT(nq >= 0 && nq <= dim, "position_dimension " << nq << " outside [0, " << dim << "]");
   if (m_k.size() != dim) resize(dim);
   const Index np = dim - nq;
-  // p1 = p0 + h F_p(t, q0, p0)
+  // p1 = p0 + h F_p(t, q0, p0). The element-wise updates run over blocks in parallel
+  // (parallel_ranges: the same bits on any thread count).
   ode.rhs(t, X0, m_k);
-  X1.tail(np) = X0.tail(np) + h * m_k.tail(np);
+  parallel_ranges(np, [&](long long b, long long e) {
+    X1.segment(nq + b, e - b) = X0.segment(nq + b, e - b) + h * m_k.segment(nq + b, e - b);
+  });
   if (nq == 0) return;
   // q1 = q0 + h F_q(t, q0, p1)
-  m_mixed.head(nq) = X0.head(nq);
-  m_mixed.tail(np) = X1.tail(np);
+  parallel_ranges(dim, [&](long long b, long long e) {
+    const long long split = std::clamp<long long>(nq, b, e);  // [b, split) positions, the rest p1
+    m_mixed.segment(b, split - b) = X0.segment(b, split - b);
+    m_mixed.segment(split, e - split) = X1.segment(split, e - split);
+  });
   ode.rhs_position(t, m_mixed, X1.head(nq), m_k);
-  X1.head(nq) = X0.head(nq) + h * X1.head(nq);
+  parallel_ranges(nq, [&](long long b, long long e) {
+    X1.segment(b, e - b) = X0.segment(b, e - b) + h * X1.segment(b, e - b);
+  });
 }
 
 }  // namespace hooke
