@@ -108,24 +108,33 @@ void ExplicitRungeKutta::step(OdeSystem& ode, double t, double h, ConstRef X0, V
     ++m_evaluations;
   }
   m_last_valid = false;
+  // Stage arguments and the result are sums in a fixed order per entry, formed over blocks in
+  // parallel (parallel_ranges: the same bits on any thread count).
   for (size_t s = 1; s < S; ++s) {
-    m_stage = X0;
-    for (size_t j = 0; j < s; ++j)
-      if (m_a[s][j] != 0.0) m_stage.noalias() += (h * m_a[s][j]) * m_k[j];
+    parallel_ranges(dim, [&](long long b, long long e) {
+      auto stage = m_stage.segment(b, e - b);
+      stage = X0.segment(b, e - b);
+      for (size_t j = 0; j < s; ++j)
+        if (m_a[s][j] != 0.0) stage.noalias() += (h * m_a[s][j]) * m_k[j].segment(b, e - b);
+    });
     ode.rhs(t + m_c[s] * h, m_stage, m_k[s]);
     ++m_evaluations;
   }
   m_last_h = h;
   if (m_fsal) {
     // The last stage's argument is X1, summed in the same order as below would.
-    X1 = m_stage;
+    parallel_ranges(
+        dim, [&](long long b, long long e) { X1.segment(b, e - b) = m_stage.segment(b, e - b); });
     m_last_t1 = t + m_c[S - 1] * h;
     m_last_valid = true;
     return;
   }
-  X1 = X0;
-  for (size_t s = 0; s < S; ++s)
-    if (m_b[s] != 0.0) X1.noalias() += (h * m_b[s]) * m_k[s];
+  parallel_ranges(dim, [&](long long b, long long e) {
+    auto x1 = X1.segment(b, e - b);
+    x1 = X0.segment(b, e - b);
+    for (size_t s = 0; s < S; ++s)
+      if (m_b[s] != 0.0) x1.noalias() += (h * m_b[s]) * m_k[s].segment(b, e - b);
+  });
 }
 
 void ExplicitStepper::error_estimate(VecRef) const {

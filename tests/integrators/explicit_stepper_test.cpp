@@ -14,6 +14,10 @@
 
 #include <gtest/gtest.h>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -222,16 +226,26 @@ TEST(ExplicitStepperEnergy, SymplecticEulerEnergyStaysBounded) {
   EXPECT_NEAR(max_last, max_first, 2e-3);
 }
 
-TEST(ExplicitStepperEnergy, SymplecticEulerFusedPathGivesTheGenericSteppersBits) {
-  // ExplicitMassSpringStepper runs symplectic Euler in one fused pass; the generic
-  // SymplecticEuler on MassSpringOde is the definition it must reproduce bit for bit, on a cloth
-  // large enough for the parallel passes (1.3e5 entries), over a few steps from a moving state.
+namespace {
+
+/// A 220 x 220 cloth (1.45e5 position entries: enough for the parallel passes of the explicit
+/// steppers), jittered and moving.
+hooke::test::Cloth moving_cloth_220() {
   hooke::test::ClothSpec spec;
   spec.n = 220;
   spec.spacing = 1.0 / 219.0;
   spec.jitter = 0.2;
   spec.speed = 0.3;
-  const hooke::test::Cloth cloth = hooke::test::make_cloth(spec);
+  return hooke::test::make_cloth(spec);
+}
+
+}  // namespace
+
+TEST(ExplicitStepperEnergy, SymplecticEulerFusedPathGivesTheGenericSteppersBits) {
+  // ExplicitMassSpringStepper runs symplectic Euler in one fused pass; the generic
+  // SymplecticEuler on MassSpringOde is the definition it must reproduce bit for bit, on a cloth
+  // large enough for the parallel passes (1.3e5 entries), over a few steps from a moving state.
+  const hooke::test::Cloth cloth = moving_cloth_220();
   const hooke::MassSpringSystem& sys = *cloth.system;
   ASSERT_GE(sys.dofs(), 1 << 17);
   auto fused = hooke::make_stepper("symplectic-euler", sys);
@@ -251,6 +265,33 @@ TEST(ExplicitStepperEnergy, SymplecticEulerFusedPathGivesTheGenericSteppersBits)
     X0 = X1;
   }
   EXPECT_GT((s.x - cloth.state.x).norm(), 0.0);
+}
+
+TEST(ExplicitStepperEnergy, RungeKuttaStepsGiveTheSameBitsOnOneOrTwoThreads) {
+#ifndef _OPENMP
+  GTEST_SKIP() << "built without OpenMP";
+#else
+  // The stages' sums run over blocks in parallel; each entry is summed in the same order on any
+  // thread count. A cloth large enough for the parallel passes (1.3e5 entries), three steps.
+  const hooke::test::Cloth cloth = moving_cloth_220();
+  const int threads = omp_get_max_threads();
+  for (const char* method : {"rk4", "midpoint", "dopri5"}) {
+    hooke::State out[2];
+    for (int t = 1; t <= 2; ++t) {
+      omp_set_num_threads(t);
+      auto stepper = hooke::make_stepper(method, *cloth.system);
+      hooke::State s = cloth.state, s1;
+      for (int k = 0; k < 3; ++k) {
+        ASSERT_EQ(stepper->step(s, 1e-4, s1).status, hooke::Status::Converged) << method;
+        std::swap(s, s1);
+      }
+      out[t - 1] = s;
+    }
+    omp_set_num_threads(threads);
+    EXPECT_EQ((out[0].x - out[1].x).cwiseAbs().maxCoeff(), 0.0) << method;
+    EXPECT_EQ((out[0].v - out[1].v).cwiseAbs().maxCoeff(), 0.0) << method;
+  }
+#endif
 }
 
 TEST(ExplicitStepperEnergy, SymplecticEulerIsForwardEulerWhenUnpartitioned) {
