@@ -83,7 +83,12 @@ void report(benchmark::State& state, double bytes, double flops, int t) {
   state.counters["GFLOP/s"] =
       benchmark::Counter(flops / 1e9, benchmark::Counter::kIsIterationInvariantRate);
   const auto tr = triad().find(t);
-  if (tr != triad().end()) state.counters["triad_GB/s"] = tr->second;
+  if (tr != triad().end()) {
+    state.counters["triad_GB/s"] = tr->second;
+    // The fraction of the triad measured in this process at the same thread count (issue 18).
+    state.counters["of_triad"] = benchmark::Counter(bytes / 1e9 / tr->second,
+                                                    benchmark::Counter::kIsIterationInvariantRate);
+  }
 }
 
 /// STREAM triad a = b + s c on 3 x 2^24 doubles (384 MB), 24 bytes and 2 flops per element.
