@@ -86,8 +86,8 @@ void report(benchmark::State& state, double bytes, double flops, int t) {
   if (tr != triad().end()) {
     state.counters["triad_GB/s"] = tr->second;
     // The fraction of the triad measured in this process at the same thread count (issue 18).
-    state.counters["of_triad"] = benchmark::Counter(bytes / 1e9 / tr->second,
-                                                    benchmark::Counter::kIsIterationInvariantRate);
+    state.counters["of_triad"] =
+        benchmark::Counter(bytes / 1e9 / tr->second, benchmark::Counter::kIsIterationInvariantRate);
   }
 }
 
