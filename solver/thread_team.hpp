@@ -101,4 +101,23 @@ class ThreadCountScope {
   int m_previous = 1;
 };
 
+/// One timed repetition on an AdaptiveTeam's choice of threads, for a repetition made of several
+/// parallel loops: asks the team for its size, runs the rest of the enclosing scope on it
+/// (ThreadCountScope) and reports the time when told the repetition is complete. A repetition
+/// left early (a break before done()) is not recorded.
+class TeamRepetition {
+ public:
+  explicit TeamRepetition(AdaptiveTeam& team)
+      : m_team(team), m_threads(team.threads()), m_scope(m_threads), m_start(Clock::now()) {}
+  /// Records the time since construction, divided by `units` (the repetition's size in the units
+  /// the team compares, when repetitions differ in size).
+  void done(double units = 1.0) { m_team.record(m_threads, seconds_since(m_start) / units); }
+
+ private:
+  AdaptiveTeam& m_team;
+  int m_threads;
+  ThreadCountScope m_scope;
+  Clock::time_point m_start;
+};
+
 }  // namespace hooke

@@ -84,9 +84,7 @@ LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x,
     m_p = m_z;
     double rz = m_r.dot(m_z);
     while (it < options.max_iterations) {
-      const int threads = m_team.threads();
-      const ThreadCountScope team(threads);
-      const auto t_iteration = Clock::now();
+      TeamRepetition repetition(m_team);
       if (!(rz > 0.0)) {
         s.status = Status::BrokeDown;
         std::ostringstream os;
@@ -115,7 +113,7 @@ LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x,
       const double rz_new = m_r.dot(m_z);
       m_p = m_z + (rz_new / rz) * m_p;
       rz = rz_new;
-      m_team.record(threads, seconds_since(t_iteration));
+      repetition.done();
     }
   }
   s.iterations = it;

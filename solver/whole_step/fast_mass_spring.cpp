@@ -401,9 +401,7 @@ bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
   for (int k = 0;; ++k) {
     // Local step at the current iterate x_k (its objective and gradient come with it).
     if (k == N && !test) break;
-    const int threads = m_team.threads();
-    const ThreadCountScope team(threads);
-    const auto t_iteration = Clock::now();
+    TeamRepetition repetition(m_team);
     const double E = local_step(m_x, test);
     if (test) {
       out.residual = error_estimate(m_x);
@@ -458,7 +456,7 @@ bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
       }
     }
     if (m_opt.on_iteration) m_opt.on_iteration(it, m_x);
-    m_team.record(threads, seconds_since(t_iteration));
+    repetition.done();
   }
   out.iterations = it;
   return converged;
@@ -507,9 +505,7 @@ bool FastMassSpringStepper::iterate_lbfgs(StepSummary& out) {
   const int H = m_opt.lbfgs_history;
   int stored = 0, newest = -1;
   for (int k = 0; k < N; ++k) {
-    const int threads = m_team.threads();
-    const ThreadCountScope team(threads);
-    const auto t_iteration = Clock::now();
+    TeamRepetition repetition(m_team);
     if (lbfgs_direction(stored, newest, out.message) != Status::Converged) {
       out.status = Status::Fatal;
       return false;
@@ -574,7 +570,7 @@ bool FastMassSpringStepper::iterate_lbfgs(StepSummary& out) {
     g = g_trial;
     if (m_opt.on_iteration) m_opt.on_iteration(it, m_x);
     // Per evaluation of the objective: the line search's trial count varies between iterations.
-    m_team.record(threads, seconds_since(t_iteration) / double(1 + trials));
+    repetition.done(1 + trials);
     if (test) {  // the accepted trial was the last local step: its gradient is at x_{k+1}
       out.residual = error_estimate(m_x);
       if (out.residual <= m_opt.tolerance) {
