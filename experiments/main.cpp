@@ -21,6 +21,7 @@
 #include <iostream>
 
 #include "experiments/cli.hpp"
+#include "experiments/run_group.hpp"
 #include "hooke/config.hpp"
 #include "hooke/thread_policy.hpp"
 #include "problems/input_error.hpp"
@@ -65,8 +66,11 @@ int main(int argc, char** argv) {
     for (const Command& c : commands)
       if (c.app->parsed()) return c.run();
     return 2;  // unreachable: require_subcommand(1)
+  } catch (const hooke::PeerFailure& e) {
+    return e.code();  // rank 0 of the MPI run says why
   } catch (const hooke::InputError& e) {
-    std::cerr << "error: " << e.what() << "\n";
+    // Every process of an MPI run meets the same bad input: rank 0 alone says so.
+    if (hooke::launched_rank() == 0) std::cerr << "error: " << e.what() << "\n";
     return 2;
   } catch (const std::exception& e) {
     std::cerr << "error: " << e.what() << "\n";

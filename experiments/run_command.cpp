@@ -13,6 +13,7 @@
 #include "experiments/checkpoint.hpp"
 #include "experiments/cli.hpp"
 #include "experiments/divergence.hpp"
+#include "experiments/run_group.hpp"
 #include "experiments/run_output.hpp"
 #include "experiments/stop_signals.hpp"
 #include "hooke/config.hpp"
@@ -107,8 +108,10 @@ class MassSpringRun {
  public:
   /// locked: the output folder, already locked (a resume, or a run into an existing folder), or
   /// null: the run creates and locks `dir` once its stepper exists.
+  /// group: the processes the run spans (a serial run, or an MPI launch stepping its pieces);
+  /// locked is then rank 0's.
   MassSpringRun(const Scene& scene, const std::string& dir, const RunOptions& options,
-                const Checkpoint* resume, std::unique_ptr<OutputDir> locked);
+                const Checkpoint* resume, std::unique_ptr<OutputDir> locked, RunGroup& group);
   int run();
 
  private:
@@ -122,7 +125,8 @@ class MassSpringRun {
   }
   /// " of N" for a run of N fixed steps, "" under error control (for messages).
   std::string of_steps() const { return m_adaptive ? "" : " of " + std::to_string(m_steps); }
-  static std::unique_ptr<Stepper> make_scene_stepper(const Scene& scene);
+  static std::unique_ptr<Stepper> make_scene_stepper(const Scene& scene,
+                                                     const MassSpringSystem& system);
   void restore(const Checkpoint& c);
   /// After a successful step: log row, divergence check, frame, progress, stop request and
   /// periodic checkpoint. Returns an exit code to stop with, or -1 to go on.
@@ -143,8 +147,9 @@ class MassSpringRun {
   const FluidStepStats* fluid_stats(long long step, const State& s);
 
   const Scene& m_scene;
-  const MassSpringSystem& m_sys;
+  const MassSpringSystem& m_sys;  // the whole system (its energies are logged on rank 0)
   const RunOptions& m_options;
+  RunGroup& m_group;
   const std::string m_dir;
   const std::string m_label;  // backend_label(scene)
   const bool m_adaptive;      // integrator.adaptive: steps chosen by error control
@@ -171,9 +176,10 @@ class MassSpringRun {
   FluidStepStats m_start_stats;
 };
 
-std::unique_ptr<Stepper> MassSpringRun::make_scene_stepper(const Scene& scene) {
+std::unique_ptr<Stepper> MassSpringRun::make_scene_stepper(const Scene& scene,
+                                                           const MassSpringSystem& system) {
   try {
-    return make_stepper(scene.integrator.method, *scene.system, scene.integrator.options);
+    return make_stepper(scene.integrator.method, system, scene.integrator.options);
   } catch (const SetupError& e) {  // e.g. a factorization above the memory budget: refused up front
     const bool implicit = method_info(scene.integrator.method).kind == MethodKind::Implicit;
     throw InputError(scene.file, implicit ? "integrator.linear_solver" : "integrator.method",
@@ -182,20 +188,30 @@ std::unique_ptr<Stepper> MassSpringRun::make_scene_stepper(const Scene& scene) {
 }
 
 MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const RunOptions& options,
-                             const Checkpoint* resume, std::unique_ptr<OutputDir> locked)
+                             const Checkpoint* resume, std::unique_ptr<OutputDir> locked,
+                             RunGroup& group)
     : m_scene(scene),
       m_sys(*scene.system),
       m_options(options),
+      m_group(group),
       m_dir(dir),
       m_label(backend_label(scene)),
       m_adaptive(scene.integrator.adaptive),
       m_steps(m_adaptive ? -1 : scene.time.steps()),
-      m_sim(m_sys, make_scene_stepper(scene), resume ? resume->state : scene.initial),
-      m_progress(options.progress, m_steps, scene.time.duration) {
+      m_sim(group.stepped(m_sys), make_scene_stepper(scene, group.stepped(m_sys)),
+            group.local_state(resume ? resume->state : scene.initial)),
+      m_progress(options.progress && group.root(), m_steps, scene.time.duration) {
   if (m_adaptive) m_sim.set_error_control(scene.integrator.error_control, scene.time.dt);
   m_sim.set_accept_not_converged(scene.run.allow_not_converged);
   m_sim.set_max_step_halvings(scene.run.max_step_halvings);
-  m_sim.set_retry_observer([this](double t, double h, int depth, const StepSummary& s) {
+  if (group.distributed())
+    m_sim.set_agreement([&group](bool accepted) { return group.all(accepted); });
+  // Every process of an MPI run retries together (Simulation::set_agreement): the note names the
+  // first one whose own step failed.
+  m_sim.set_retry_observer([this](double t, double h, int depth, const StepSummary& failed) {
+    StepSummary s = failed;
+    m_group.first(!m_sim.failed_elsewhere(), s.message);
+    if (!m_group.root()) return;
     std::fprintf(stderr,
                  "note: %s: step %lld (t = %.9g, h = %.6g, %s): %s: %s; retrying as two steps of "
                  "h/2 = %.6g (%d of run.max_step_halvings = %d)\n",
@@ -203,8 +219,10 @@ MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const R
                  s.message.c_str(), 0.5 * h, depth, m_scene.run.max_step_halvings);
   });
   if (resume) restore(*resume);  // checks the checkpoint before any file is touched
-  if (!locked) locked = std::make_unique<OutputDir>(dir, "hooke run " + scene.file);
-  m_out = std::make_unique<RunOutput>(scene, std::move(locked), resume, options.force);
+  group.on_root([&] {
+    if (!locked) locked = std::make_unique<OutputDir>(dir, "hooke run " + scene.file);
+    m_out = std::make_unique<RunOutput>(scene, std::move(locked), resume, options.force);
+  });
   const State& s0 = scene.initial;
   m_E0 = m_sys.kinetic_energy(s0.v) + m_sys.potential_energy(s0.x);
   m_scale = std::max({divergence_energy_scale(m_sys, s0), std::abs(m_E0), 1e-30});
@@ -284,7 +302,7 @@ void MassSpringRun::restore(const Checkpoint& c) {
   m_not_converged = c.not_converged;
   m_sim.set_halved_steps(c.halved_steps);
   m_wall = c.wall;
-  if (!m_sim.stepper().exact_resume())
+  if (!m_sim.stepper().exact_resume() && m_group.root())
     std::fprintf(stderr,
                  "note: %s keeps an internal history that a checkpoint cannot hold: it restarts at "
                  "step %lld, so the result agrees with an uninterrupted run to the solver's "
@@ -295,8 +313,11 @@ void MassSpringRun::restore(const Checkpoint& c) {
 int MassSpringRun::run() {
   try {
     return run_steps();
+  } catch (const PeerFailure&) {
+    throw;
   } catch (const std::exception& e) {
     m_progress.done();
+    if (!m_out) throw;  // another process of the run wrote no file
     const bool marked = m_out->failed(e.what());
     throw std::runtime_error(
         std::string(e.what()) + "\n  the run stopped at step " + std::to_string(m_step) +
@@ -308,9 +329,11 @@ int MassSpringRun::run() {
 int MassSpringRun::run_steps() {
   if (m_first_step == 1) {
     const RunOutput::ControlColumns start;
-    m_out->log_row(0, m_sim.state(), 0, 0.0, m_wall, m_adaptive ? &start : nullptr,
-                   fluid_stats(0, m_sim.state()));
-    m_out->frame(0, m_sim.state(), fluid_fields(m_sim.state()));
+    const State& s = m_group.whole(m_sim.state());
+    m_group.on_root([&] {
+      m_out->log_row(0, s, 0, 0.0, m_wall, m_adaptive ? &start : nullptr, fluid_stats(0, s));
+      m_out->frame(0, s, fluid_fields(s));
+    });
   }
   const StopSignals stop_signals;
   for (long long step = m_first_step; !done(step - 1); ++step) {
@@ -323,7 +346,7 @@ int MassSpringRun::run_steps() {
     const bool accepted = sum.status == Status::Converged ||
                           (sum.status == Status::NotConverged && m_scene.run.allow_not_converged);
     if (!accepted) return report_failure(step, sum);
-    if (sum.status == Status::NotConverged && m_not_converged++ == 0) {
+    if (sum.status == Status::NotConverged && m_not_converged++ == 0 && m_group.root()) {
       m_progress.done();
       std::fprintf(stderr,
                    "warning: %s: step %lld (t = %.9g, %s): %s (continuing, "
@@ -352,12 +375,20 @@ bool MassSpringRun::interval_frame_due(double t) {
 
 int MassSpringRun::after_step(long long step, const StepSummary& sum) {
   const bool last = done(step);
-  const State& s = m_sim.state();
-  if (step % m_scene.output.log_every == 0 || last) {
+  const bool log = step % m_scene.output.log_every == 0 || last;
+  const bool frame = (m_scene.output.every > 0 && step % m_scene.output.every == 0) || last ||
+                     interval_frame_due(m_sim.state().t);
+  // The whole state, where rank 0 writes it from (a serial run's own).
+  const State& s = log || frame ? m_group.whole(m_sim.state()) : m_sim.state();
+  if (log) {
     RunOutput::ControlColumns control;
     if (m_adaptive) control = {m_last_h, m_sim.accepted_steps(), m_sim.rejected_steps()};
-    const double E = m_out->log_row(step, s, sum.iterations, sum.residual, m_wall,
-                                    m_adaptive ? &control : nullptr, fluid_stats(step, s));
+    double E = 0.0;
+    m_group.on_root([&] {
+      E = m_out->log_row(step, s, sum.iterations, sum.residual, m_wall,
+                         m_adaptive ? &control : nullptr, fluid_stats(step, s));
+    });
+    E = m_group.from_root(E);
     if (!(E <= m_E_limit)) return report_divergence(step, E);
     if (m_strain_limit) {
       const double e = m_strain_limit->worst_strain(s.x);
@@ -367,29 +398,34 @@ int MassSpringRun::after_step(long long step, const StepSummary& sum) {
       }
     }
   }
-  if ((m_scene.output.every > 0 && step % m_scene.output.every == 0) || last ||
-      interval_frame_due(s.t))
-    m_out->frame(step, s, fluid_fields(s));
+  if (frame) m_group.on_root([&] { m_out->frame(step, s, fluid_fields(s)); });
   m_progress.update(step, s.t);
   if (last) return -1;
-  if (const int sig = stop_signal(); sig != 0 || step == m_options.stop_after)
+  // A signal reaches the processes of an MPI run at different steps: all stop at the first.
+  if (const int sig = int(m_group.max(stop_signal())); sig != 0 || step == m_options.stop_after)
     return stop(step, sig);
-  if ((m_scene.run.checkpoint_every > 0 && step % m_scene.run.checkpoint_every == 0) ||
+  const bool periodic =
+      (m_scene.run.checkpoint_every > 0 && step % m_scene.run.checkpoint_every == 0) ||
       Clock::now() - m_last_checkpoint >=
-          std::chrono::duration<double>(m_scene.run.checkpoint_seconds)) {
+          std::chrono::duration<double>(m_scene.run.checkpoint_seconds);
+  if (m_group.from_root(periodic ? 1.0 : 0.0) != 0.0) {  // rank 0's clock decides
     checkpoint(step);
     m_last_checkpoint = Clock::now();
   }
   return -1;
 }
 
-int MassSpringRun::report_failure(long long step, const StepSummary& sum) {
+int MassSpringRun::report_failure(long long step, const StepSummary& failed) {
   m_progress.done();
+  // The summary of the first process whose own step failed (an MPI run), as a serial run says it.
+  StepSummary sum = failed;
+  m_group.first(!m_sim.failed_elsewhere(), sum.message);
   const std::string what = strprintf(
       "step %lld failed (t = %.9g, h = %.6g, %s, %d %s iterations, residual %.3g): "
       "%s: %s",
       step, m_sim.failed_t(), m_sim.failed_h(), m_label.c_str(), sum.iterations,
       m_sph ? "pressure" : "linear", sum.residual, to_string(sum.status), sum.message.c_str());
+  if (!m_group.root()) return 3;
   m_out->failed(what);
   std::fprintf(stderr,
                "error: %s: %s\n"
@@ -405,7 +441,9 @@ int MassSpringRun::report_failure(long long step, const StepSummary& sum) {
 
 int MassSpringRun::report_divergence(long long step, double E) {
   m_progress.done();
-  m_out->frame(step, m_sim.state(), fluid_fields(m_sim.state()));
+  const State& s = m_group.whole(m_sim.state());
+  m_group.on_root([&] { m_out->frame(step, s, fluid_fields(s)); });
+  if (!m_group.root()) return 3;
   const std::string what = strprintf(
       "diverged at step %lld (t = %.9g, %s): total energy %.6g J exceeds the initial %.6g J by "
       "more than %g x the scene's energy scale %.6g J (run.energy_growth_limit)",
@@ -423,12 +461,14 @@ int MassSpringRun::stop(long long step, int sig) {
   m_progress.done();
   const std::string how =
       sig ? std::string("interrupted by ") + signal_name(sig) : "stopped (--stop-after)";
+  const int code = sig ? exit_code_for_signal(sig) : kExitInterrupted;
+  if (!m_group.root()) return code;
   m_out->stopped(strprintf("%s at step %lld%s (t = %.9g); continue with: hooke resume %s",
                            how.c_str(), step, of_steps().c_str(), m_sim.state().t, m_dir.c_str()));
   std::fprintf(stderr, "%s at step %lld%s (t = %.9g): wrote %s; continue with: hooke resume %s\n",
                how.c_str(), step, of_steps().c_str(), m_sim.state().t,
                m_out->checkpoint_path().c_str(), m_dir.c_str());
-  return sig ? exit_code_for_signal(sig) : kExitInterrupted;
+  return code;
 }
 
 void MassSpringRun::checkpoint(long long step) {
@@ -438,10 +478,12 @@ void MassSpringRun::checkpoint(long long step) {
   c.not_converged = m_not_converged;
   c.halved_steps = m_sim.halved_steps();
   c.wall = m_wall;
-  c.state = m_sim.state();
+  c.state = m_group.whole(m_sim.state());
   c.history = m_sim.stepper().history();
+  HOOKE_ASSERT(!m_group.distributed() || c.history.empty(),
+               "a distributed run of a stepper with a history to checkpoint");
   if (m_adaptive) append_error_control(m_sim, c.history);  // restore() takes it back off
-  m_out->checkpoint(std::move(c));
+  m_group.on_root([&] { m_out->checkpoint(std::move(c)); });
 }
 
 int MassSpringRun::finish() {
@@ -449,26 +491,30 @@ int MassSpringRun::finish() {
   const long long steps = m_adaptive ? m_sim.accepted_steps() : m_steps;
   if (steps == 0) m_progress.update(0, 0.0);
   m_progress.done();
-  const std::string& file = m_scene.file;
-  if (m_not_converged > 0)
-    std::fprintf(stderr,
-                 "warning: %s: %lld of %lld steps did not converge to the requested tolerance\n",
-                 file.c_str(), m_not_converged, steps);
-  if (m_sim.halved_steps() > 0)
-    std::fprintf(stderr, "note: %s: %lld of %lld steps were retried with a smaller h\n",
-                 file.c_str(), m_sim.halved_steps(), steps);
-  if (m_strain_exceeded > 0)
-    std::fprintf(stderr,
-                 "note: %s: %lld logged steps (of this invocation) ended with a limited spring "
-                 "beyond the strain limit %g (worst %g at step %lld): its %d projection passes "
-                 "(strain_limit.passes) ran out first\n",
-                 file.c_str(), m_strain_exceeded, m_strain_limit->max_strain(), m_worst_strain,
-                 m_worst_strain_step, m_strain_limit->passes());
+  const State& s = m_group.whole(m_sim.state());
+  std::vector<std::string> written;
   const std::string summary = strprintf("%lld steps of %s to t = %.6g in %.3f s", steps,
-                                        m_scene.integrator.method.c_str(), m_sim.state().t, m_wall);
+                                        m_scene.integrator.method.c_str(), s.t, m_wall);
+  const std::string& file = m_scene.file;
+  if (m_group.root()) {
+    if (m_not_converged > 0)
+      std::fprintf(stderr,
+                   "warning: %s: %lld of %lld steps did not converge to the requested tolerance\n",
+                   file.c_str(), m_not_converged, steps);
+    if (m_sim.halved_steps() > 0)
+      std::fprintf(stderr, "note: %s: %lld of %lld steps were retried with a smaller h\n",
+                   file.c_str(), m_sim.halved_steps(), steps);
+    if (m_strain_exceeded > 0)
+      std::fprintf(stderr,
+                   "note: %s: %lld logged steps (of this invocation) ended with a limited spring "
+                   "beyond the strain limit %g (worst %g at step %lld): its %d projection passes "
+                   "(strain_limit.passes) ran out first\n",
+                   file.c_str(), m_strain_exceeded, m_strain_limit->max_strain(), m_worst_strain,
+                   m_worst_strain_step, m_strain_limit->passes());
+  }
   if (m_options.on_finished) m_options.on_finished(m_sim);
-  const std::vector<std::string> written =
-      m_out->finish(m_sim.state(), summary, fluid_fields(m_sim.state()));
+  m_group.on_root([&] { written = m_out->finish(s, summary, fluid_fields(s)); });
+  if (!m_group.root()) return 0;
   if (m_adaptive) {  // in CVODE's style: what the error control did
     const ErrorControl& c = m_scene.integrator.error_control;
     std::printf("%s: steps %lld, rejected %lld, next h %.3e (rtol %g, atol %g)\n",
@@ -563,36 +609,87 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
   return 0;
 }
 
+/// The processes the run of `scene` spans (RunGroup::for_launch): under an MPI launch of several
+/// processes, its system split between them, refused (InputError, on every process alike) for
+/// what does not run distributed yet.
+std::unique_ptr<RunGroup> run_group(const Scene& scene) {
+  const bool launched = launched_size() > 1;
+  if (launched && scene.is_ode())
+    throw InputError(scene.file, "ode",
+                     "an [ode] scene runs on one process: run it without mpirun (or with -n 1)");
+  if (launched && method_info(scene.integrator.method).kind != MethodKind::Explicit) {
+    std::string explicit_methods;
+    for (const MethodInfo& m : methods())
+      if (m.kind == MethodKind::Explicit)
+        explicit_methods += (explicit_methods.empty() ? "" : ", ") + std::string(m.name);
+    throw InputError(scene.file, "integrator.method",
+                     "'" + scene.integrator.method +
+                         "' does not run across MPI processes yet: use an explicit method (" +
+                         explicit_methods + "), or run one process");
+  }
+  if (launched && scene.integrator.adaptive)
+    throw InputError(scene.file, "integrator.adaptive",
+                     "error control does not run across MPI processes yet: set it false, or run "
+                     "one process");
+  if (scene.is_ode()) return std::make_unique<RunGroup>();
+  try {
+    return RunGroup::for_launch(*scene.system);
+  } catch (const SetupError& e) {
+    throw InputError(scene.file, "scene",
+                     std::string(e.what()) + ": run it on one process (without mpirun)");
+  }
+}
+
 }  // namespace
 
 int run_scene(Scene& scene, const RunOptions& options) {
   const std::string dir = options.out_dir.empty() ? scene.output.dir : options.out_dir;
   if (auto* out = scene.resolved["output"].as_table()) out->insert_or_assign("dir", dir);
+  const auto group = run_group(scene);
   if (scene.is_ode()) return run_ode(scene, dir, options);
   // An existing folder is locked and checked at once, so that a second writer or a stopped run
   // is refused before a long setup; a new one is created only after the setup succeeded, so that
   // a scene refused there (e.g. a factorization over the memory budget) leaves nothing on disk.
+  // In an MPI run, rank 0 alone holds the folder.
   std::unique_ptr<OutputDir> locked;
-  std::error_code ec;
-  if (fs::is_directory(dir, ec)) {
-    locked = std::make_unique<OutputDir>(dir, "hooke run " + scene.file);
-    check_no_stopped_run(*locked, options.force);
-  }
-  return MassSpringRun(scene, dir, options, nullptr, std::move(locked)).run();
+  group->on_root([&] {
+    std::error_code ec;
+    if (fs::is_directory(dir, ec)) {
+      locked = std::make_unique<OutputDir>(dir, "hooke run " + scene.file);
+      check_no_stopped_run(*locked, options.force);
+    }
+  });
+  return MassSpringRun(scene, dir, options, nullptr, std::move(locked), *group).run();
 }
 
 int resume_run(const std::string& dir, const RunOptions& options) {
   std::error_code ec;
   if (!fs::is_directory(dir, ec))
     throw InputError(dir, "directory", "is not an output directory of hooke run");
-  // Locked before anything is read: a run still writing this folder is refused at once.
-  auto locked = std::make_unique<OutputDir>(dir, "hooke resume " + dir);
+  // Locked before anything is read: a run still writing this folder is refused at once. An MPI
+  // run's rank 0 holds it; every process reads the scene and the checkpoint.
+  std::unique_ptr<OutputDir> locked;
+  std::exception_ptr lock_error;
+  if (launched_rank() == 0) {
+    try {
+      locked = std::make_unique<OutputDir>(dir, "hooke resume " + dir);
+    } catch (...) {
+      if (launched_size() <= 1) throw;
+      lock_error = std::current_exception();  // thrown below, once every process can hear it
+    }
+  }
   Scene scene = load_scene(dir + "/scene.toml");
   if (scene.is_ode())
     throw InputError(dir + "/scene.toml", "ode",
                      "ODE scenes write no checkpoints (they run in seconds): run them again");
+  const auto group = run_group(scene);
+  group->on_root([&] {
+    if (lock_error) std::rethrow_exception(lock_error);
+  });
   const Checkpoint c = read_checkpoint(dir + "/checkpoint.bin", scene.system->dofs());
-  MassSpringRun run(scene, dir, options, &c, std::move(locked));  // checks c against the scene
+  // Checks c against the scene.
+  MassSpringRun run(scene, dir, options, &c, std::move(locked), *group);
+  if (!group->root()) return run.run();
   if (scene.integrator.adaptive)
     std::fprintf(stderr, "resuming %s at step %lld (t = %.9g of %.9g)\n", dir.c_str(), c.step,
                  c.state.t, scene.time.duration);

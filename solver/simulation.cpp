@@ -40,8 +40,15 @@ StepSummary Simulation::advance_halving(double h, int depth) {
 
 StepSummary Simulation::advance_once(double h) {
   StepSummary s = attempt(h);
-  if (!accepted(s)) return s;
-  return commit(std::move(s), h);
+  if (accepted(s)) s = check_end_state(std::move(s), h);
+  m_failed_elsewhere = false;
+  if (m_agreement && !m_agreement(accepted(s)) && accepted(s)) {
+    m_failed_elsewhere = true;
+    s.status = Status::Fatal;
+    s.message = "the step failed on another process";
+  }
+  if (accepted(s)) make_current();
+  return s;
 }
 
 StepSummary Simulation::attempt(double h) {
@@ -57,15 +64,18 @@ StepSummary Simulation::attempt(double h) {
   return s;
 }
 
-StepSummary Simulation::commit(StepSummary s, double h) {
+StepSummary Simulation::check_end_state(StepSummary s, double h) {
   // Scripted pins end the step exactly on their path, whatever the stepper's round-off or order.
   if (m_system.has_pin_motion()) m_system.pin_motion().place(m_next.t, m_next.x, m_next.v);
   m_system.apply_constraints(m_state.x, h, m_next.x, m_next.v);
   if (!m_next.is_finite()) {
     s.status = Status::Fatal;
     s.message = std::string(m_stepper->name()) + ": state became non-finite";
-    return s;
   }
+  return s;
+}
+
+void Simulation::make_current() {
   if (m_stable_buffers) {
     // Same sizes: copied into the existing storage, over blocks in parallel.
     parallel_ranges(m_state.x.size(), [&](long long b, long long e) {
@@ -76,7 +86,6 @@ StepSummary Simulation::commit(StepSummary s, double h) {
   } else {
     std::swap(m_state, m_next);
   }
-  return s;
 }
 
 void Simulation::set_error_control(const ErrorControl& control, double first_step) {
@@ -103,6 +112,7 @@ void Simulation::restore_adaptive(long long accepted, long long rejected, double
 
 StepSummary Simulation::advance_adaptive(double t_end) {
   HOOKE_ASSERT(m_controller, "advance_adaptive without set_error_control");
+  HOOKE_ASSERT(!m_agreement, "advance_adaptive in a distributed run (set_agreement)");
   const double t = m_state.t;
   HOOKE_ASSERT(t_end > t, "advance_adaptive to t_end = " << t_end << " from t = " << t);
   const double h_min =
@@ -154,7 +164,7 @@ StepSummary Simulation::advance_adaptive(double t_end) {
     }
     h_new = std::min(h_new, m_stepper->max_step_ratio() * h);
     if (lands) m_next.t = t_end;  // exactly, whatever t + (t_end - t) rounds to
-    s = commit(std::move(s), h);
+    s = check_end_state(std::move(s), h);
     if (s.status == Status::Fatal) {  // non-finite after constraints: retry smaller
       ++m_rejected;
       m_failed_t = t;
@@ -162,6 +172,7 @@ StepSummary Simulation::advance_adaptive(double t_end) {
       h *= 0.25;
       continue;
     }
+    make_current();
     ++m_accepted;
     m_h_next = h_new;
     s.iterations = iterations;

@@ -51,6 +51,15 @@ class Simulation {
   const StepController* controller() const { return m_controller.get(); }
   /// How often a failed step is halved (0, the default: never).
   void set_max_step_halvings(int max_halvings) { m_max_halvings = max_halvings; }
+  /// Makes every advance() agree with the other processes of a distributed run (issue 17):
+  /// after each attempt, agreement(accepted here) must return whether every process accepted its
+  /// piece of the step (a collective call, e.g. an MPI logical and). A step that failed anywhere
+  /// fails everywhere, with the message "the step failed on another process" where it did not
+  /// fail (failed_elsewhere()), so all processes retry or stop together. Not for
+  /// advance_adaptive(). Empty (the default): a process alone.
+  void set_agreement(std::function<bool(bool)> agreement) { m_agreement = std::move(agreement); }
+  /// True if the last failed attempt failed on another process only (set_agreement).
+  bool failed_elsewhere() const { return m_failed_elsewhere; }
   /// Called before each retry (e.g. to report it); empty = nobody is told.
   void set_retry_observer(RetryObserver observer) { m_on_retry = std::move(observer); }
   /// Start time and size (s) of the last (sub)step that failed.
@@ -87,9 +96,11 @@ class Simulation {
   StepSummary advance_once(double h);
   /// The stepper's step of size h into m_next, failed if it was not accepted or stopped short.
   StepSummary attempt(double h);
-  /// Completes an attempt that succeeded: scripted pins, constraints, the finiteness check, and
-  /// m_next becomes the current state. Fails (state unchanged) if the state is not finite.
-  StepSummary commit(StepSummary s, double h);
+  /// Completes an attempt that succeeded: scripted pins and constraints on m_next, then the
+  /// finiteness check, which fails the step (Status::Fatal) if m_next is not finite.
+  StepSummary check_end_state(StepSummary s, double h);
+  /// m_next becomes the current state.
+  void make_current();
   /// advance_once, retried as two half steps while depth < m_max_halvings.
   StepSummary advance_halving(double h, int depth);
   /// True if the step advanced the state.
@@ -104,6 +115,8 @@ class Simulation {
   bool m_accept_not_converged = true;
   int m_max_halvings = 0;
   RetryObserver m_on_retry;
+  std::function<bool(bool)> m_agreement;
+  bool m_failed_elsewhere = false;
   double m_failed_t = 0.0, m_failed_h = 0.0;
   long long m_halved_steps = 0;
   bool m_stable_buffers = false;

@@ -27,6 +27,10 @@ class GroundPlane final : public Constraint {
   const char* name() const override { return "ground-plane"; }
   void project(ConstRef x0, double h, const std::vector<char>& pinned, VecRef x1,
                VecRef v1) const override;
+  /// Particle by particle: the same plane.
+  std::unique_ptr<Constraint> localize(const LocalIndex&) const override {
+    return std::make_unique<GroundPlane>(*this);
+  }
 
  private:
   Vec3 m_n;
@@ -42,6 +46,10 @@ class SphereCollider final : public Constraint {
   const char* name() const override { return "sphere-collider"; }
   void project(ConstRef x0, double h, const std::vector<char>& pinned, VecRef x1,
                VecRef v1) const override;
+  /// Particle by particle: the same sphere.
+  std::unique_ptr<Constraint> localize(const LocalIndex&) const override {
+    return std::make_unique<SphereCollider>(*this);
+  }
 
  private:
   Vec3 m_c;

@@ -1,7 +1,9 @@
 #pragma once
+#include <memory>
 #include <vector>
 
 #include "hooke/core.hpp"
+#include "hooke/model/local_index.hpp"
 
 namespace hooke {
 
@@ -17,6 +19,12 @@ class Constraint {
   /// Corrects x1 and v1 (3n vectors) in place; x0 is the start-of-step position.
   virtual void project(ConstRef x0, double h, const std::vector<char>& pinned, VecRef x1,
                        VecRef v1) const = 0;
+  /// This constraint over the local particles of one process (issue 17), correcting every owned
+  /// particle exactly as the whole constraint does; nullptr (the default) if it couples particles
+  /// in a way that cannot be split (a distributed run then refuses the scene, naming it).
+  virtual std::unique_ptr<Constraint> localize(const LocalIndex& /*index*/) const {
+    return nullptr;
+  }
 };
 
 }  // namespace hooke

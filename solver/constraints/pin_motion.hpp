@@ -2,6 +2,7 @@
 #include <vector>
 
 #include "hooke/core.hpp"
+#include "hooke/model/local_index.hpp"
 
 namespace hooke {
 
@@ -45,6 +46,16 @@ class PinMotion {
   void place(double t, VecRef x, VecRef v) const;
   /// Overwrites the accelerations of the moving particles in the 3n vector a at t.
   void accelerate(double t, VecRef a) const;
+  /// The scripted pins among the local particles of `index` (issue 17), renumbered, with the same
+  /// motions: each moves exactly as in the whole system.
+  PinMotion localize(const LocalIndex& index) const {
+    PinMotion local;
+    local.m_motions = m_motions;
+    for (size_t k = 0; k < m_particles.size(); ++k)
+      if (const int l = index.local_of[size_t(m_particles[k])]; l >= 0)
+        local.add_particle(l, m_motion_of[k], m_X[k]);
+    return local;
+  }
 
  private:
   /// R(w tau) (X - c) and whether t is inside (start, stop).

@@ -18,6 +18,10 @@ class AirDrag final : public Force {
   const Vec3& wind() const { return m_wind; }
 
   const char* name() const override { return "air-drag"; }
+  /// Particle by particle: the same drag over the local particles.
+  std::unique_ptr<Force> localize(const LocalIndex& index) const override {
+    return std::make_unique<AirDrag>(index.num_local(), m_c, m_wind);
+  }
   void add_forces(ConstRef x, ConstRef v, VecRef f) const override;
   void bind(const BlockPattern& p) override;
   void add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options, SparseMatrix& K,

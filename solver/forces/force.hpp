@@ -1,7 +1,9 @@
 #pragma once
 #include <limits>
+#include <memory>
 
 #include "hooke/core.hpp"
+#include "hooke/model/local_index.hpp"
 #include "hooke/sparse/block_pattern.hpp"
 
 namespace hooke {
@@ -80,6 +82,13 @@ class Force {
   /// An energy scale (J) used to recognise a blown-up run: for springs, the energy of every spring
   /// stretched by its own rest length. 0 if the force has no natural scale.
   virtual double energy_scale() const { return 0.0; }
+  /// This force as it acts on the owned particles of one process (issue 17): over the local
+  /// particles of `index` (owned, then ghosts), giving every owned particle the same force, bit for
+  /// bit, as the whole force gives it (same terms, added in the same order); forces on ghosts may
+  /// be partial (the ghost exchange overwrites them). Unbound: the local system declares and binds
+  /// it. nullptr (the default) if the force cannot be split, which makes a distributed run refuse
+  /// the scene, naming the force.
+  virtual std::unique_ptr<Force> localize(const LocalIndex& /*index*/) const { return nullptr; }
 };
 
 }  // namespace hooke

@@ -11,6 +11,12 @@ class Gravity final : public Force {
   const Vec3& acceleration() const { return m_g; }
 
   const char* name() const override { return "gravity"; }
+  /// Particle by particle: the local particles' masses, the same g.
+  std::unique_ptr<Force> localize(const LocalIndex& index) const override {
+    Vec masses(index.num_local());
+    for (Index l = 0; l < index.num_local(); ++l) masses[l] = m_masses[index.global[size_t(l)]];
+    return std::make_unique<Gravity>(std::move(masses), m_g);
+  }
   void add_forces(ConstRef x, ConstRef v, VecRef f) const override;
   double potential_energy(ConstRef x) const override;
   bool has_velocity_jacobian() const override { return false; }

@@ -90,6 +90,11 @@ class HookeSpring final : public Force {
                             double cv, double cx, VecRef y) const override;
   double max_strain(ConstRef x) const override;
   double energy_scale() const override;
+  std::unique_ptr<Force> localize(const LocalIndex& index) const override {
+    auto local = std::make_unique<HookeSpring>();
+    local->m_springs = m_springs.localize(index);
+    return local;
+  }
 
  private:
   SpringSet m_springs;

@@ -62,6 +62,12 @@ class SpringDamper final : public Force {
   bool add_jacobian_product(ConstRef x, ConstRef v, const JacobianOptions& options, ConstRef p,
                             double cv, double cx, VecRef y) const override;
 
+  std::unique_ptr<Force> localize(const LocalIndex& index) const override {
+    auto local = std::make_unique<SpringDamper>();
+    local->m_springs = m_springs.localize(index);
+    return local;
+  }
+
  private:
   SpringSet m_springs;
 };

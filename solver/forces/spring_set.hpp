@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "hooke/core.hpp"
+#include "hooke/model/local_index.hpp"
 #include "hooke/sparse/block_pattern.hpp"
 
 namespace hooke {
@@ -31,6 +32,9 @@ struct SpringSet {
   std::vector<size_t> group_start;  ///< group g holds springs [group_start[g], group_start[g+1])
   std::array<size_t, 5> phase_start{};  ///< phase p runs groups [phase_start[p], phase_start[p+1]):
                                         ///< interior, even boundary, odd boundary, remainder
+  /// bind() keeps the springs in the order they were added (one group, run serially) instead of
+  /// grouping them: set by localize(), whose order is the whole set's.
+  bool keep_order = false;
 
   size_t size() const { return i.size(); }
   void add(int a, int b, double c, double L) {
@@ -50,6 +54,22 @@ struct SpringSet {
     slots.resize(size());
     for (size_t s = 0; s < size(); ++s)
       slots[s] = {p.slot(i[s], i[s]), p.slot(j[s], j[s]), p.slot(i[s], j[s]), p.slot(j[s], i[s])};
+  }
+  /// The springs with an owned endpoint in `index` (issue 17), in this set's storage order (the
+  /// bound order), renumbered to local ids and kept in that order (keep_order): every owned
+  /// particle then sums its springs' terms in the order this set does, so it gets the same bits.
+  /// Every endpoint of such a spring must be held locally (owned or ghost).
+  SpringSet localize(const LocalIndex& index) const {
+    SpringSet local;
+    local.keep_order = true;
+    for (size_t s = 0; s < size(); ++s) {
+      if (!index.owns_global(i[s]) && !index.owns_global(j[s])) continue;
+      const int a = index.local_of[size_t(i[s])], b = index.local_of[size_t(j[s])];
+      HOOKE_ASSERT(a >= 0 && b >= 0, "localize: spring " << s << " (" << i[s] << ", " << j[s]
+                                                         << ") has an endpoint not held locally");
+      local.add(a, b, coeff[s], rest_length[s]);
+    }
+    return local;
   }
   /// Number of spring groups (0 before bind()).
   size_t num_groups() const { return group_start.empty() ? 0 : group_start.size() - 1; }
@@ -90,7 +110,7 @@ struct SpringSet {
   /// stably into the groups of the class comment (setup time only).
   void partition(long long num_particles) {
     const size_t m = size();
-    const long long R = std::clamp(num_particles / 8192, 1LL, 256LL);
+    const long long R = keep_order ? 1 : std::clamp(num_particles / 8192, 1LL, 256LL);
     const long long width = std::max(1LL, (num_particles + R - 1) / R);
     const long long even = R / 2;  // boundaries lo = 0, 2, 4, ... < R - 1
     std::vector<long long> key(m);

@@ -10,6 +10,8 @@
 #include <type_traits>
 #include <vector>
 
+#include "hooke/linear/petsc_runtime.hpp"
+
 namespace hooke {
 
 namespace {
@@ -269,6 +271,8 @@ bool is_coordinate_split(PC pc) {
 }
 
 }  // namespace
+
+void start_petsc() { ensure_petsc(); }
 
 struct PetscSolver::Impl {
   PetscSolverOptions settings;

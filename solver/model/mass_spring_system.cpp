@@ -64,6 +64,65 @@ void MassSpringSystem::finalize() {
   m_finalized = true;
 }
 
+LocalIndex MassSpringSystem::local_index(Index begin, Index end) const {
+  HOOKE_ASSERT(m_finalized, "local_index before finalize");
+  HOOKE_ASSERT(0 <= begin && begin <= end && end <= num_particles(),
+               "local_index [" << begin << ", " << end << ") of " << num_particles());
+  LocalIndex index;
+  index.num_owned = end - begin;
+  index.local_of.assign(size_t(num_particles()), -1);
+  for (Index g = begin; g < end; ++g) {
+    index.local_of[size_t(g)] = int(g - begin);
+    index.global.push_back(int(g));
+  }
+  std::vector<int> ghosts;
+  for (Index g = begin; g < end; ++g)
+    m_pattern.for_each_in_column(int(g), [&](int j) {
+      if (j < begin || j >= end) ghosts.push_back(j);
+    });
+  std::sort(ghosts.begin(), ghosts.end());
+  ghosts.erase(std::unique(ghosts.begin(), ghosts.end()), ghosts.end());
+  for (const int j : ghosts) {
+    index.local_of[size_t(j)] = int(index.global.size());
+    index.global.push_back(j);
+  }
+  return index;
+}
+
+std::unique_ptr<MassSpringSystem> MassSpringSystem::localize(const LocalIndex& index) const {
+  HOOKE_ASSERT(m_finalized, "localize before finalize");
+  HOOKE_ASSERT(index.local_of.size() == size_t(num_particles()),
+               "localize: an index over " << index.local_of.size() << " particles for a system of "
+                                          << num_particles());
+  if (m_fluid) throw SetupError("a fluid scene cannot be split between processes yet");
+  const Index n = index.num_local();
+  Vec masses(n);
+  std::vector<char> pinned(size_t(n), 0);
+  for (Index l = 0; l < n; ++l) {
+    const int g = index.global[size_t(l)];
+    masses[l] = m_masses[g];
+    pinned[size_t(l)] = m_pinned[size_t(g)];
+  }
+  auto local = std::make_unique<MassSpringSystem>(std::move(masses), std::move(pinned));
+  if (has_pin_motion()) local->set_pin_motion(m_pin_motion.localize(index));
+  for (const auto& force : m_forces) {
+    std::unique_ptr<Force> piece = force->localize(index);
+    if (!piece)
+      throw SetupError(std::string("the force '") + force->name() +
+                       "' cannot be split between processes yet");
+    local->add_force(std::move(piece));
+  }
+  for (const auto& constraint : m_constraints) {
+    std::unique_ptr<Constraint> piece = constraint->localize(index);
+    if (!piece)
+      throw SetupError(std::string("the constraint '") + constraint->name() +
+                       "' cannot be split between processes yet");
+    local->add_constraint(std::move(piece));
+  }
+  local->finalize();
+  return local;
+}
+
 Index MassSpringSystem::num_pinned() const {
   return static_cast<Index>(
       std::count_if(m_pinned.begin(), m_pinned.end(), [](char p) { return p != 0; }));
@@ -75,6 +134,7 @@ void MassSpringSystem::compute_forces(ConstRef x, ConstRef v, VecRef f) const {
                                         << " for " << dofs() << " dofs");
   parallel_for(num_particles(), 1 << 15, [&](long long p) { f.segment<3>(3 * p).setZero(); });
   for (const auto& force : m_forces) force->add_forces(x, v, f);
+  if (m_ghosts) m_ghosts->complete(f);
 }
 
 void MassSpringSystem::compute_discrete_gradient(ConstRef x0, ConstRef x1, ConstRef xm, ConstRef vm,

@@ -5,6 +5,7 @@
 #include "hooke/constraints/constraint.hpp"
 #include "hooke/constraints/pin_motion.hpp"
 #include "hooke/forces/force.hpp"
+#include "hooke/model/local_index.hpp"
 #include "hooke/model/state.hpp"
 #include "hooke/sparse/block_pattern.hpp"
 
@@ -22,6 +23,18 @@ struct Jacobians {
   SparseMatrix D;
   /// D's values, or nullptr when D is not stored (no velocity-dependent force).
   const double* velocity_values() const { return D.nonZeros() > 0 ? D.valuePtr() : nullptr; }
+};
+
+/// Completes the forces of one process's piece of a distributed system (issue 17): overwrites
+/// the forces of its ghost particles, which its own springs give only in part, with the forces
+/// their owners computed. Implemented over MPI in solver/distributed/ (DistributedModel); the
+/// system calls it at the end of every compute_forces(). Collective: every process of the run
+/// must call it together.
+class GhostExchange {
+ public:
+  virtual ~GhostExchange() = default;
+  /// f: the local 3n force vector (owned particles, then ghosts); its ghost entries are replaced.
+  virtual void complete(VecRef f) const = 0;
 };
 
 /// A mass-spring system: n particles with masses and pins, a list of forces and a list of post-step
@@ -52,6 +65,24 @@ class MassSpringSystem {
   void set_fluid(std::shared_ptr<const FluidModel> fluid);
   /// Builds the Jacobian block pattern and binds the forces to it. Call once, after all forces.
   void finalize();
+  /// The local particles of the process that owns particles [begin, end) of this finalized
+  /// system (issue 17): those, then as ghosts every other particle a force couples to one of them
+  /// (the Jacobian pattern's blocks), ascending.
+  LocalIndex local_index(Index begin, Index end) const;
+  /// The piece of this finalized system that one process steps in a distributed run (issue 17):
+  /// the local particles of `index` (owned, then ghosts) with their masses and pins, every force
+  /// and constraint localized (Force::localize), finalized. Its forces on owned particles are this
+  /// system's, bit for bit; on ghosts they are partial until a GhostExchange completes them.
+  /// Throws SetupError naming the part that cannot be split: a force or constraint without
+  /// localize, a fluid.
+  std::unique_ptr<MassSpringSystem> localize(const LocalIndex& index) const;
+  /// Makes compute_forces() finish with exchange.complete(f) (a distributed piece; see
+  /// GhostExchange). Before or after finalize; the exchange must outlive the system's use.
+  void set_ghost_exchange(std::shared_ptr<const GhostExchange> exchange) {
+    m_ghosts = std::move(exchange);
+  }
+  /// True for the piece of a distributed system (set_ghost_exchange).
+  bool distributed() const { return m_ghosts != nullptr; }
 
   Index num_particles() const { return m_masses.size(); }
   /// Number of scalar unknowns of positions (3n).
@@ -85,7 +116,8 @@ class MassSpringSystem {
   /// Incremented by every mutable_force() call; starts at 0.
   unsigned long long revision() const { return m_revision; }
 
-  /// f = sum of all forces at (x, v); f is overwritten (3n).
+  /// f = sum of all forces at (x, v); f is overwritten (3n). On a distributed piece, the ghosts'
+  /// forces are then completed by the GhostExchange (collective).
   void compute_forces(ConstRef x, ConstRef v, VecRef f) const;
   /// f = sum of the forces' discrete gradients between x0 and x1 (Force::add_discrete_gradient),
   /// with xm = (x0 + x1) / 2 and vm the midpoint velocity; f is overwritten (3n each).
@@ -124,6 +156,7 @@ class MassSpringSystem {
   std::vector<char> m_pinned;
   PinMotion m_pin_motion;
   std::shared_ptr<const FluidModel> m_fluid;
+  std::shared_ptr<const GhostExchange> m_ghosts;
   std::vector<std::unique_ptr<Force>> m_forces;
   std::vector<std::unique_ptr<Constraint>> m_constraints;
   BlockPattern m_pattern;

@@ -42,6 +42,13 @@ class BlockPattern {
   /// Slot of block (i, j); throws InternalError if the block was not declared. Setup-time only
   /// (binary search).
   BlockSlot slot(int i, int j) const;
+  /// Calls f(i) for every row block i stored in block column j, ascending (j itself included):
+  /// the particles a force couples to particle j. After finalize() only.
+  template <typename F>
+  void for_each_in_column(int j, F&& f) const {
+    for (int k = m_block_col_start[size_t(j)]; k < m_block_col_start[size_t(j) + 1]; ++k)
+      f(m_block_rows[size_t(k)]);
+  }
   /// A 3n x 3n matrix with this structure and all values zero (allocates: setup-time only).
   SparseMatrix make_matrix() const;
 

@@ -13,6 +13,7 @@
 #include <random>
 #include <vector>
 
+#include "hooke/constraints/strain_limit.hpp"
 #include "hooke/forces/air_drag.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
@@ -20,6 +21,7 @@
 #include "hooke/model/mass_spring_ode.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"
+#include "support/systems.hpp"
 
 namespace {
 
@@ -217,4 +219,64 @@ TEST(MassSpringSystem, RejectsBadInput) {
                hooke::InternalError);
   EXPECT_THROW({ hooke::MassSpringSystem s(Vec::Zero(2), std::vector<char>(2, 0)); },
                hooke::InternalError);
+}
+
+// The pieces a distributed run steps (issue 17): split into P contiguous ranges, each piece gives
+// its owned particles the whole system's forces bit for bit (same terms in the same order), on a
+// cloth large enough that the whole system's springs are grouped for threads (SpringSet::bind)
+// and with two threads, so the order the pieces keep is the grouped one.
+TEST(MassSpringSystem, LocalizedPiecesGiveOwnedParticlesTheWholeForceBitForBit) {
+  hooke::test::ClothSpec spec;
+  spec.n = 130;  // 16,900 particles: two particle ranges in SpringSet::partition
+  spec.jitter = 0.2;
+  spec.speed = 0.3;
+  const hooke::test::Cloth cloth = hooke::test::make_cloth(spec);
+  const hooke::MassSpringSystem& whole = *cloth.system;
+  const hooke::Index n = whole.num_particles();
+  Vec f(whole.dofs());
+  whole.compute_forces(cloth.state.x, cloth.state.v, f);
+  long long compared = 0;
+  for (const int P : {2, 3, 7}) {
+    for (int r = 0; r < P; ++r) {
+      const hooke::Index begin = n * r / P, end = n * (r + 1) / P;
+      const hooke::LocalIndex index = whole.local_index(begin, end);
+      ASSERT_EQ(index.num_owned, end - begin);
+      // A strip of rows: the ghosts are the rows of the neighbouring strips within the springs'
+      // reach (flexion springs span two rows).
+      EXPECT_GT(index.num_local(), index.num_owned) << P << " pieces, piece " << r;
+      EXPECT_LE(index.num_local() - index.num_owned, 4 * spec.n + 4) << P << " pieces, piece " << r;
+      const auto piece = whole.localize(index);
+      ASSERT_EQ(piece->num_particles(), index.num_local());
+      Vec x(piece->dofs()), v(piece->dofs()), fl(piece->dofs());
+      for (hooke::Index l = 0; l < index.num_local(); ++l) {
+        x.segment<3>(3 * l) = cloth.state.x.segment<3>(3 * index.global[size_t(l)]);
+        v.segment<3>(3 * l) = cloth.state.v.segment<3>(3 * index.global[size_t(l)]);
+      }
+      piece->compute_forces(x, v, fl);
+      for (hooke::Index l = 0; l < index.num_owned; ++l) {
+        const hooke::Index g = index.global[size_t(l)];
+        ASSERT_EQ(piece->masses()[l], whole.masses()[g]);
+        ASSERT_EQ(piece->pinned()[size_t(l)], whole.pinned()[size_t(g)]);
+        for (int c = 0; c < 3; ++c)
+          ASSERT_EQ(fl[3 * l + c], f[3 * g + c])
+              << "particle " << g << " of piece " << r << "/" << P;
+        ++compared;
+      }
+    }
+  }
+  EXPECT_EQ(compared, 3 * n);
+}
+
+TEST(MassSpringSystem, LocalizeNamesWhatCannotBeSplit) {
+  auto sys = std::make_unique<hooke::MassSpringSystem>(Vec::Ones(3), std::vector<char>(3, 0));
+  auto limit = std::make_unique<hooke::StrainLimit>(0.1, 4);
+  limit->add(0, 1, 1.0);
+  sys->add_constraint(std::move(limit));
+  sys->finalize();
+  try {
+    (void)sys->localize(sys->local_index(0, 2));
+    FAIL() << "a strain limit was split";
+  } catch (const hooke::SetupError& e) {
+    EXPECT_NE(std::string(e.what()).find("'strain-limit'"), std::string::npos) << e.what();
+  }
 }

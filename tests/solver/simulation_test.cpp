@@ -68,6 +68,37 @@ TEST(Simulation, FailedStepLeavesTheStateUnchangedWithoutHalvings) {
   EXPECT_EQ(sim.halved_steps(), 0);
 }
 
+TEST(Simulation, AStepAnotherProcessRefusedFailsHereTooAndRetriesTogether) {
+  // The agreement of a distributed run (set_agreement): a step this process accepted fails if
+  // another process's failed, leaving the state unchanged, and every retry asks again.
+  const test::TwoParticleSpring sp(1e3);
+  Simulation sim(*sp.system, std::make_unique<FailsAboveStep>(*sp.system, 1.0), sp.initial(0.1));
+  std::vector<bool> asked;
+  sim.set_agreement([&](bool here) {
+    asked.push_back(here);
+    return false;  // some other process failed
+  });
+  sim.set_max_step_halvings(1);
+  const State before = sim.state();
+  const StepSummary r = sim.advance(0.02);
+  EXPECT_EQ(r.status, Status::Fatal);
+  EXPECT_EQ(r.message, "the step failed on another process");
+  EXPECT_TRUE(sim.failed_elsewhere());
+  EXPECT_EQ(sim.state(), before);
+  EXPECT_EQ(asked, (std::vector<bool>{true, true}));  // the step and its first half
+  EXPECT_EQ(sim.failed_h(), 0.01);
+
+  // Agreeing: the same bits as a process alone.
+  Simulation alone(*sp.system, std::make_unique<FailsAboveStep>(*sp.system, 1.0), sp.initial(0.1));
+  sim.set_agreement([](bool here) { return here; });
+  for (int k = 0; k < 5; ++k) {
+    ASSERT_EQ(sim.advance(0.02).status, Status::Converged);
+    ASSERT_EQ(alone.advance(0.02).status, Status::Converged);
+  }
+  EXPECT_FALSE(sim.failed_elsewhere());
+  EXPECT_EQ(sim.state(), alone.state());
+}
+
 TEST(Simulation, FailedStepIsRetriedAsHalvesThatLandOnTPlusH) {
   const test::TwoParticleSpring sp(1e3);
   auto stepper = std::make_unique<FailsAboveStep>(*sp.system, 0.0026);
