@@ -302,7 +302,8 @@ void MassSpringRun::restore(const Checkpoint& c) {
   m_not_converged = c.not_converged;
   m_sim.set_halved_steps(c.halved_steps);
   m_wall = c.wall;
-  if (!m_sim.stepper().exact_resume() && m_group.root())
+  const bool restarted = c.history.empty() && !m_sim.stepper().history().empty();
+  if ((!m_sim.stepper().exact_resume() || restarted) && m_group.root())
     std::fprintf(stderr,
                  "note: %s keeps an internal history that a checkpoint cannot hold: it restarts at "
                  "step %lld, so the result agrees with an uninterrupted run to the solver's "
@@ -479,9 +480,9 @@ void MassSpringRun::checkpoint(long long step) {
   c.halved_steps = m_sim.halved_steps();
   c.wall = m_wall;
   c.state = m_group.whole(m_sim.state());
-  c.history = m_sim.stepper().history();
-  HOOKE_ASSERT(!m_group.distributed() || c.history.empty(),
-               "a distributed run of a stepper with a history to checkpoint");
+  // A distributed run's stepper history (warm starts, BDF2's states) is per process: none is
+  // kept, and a resumed run starts its stepper afresh (restore() says so).
+  if (!m_group.distributed()) c.history = m_sim.stepper().history();
   if (m_adaptive) append_error_control(m_sim, c.history);  // restore() takes it back off
   m_group.on_root([&] { m_out->checkpoint(std::move(c)); });
 }
@@ -617,15 +618,16 @@ std::unique_ptr<RunGroup> run_group(const Scene& scene) {
   if (launched && scene.is_ode())
     throw InputError(scene.file, "ode",
                      "an [ode] scene runs on one process: run it without mpirun (or with -n 1)");
-  if (launched && method_info(scene.integrator.method).kind != MethodKind::Explicit) {
-    std::string explicit_methods;
+  const MethodKind kind = method_info(scene.integrator.method).kind;
+  if (launched && kind != MethodKind::Explicit && kind != MethodKind::Implicit) {
+    std::string methods_across;
     for (const MethodInfo& m : methods())
-      if (m.kind == MethodKind::Explicit)
-        explicit_methods += (explicit_methods.empty() ? "" : ", ") + std::string(m.name);
+      if (m.kind == MethodKind::Explicit || m.kind == MethodKind::Implicit)
+        methods_across += (methods_across.empty() ? "" : ", ") + std::string(m.name);
     throw InputError(scene.file, "integrator.method",
                      "'" + scene.integrator.method +
-                         "' does not run across MPI processes yet: use an explicit method (" +
-                         explicit_methods + "), or run one process");
+                         "' does not run across MPI processes yet: use one of " + methods_across +
+                         " (the implicit ones with linear_solver = \"petsc\"), or run one process");
   }
   if (launched && scene.integrator.adaptive)
     throw InputError(scene.file, "integrator.adaptive",

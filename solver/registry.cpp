@@ -212,7 +212,8 @@ std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringS
                                           : options.as<ImplicitOptions>(e.info.name);
       if (const OptionError err = o.validate(); !err.ok()) throw std::invalid_argument(err.message);
       if (o.linear_solver.empty()) o.linear_solver = default_linear_solver();
-      auto solver = make_linear_solver(o.linear_solver, o.preconditioner, {o.petsc_options});
+      auto solver = make_linear_solver(o.linear_solver, o.preconditioner,
+                                       {o.petsc_options, system.distribution()});
       return std::make_unique<ImplicitStepper>(system, e.scheme, std::move(solver), o);
     }
   for (const auto& e : whole_step_table())

@@ -38,12 +38,13 @@ int mpi_world_size() {
   return n;
 }
 
-/// The ghost exchange of forces (GhostExchange): a ghosted PETSc vector of block size 3, owned
+/// The piece's Distribution: the ghost exchange is a ghosted PETSc vector of block size 3, owned
 /// particles then ghosts in its local form, exactly the local particle order.
-class DistributedModel::Exchange final : public GhostExchange {
+class DistributedModel::Exchange final : public Distribution {
  public:
-  Exchange(Index owned, const std::vector<PetscInt>& ghosts) : m_owned(owned) {
-    check(VecCreateGhostBlock(world(), 3, PetscInt(3 * owned), PETSC_DECIDE,
+  Exchange(const LocalIndex& index, const std::vector<PetscInt>& ghosts)
+      : m_index(index), m_owned(index.num_owned) {
+    check(VecCreateGhostBlock(world(), 3, PetscInt(3 * m_owned), PETSC_DECIDE,
                               PetscInt(ghosts.size()), ghosts.data(), &m_vec),
           "VecCreateGhostBlock");
   }
@@ -55,6 +56,12 @@ class DistributedModel::Exchange final : public GhostExchange {
   Exchange(const Exchange&) = delete;
   Exchange& operator=(const Exchange&) = delete;
 
+  const LocalIndex& index() const override { return m_index; }
+  double max(double value) const override {
+    double out = 0.0;
+    check(MPI_Allreduce(&value, &out, 1, MPI_DOUBLE, MPI_MAX, world()), "MPI_Allreduce");
+    return out;
+  }
   void complete(VecRef f) const override {
     const Index owned = 3 * m_owned;
     ::Vec local = nullptr;
@@ -73,6 +80,7 @@ class DistributedModel::Exchange final : public GhostExchange {
   }
 
  private:
+  const LocalIndex& m_index;
   Index m_owned;
   ::Vec m_vec = nullptr;
 };
@@ -94,8 +102,8 @@ DistributedModel::DistributedModel(const MassSpringSystem& global) {
   const std::vector<PetscInt> ghost_blocks(m_index.global.begin() + m_index.num_owned,
                                            m_index.global.end());
   m_local = global.localize(m_index);
-  m_exchange = std::make_shared<Exchange>(m_index.num_owned, ghost_blocks);
-  m_local->set_ghost_exchange(m_exchange);
+  m_exchange = std::make_shared<Exchange>(m_index, ghost_blocks);
+  m_local->set_distribution(m_exchange);
 }
 
 DistributedModel::~DistributedModel() = default;

@@ -20,8 +20,9 @@ int mpi_world_size();
 /// order (a contiguous partition of the mesh order: strips of a row-major cloth grid). It holds
 /// those particles, the springs incident to them, and as ghosts the other ends of those springs
 /// (LocalIndex: owned first, then ghosts, each in ascending global id). local() is that piece as a
-/// MassSpringSystem whose compute_forces() finishes with a ghost exchange through a PETSc ghosted
-/// vector (VecGhost, block size 3, built once): each ghost receives the force its owner computed.
+/// MassSpringSystem with this model's Distribution: its compute_forces() finishes with a ghost
+/// exchange through a PETSc ghosted vector (VecGhost, block size 3, built once), in which each
+/// ghost receives the force its owner computed.
 /// A stepper running unchanged on local() then moves every ghost exactly as its owner moves it,
 /// so the state needs no exchange of its own, and the owned particles follow the serial run bit
 /// for bit (same terms, summed in the same order: Force::localize), one OpenMP thread per

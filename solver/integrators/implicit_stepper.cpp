@@ -118,6 +118,11 @@ std::vector<double> ImplicitStepper::history() const {
 }
 
 void ImplicitStepper::restore_history(const std::vector<double>& h) {
+  if (h.empty()) {  // none kept (a distributed run's checkpoint): start as a new stepper does
+    m_has_last = false;
+    m_delta.setZero();
+    return;
+  }
   const std::vector<char>& pinned = m_system.pinned();
   const size_t N = size_t(m_system.dofs()), nf = N - 3 * size_t(m_system.num_pinned());
   const size_t head = m_scheme == ImplicitScheme::Bdf2 ? 5 + (m_estimating ? 6 : 4) * N : 0;
@@ -297,6 +302,8 @@ double ImplicitStepper::max_step_ratio() const {
 
 void ImplicitStepper::set_error_estimation(bool on) {
   HOOKE_ASSERT(!on || error_estimate_order() > 0, name() << " makes no local error estimate");
+  HOOKE_ASSERT(!on || !m_system.distribution(), name()
+                                                    << ": error control on a distributed system");
   m_estimating = on;
   m_doubling = on && m_scheme != ImplicitScheme::Bdf2;
   const Index n = m_system.num_particles();
@@ -308,7 +315,8 @@ void ImplicitStepper::set_error_estimation(bool on) {
   if (m_doubling && m_full.x.size() == 0) {
     for (State* s : {&m_full, &m_half}) *s = State(n);
     if (linear_solver_unknown(m_solver->name()).empty()) {
-      m_solver_half = make_linear_solver(m_solver->name(), "", {m_options.petsc_options});
+      m_solver_half = make_linear_solver(m_solver->name(), "",
+                                         {m_options.petsc_options, m_system.distribution()});
       const LinearSummary a = m_solver_half->analyze(m_A.matrix());
       if (a.status != Status::Converged) throw SetupError(a.message);
       accumulate(m_totals, a);
@@ -429,9 +437,16 @@ StepSummary ImplicitStepper::newton(const State& s0, double h, State& s1, Linear
     m_v1 += m_delta;
     if (m_options.newton_iterations > 1) {
       const double previous_norm = delta_norm;
+      // Over every process of a distributed system: its ghosts hold their owners' values, so the
+      // largest local norm is the whole system's.
+      const Distribution* d = m_system.distribution();
       delta_norm = m_delta.lpNorm<Eigen::Infinity>();
-      const double scale =
+      double scale =
           std::max({m_v1.lpNorm<Eigen::Infinity>(), m_v0.lpNorm<Eigen::Infinity>(), 1e-12});
+      if (d) {
+        delta_norm = d->max(delta_norm);
+        scale = d->max(scale);
+      }
       const double target = m_options.newton_tolerance * scale;
       if (delta_norm <= target) {
         converged = true;

@@ -101,7 +101,8 @@ class Stepper {
   /// the stepper chooses; empty for one-step methods without warm starts).
   virtual std::vector<double> history() const { return {}; }
   /// Restores what history() returned on a stepper made with the same method, options and
-  /// system. Throws InternalError if the data cannot be from such a stepper.
+  /// system; an empty history (a distributed run keeps none) starts the stepper afresh, as a new
+  /// one would. Throws InternalError if the data cannot be from such a stepper.
   virtual void restore_history(const std::vector<double>& history) {
     HOOKE_ASSERT(history.empty(), name()
                                       << " keeps no history, got " << history.size() << " numbers");

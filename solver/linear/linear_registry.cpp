@@ -67,7 +67,8 @@ const std::vector<Entry>& table() {
       "PETSc KSP/PC, by default CG with smoothed-aggregation AMG (GAMG) and rigid-body modes; "
       "[integrator] petsc_options and PETSC_OPTIONS choose others (e.g. -pc_type hypre)"},
      [](const LinearBackendSettings& s) {
-       return std::make_unique<PetscSolver>(PetscSolverOptions{s.petsc_options});
+       return std::make_unique<PetscSolver>(
+           PetscSolverOptions{s.petsc_options, true, s.distribution});
      }},
 #endif
     {{"colored-gauss-seidel", "multicolour 3x3-block Gauss-Seidel, parallel within a colour"},
@@ -194,6 +195,9 @@ std::unique_ptr<LinearSolver> make_linear_solver(const std::string& name,
                                                  const LinearBackendSettings& settings) {
   if (const std::string why = linear_solver_unknown(name, preconditioner); !why.empty())
     throw UnknownName(why);
+  if (settings.distribution && canonical_linear_solver(name, preconditioner) != "petsc")
+    throw SetupError("linear solver '" + canonical_linear_solver(name, preconditioner) +
+                     "' solves on one process only: across MPI processes, use 'petsc'");
   const std::string p = preconditioner.empty() ? krylov_preconditioner(name) : preconditioner;
   if (const PreconditionerEntry* e = p.empty() ? nullptr : find_preconditioner(p))
     return std::make_unique<ConjugateGradientSolver>(e->make());

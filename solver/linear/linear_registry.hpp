@@ -14,10 +14,15 @@ struct LinearSolverInfo {
   const char* description;  ///< one line for --help and messages
 };
 
+class Distribution;  // hooke/model/mass_spring_system.hpp
+
 /// Settings that only some backends read, given to make_linear_solver.
 struct LinearBackendSettings {
   /// "petsc": PETSc options for its KSP and PC (PetscSolverOptions::options).
   std::string petsc_options;
+  /// The piece of a distributed system the backend solves on (issue 17), or nullptr. Only
+  /// "petsc" solves across processes; the others refuse a distribution (SetupError).
+  const Distribution* distribution = nullptr;
 };
 
 /// One entry of the preconditioner table.

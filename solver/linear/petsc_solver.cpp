@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cstdlib>
 #include <cstring>
+#include <numeric>
 #include <sstream>
 #include <stdexcept>
 #include <type_traits>
@@ -92,12 +93,19 @@ void ensure_petsc() {
   (void)done;
 }
 
+/// True if PETSc solves span the processes of an MPI run (a distributed system's solver exists):
+/// -log_view's summary is then collective, printed once by rank 0.
+bool g_log_world = false;
+
 /// Starts PETSc's event logging and prints its summary on stdout at exit (before PetscFinalize,
-/// whose own atexit handler was registered first and so runs after this one).
-void log_view_at_exit() {
+/// whose own atexit handler was registered first and so runs after this one): this process's, or
+/// in an MPI run the whole run's, once, by rank 0.
+void log_view_at_exit(bool world) {
+  g_log_world = g_log_world || world;
   static const bool done = [] {
     PetscLogDefaultBegin();
-    std::atexit([] { PetscLogView(PETSC_VIEWER_STDOUT_SELF); });
+    std::atexit(
+        [] { PetscLogView(g_log_world ? PETSC_VIEWER_STDOUT_WORLD : PETSC_VIEWER_STDOUT_SELF); });
     return true;
   }();
   (void)done;
@@ -287,6 +295,14 @@ struct PetscSolver::Impl {
   const void* wrapped[3] = {nullptr, nullptr, nullptr};
   std::vector<PetscInt> rows, cols;  // only if PetscInt is not Eigen's index type (64-bit PETSc)
   Index n = 0;
+  // A distributed system (settings.distribution): M is an MPI AIJ matrix of this process's owned
+  // rows, the first n_owned of A (see distribute()), in compressed rows with global columns sorted
+  // within each row (csr_start, csr_col); entry p of them is A's entry csr_from[p], copied into
+  // csr_value by factor().
+  Index n_owned = 0;
+  std::vector<PetscInt> csr_start, csr_col;
+  std::vector<int> csr_from;
+  std::vector<double> csr_value;
   hooke::Vec coordinates;  // positions of the unknowns (set_coordinates), for the near-null space
   bool user_rtol = false, user_max_it = false, user_divtol = false;
   bool view_pending = false;      // -ksp_view was given: KSPView after the first solve
@@ -359,7 +375,7 @@ struct PetscSolver::Impl {
     check(PetscOptionsHasName(options, nullptr, "-log_view", &has), "options");
     if (has) {
       check(PetscOptionsClearValue(options, "-log_view"), "options");
-      if (settings.view) log_view_at_exit();
+      if (settings.view) log_view_at_exit(settings.distribution != nullptr);
     }
   }
 
@@ -402,11 +418,73 @@ struct PetscSolver::Impl {
            wrapped[2] == A.valuePtr();
   }
 
+  bool distributed() const { return settings.distribution != nullptr; }
+  /// What the Krylov method multiplies by: hooke's threaded product on one process, PETSc's MPI
+  /// AIJ product across processes.
+  Mat krylov_operator() const { return distributed() ? M : shell; }
+
+  /// A distributed system's M (analyze): an MPI AIJ matrix of block size 3 over the process's
+  /// owned rows, preallocated from A's pattern. Owned particles come first in the piece (A's first
+  /// n_owned rows and columns) and a piece holds every spring of an owned particle, so their rows
+  /// are complete; A is symmetric, so its compressed columns are those rows. Global indices follow
+  /// the distribution's global ids, whose contiguous ranges per rank are PETSc's ownership ranges.
+  void distribute(const SparseMatrix& A) {
+    const LocalIndex& index = settings.distribution->index();
+    n_owned = 3 * index.num_owned;
+    const auto global = [&](Index q) { return PetscInt(3 * index.global[size_t(q / 3)] + q % 3); };
+    const int* start = A.outerIndexPtr();
+    const int* inner = A.innerIndexPtr();
+    const size_t nnz = size_t(start[n_owned]);
+    csr_start.assign(start, start + n_owned + 1);
+    csr_col.resize(nnz);
+    csr_from.resize(nnz);
+    csr_value.assign(nnz, 0.0);
+    for (Index r = 0; r < n_owned; ++r) {
+      std::iota(csr_from.begin() + start[r], csr_from.begin() + start[r + 1], start[r]);
+      std::sort(csr_from.begin() + start[r], csr_from.begin() + start[r + 1],
+                [&](int a, int b) { return global(inner[a]) < global(inner[b]); });
+      for (int p = start[r]; p < start[r + 1]; ++p)
+        csr_col[size_t(p)] = global(inner[csr_from[size_t(p)]]);
+    }
+    check(MatCreate(PETSC_COMM_WORLD, &M), "MatCreate");
+    check(MatSetSizes(M, PetscInt(n_owned), PetscInt(n_owned), PETSC_DETERMINE, PETSC_DETERMINE),
+          "MatSetSizes");
+    check(MatSetBlockSize(M, 3), "MatSetBlockSize");
+    check(MatSetType(M, MATMPIAIJ), "MatSetType");
+    check(MatMPIAIJSetPreallocationCSR(M, csr_start.data(), csr_col.data(), nullptr),
+          "MatMPIAIJSetPreallocationCSR");
+    check(MatSetOption(M, MAT_NEW_NONZERO_ALLOCATION_ERR, PETSC_TRUE), "MatSetOption");
+    check(MatSetOption(M, MAT_NO_OFF_PROC_ENTRIES, PETSC_TRUE), "MatSetOption");
+    check(MatSetOption(M, MAT_SPD, PETSC_TRUE), "MatSetOption");
+    for (::Vec* v : {&b, &x})
+      check(VecCreateMPIWithArray(PETSC_COMM_WORLD, 3, PetscInt(n_owned), PETSC_DECIDE, nullptr, v),
+            "VecCreateMPIWithArray");
+  }
+
+  /// The 2-norm of a distributed system's vector over the owned rows of every process.
+  double owned_norm(ConstRef v) {
+    check(VecPlaceArray(b, v.data()), "VecPlaceArray");
+    PetscReal norm = 0.0;
+    const PetscErrorCode ierr = VecNorm(b, NORM_2, &norm);
+    VecResetArray(b);
+    check(ierr, "VecNorm");
+    return double(norm);
+  }
+
+  /// A distributed system's new values (factor): A's owned rows into M, in M's order.
+  void copy_owned_rows(const SparseMatrix& A) {
+    const double* a = A.valuePtr();
+    parallel_ranges(Index(csr_value.size()), [&](long long b, long long e) {
+      for (long long p = b; p < e; ++p) csr_value[size_t(p)] = a[csr_from[size_t(p)]];
+    });
+    check(MatUpdateMPIAIJWithArray(M, csr_value.data()), "MatUpdateMPIAIJWithArray");
+  }
+
   /// After the first set-up: if the KSP's preconditioner is the coordinate split (the default)
   /// and there are threads to share it, the splits are applied concurrently from now on
   /// (ConcurrentSplit): the PCFIELDSPLIT moves behind a PCSHELL that the KSP uses instead.
   void adopt_concurrent_split() {
-    if (split.split || !run_parallel(3, 2) || !g_mpi_thread_multiple) return;
+    if (split.split || distributed() || !run_parallel(3, 2) || !g_mpi_thread_multiple) return;
     PC pc = nullptr;
     check(KSPGetPC(ksp, &pc), "KSPGetPC");
     if (!is_coordinate_split(pc)) return;
@@ -441,11 +519,18 @@ struct PetscSolver::Impl {
   /// The rigid-body modes of the free particles at `coordinates` as A's near-null space.
   void near_null_space() {
     if (!rigid_body_modes || coordinates.size() != n || n % 3 != 0) return;
-    if (!coords) check(VecCreateSeq(PETSC_COMM_SELF, PetscInt(n), &coords), "VecCreateSeq");
+    const Index rows = distributed() ? n_owned : n;
+    if (!coords) {
+      if (distributed())
+        check(VecCreateMPI(PETSC_COMM_WORLD, PetscInt(rows), PETSC_DECIDE, &coords),
+              "VecCreateMPI");
+      else
+        check(VecCreateSeq(PETSC_COMM_SELF, PetscInt(rows), &coords), "VecCreateSeq");
+    }
     check(VecSetBlockSize(coords, 3), "VecSetBlockSize");
     PetscScalar* c = nullptr;
     check(VecGetArray(coords, &c), "VecGetArray");
-    std::memcpy(c, coordinates.data(), sizeof(double) * size_t(n));
+    std::memcpy(c, coordinates.data(), sizeof(double) * size_t(rows));
     check(VecRestoreArray(coords, &c), "VecRestoreArray");
     MatNullSpace nsp = nullptr;
     check(MatNullSpaceCreateRigidBody(coords, &nsp), "MatNullSpaceCreateRigidBody");
@@ -542,7 +627,13 @@ LinearSummary PetscSolver::analyze(const SparseMatrix& A) {
   try {
     const ErrorScope errors;
     m->make_options();
-    if (m->n > 0) {
+    if (m->n > 0 && m->distributed()) {
+      const OptionsScope scope(m->options);
+      m->distribute(A);
+      check(KSPCreate(PETSC_COMM_WORLD, &m->ksp), "KSPCreate");
+      check(KSPSetOperators(m->ksp, m->M, m->M), "KSPSetOperators");
+      check(KSPSetFromOptions(m->ksp), "KSPSetFromOptions");
+    } else if (m->n > 0) {
       const OptionsScope scope(m->options);
       m->wrap(A);
       check(VecCreateSeqWithArray(PETSC_COMM_SELF, 1, PetscInt(m->n), nullptr, &m->b),
@@ -575,7 +666,9 @@ LinearSummary PetscSolver::factor(const SparseMatrix& A) {
   try {
     const ErrorScope errors;
     const OptionsScope scope(m->options);
-    if (!m->wraps(A)) {  // another matrix than the last one (same pattern): wrap it instead
+    if (m->distributed()) {
+      m->copy_owned_rows(A);
+    } else if (!m->wraps(A)) {  // another matrix than the last one (same pattern): wrap it instead
       m->wrap(A);
       m->rebuild = true;
     }
@@ -590,7 +683,7 @@ LinearSummary PetscSolver::factor(const SparseMatrix& A) {
     if (m->rebuild) {
       m->near_null_space();
       check(KSPSetReusePreconditioner(m->ksp, PETSC_FALSE), "KSPSetReusePreconditioner");
-      check(KSPSetOperators(m->ksp, m->shell, m->M), "KSPSetOperators");
+      check(KSPSetOperators(m->ksp, m->krylov_operator(), m->M), "KSPSetOperators");
       check(KSPSetUp(m->ksp), "KSPSetUp");
       m->adopt_concurrent_split();
       check(KSPSetReusePreconditioner(m->ksp, PETSC_TRUE), "KSPSetReusePreconditioner");
@@ -599,7 +692,7 @@ LinearSummary PetscSolver::factor(const SparseMatrix& A) {
       m->solves_since = 0;
       m->rebuild = false;
     } else {
-      check(KSPSetOperators(m->ksp, m->shell, m->M), "KSPSetOperators");
+      check(KSPSetOperators(m->ksp, m->krylov_operator(), m->M), "KSPSetOperators");
     }
   } catch (const PetscFailure& e) {
     s.status = Status::Fatal;
@@ -620,11 +713,13 @@ LinearSummary PetscSolver::solve(ConstRef b, VecRef x, const LinearSolveOptions&
     return s;
   }
   try {
-    if (b.isZero(0.0)) {  // the exact solution, whatever the tolerance or the warm start
+    const ErrorScope errors;
+    // Over the owned rows of every process for a distributed system (its other rows are partial).
+    const double bnorm = m->distributed() ? m->owned_norm(b) : b.norm();
+    if (bnorm == 0.0) {  // the exact solution, whatever the tolerance or the warm start
       x.setZero();
       return s;
     }
-    const ErrorScope errors;
     const OptionsScope scope(m->options);
     if (!options.warm_start) x.setZero();
     check(KSPSetInitialGuessNonzero(m->ksp, options.warm_start ? PETSC_TRUE : PETSC_FALSE),
@@ -642,9 +737,13 @@ LinearSummary PetscSolver::solve(ConstRef b, VecRef x, const LinearSolveOptions&
     VecResetArray(m->b);
     VecResetArray(m->x);
     check(ierr, "KSPSolve");
+    // The ghosts' unknowns from their owners: every process then holds the same x for a particle.
+    if (m->distributed()) m->settings.distribution->complete(x);
     if (m->view_pending) {
       m->view_pending = false;
-      check(KSPView(m->ksp, PETSC_VIEWER_STDOUT_SELF), "KSPView");
+      check(
+          KSPView(m->ksp, m->distributed() ? PETSC_VIEWER_STDOUT_WORLD : PETSC_VIEWER_STDOUT_SELF),
+          "KSPView");
     }
     PetscInt its = 0;
     KSPConvergedReason reason;
@@ -653,7 +752,6 @@ LinearSummary PetscSolver::solve(ConstRef b, VecRef x, const LinearSolveOptions&
     check(KSPGetConvergedReason(m->ksp, &reason), "KSPGetConvergedReason");
     check(KSPGetResidualNorm(m->ksp, &rnorm), "KSPGetResidualNorm");
     s.iterations = int(its);
-    const double bnorm = b.norm();
     s.residual = bnorm > 0 ? double(rnorm) / bnorm : double(rnorm);
     m->last_iterations = int(its);
     m->cost_since += double(its);

@@ -3,6 +3,7 @@
 #include <string>
 
 #include "hooke/linear/linear_solver.hpp"
+#include "hooke/model/mass_spring_system.hpp"
 
 namespace hooke {
 
@@ -15,6 +16,9 @@ struct PetscSolverOptions {
   std::string options;
   /// -ksp_view prints the solver once, after its first solve (false: never, for probes).
   bool view = true;
+  /// The piece of a distributed system the matrices belong to (issue 17), or nullptr (a whole
+  /// system on this process alone). See PetscSolver. Must outlive the solver.
+  const Distribution* distribution = nullptr;
 };
 
 /// The defaults: CG on the true residual, preconditioned by one algebraic multigrid V-cycle per
@@ -69,6 +73,13 @@ std::string petsc_options_problem(const std::string& options);
 /// A PETSc error (including an invalid option) is Status::Fatal with PETSc's message; a KSP that
 /// diverges (e.g. indefinite A: DIVERGED_INDEFINITE_PC / _MAT) is BrokeDown with the reason.
 /// The age of the hierarchy is not in a checkpoint: exact_resume() is false.
+///
+/// With PetscSolverOptions::distribution (issue 17), A is the step matrix of one process's piece
+/// of a distributed system and every call is collective: the solver works on PETSC_COMM_WORLD
+/// with an MPI AIJ matrix of the piece's owned rows (copied from A at each factor(), since a
+/// piece's other rows are partial), PETSc's own product, the same options and renewal rule, and
+/// after each solve the ghosts' unknowns from their owners (Distribution::complete). -ksp_view
+/// and -log_view print once, on rank 0.
 class PetscSolver final : public LinearSolver {
  public:
   /// What one preconditioner set-up counts for in the renewal rule, in Krylov iterations, with

@@ -134,7 +134,7 @@ void MassSpringSystem::compute_forces(ConstRef x, ConstRef v, VecRef f) const {
                                         << " for " << dofs() << " dofs");
   parallel_for(num_particles(), 1 << 15, [&](long long p) { f.segment<3>(3 * p).setZero(); });
   for (const auto& force : m_forces) force->add_forces(x, v, f);
-  if (m_ghosts) m_ghosts->complete(f);
+  if (m_distribution) m_distribution->complete(f);
 }
 
 void MassSpringSystem::compute_discrete_gradient(ConstRef x0, ConstRef x1, ConstRef xm, ConstRef vm,

@@ -25,16 +25,21 @@ struct Jacobians {
   const double* velocity_values() const { return D.nonZeros() > 0 ? D.valuePtr() : nullptr; }
 };
 
-/// Completes the forces of one process's piece of a distributed system (issue 17): overwrites
-/// the forces of its ghost particles, which its own springs give only in part, with the forces
-/// their owners computed. Implemented over MPI in solver/distributed/ (DistributedModel); the
-/// system calls it at the end of every compute_forces(). Collective: every process of the run
-/// must call it together.
-class GhostExchange {
+/// How one process's piece of a distributed system (issue 17) reaches the other processes:
+/// implemented over MPI in solver/distributed/ (DistributedModel). The piece's compute_forces()
+/// ends with complete(f), so its ghosts get the forces their owners computed (their own springs
+/// give them only in part); steppers and backends call the rest where a serial step takes a
+/// global view. Every call is collective: all processes of the run must make it together.
+class Distribution {
  public:
-  virtual ~GhostExchange() = default;
-  /// f: the local 3n force vector (owned particles, then ghosts); its ghost entries are replaced.
-  virtual void complete(VecRef f) const = 0;
+  virtual ~Distribution() = default;
+  /// The piece's particles: owned, then ghosts (the global ids each local one stands for).
+  virtual const LocalIndex& index() const = 0;
+  /// v: a local 3n vector (owned particles, then ghosts); the ghosts' entries are replaced by
+  /// their owners' (after which every process holds the same values for a particle).
+  virtual void complete(VecRef v) const = 0;
+  /// The largest of every process's `value`.
+  virtual double max(double value) const = 0;
 };
 
 /// A mass-spring system: n particles with masses and pins, a list of forces and a list of post-step
@@ -72,17 +77,17 @@ class MassSpringSystem {
   /// The piece of this finalized system that one process steps in a distributed run (issue 17):
   /// the local particles of `index` (owned, then ghosts) with their masses and pins, every force
   /// and constraint localized (Force::localize), finalized. Its forces on owned particles are this
-  /// system's, bit for bit; on ghosts they are partial until a GhostExchange completes them.
+  /// system's, bit for bit; on ghosts they are partial until a Distribution completes them.
   /// Throws SetupError naming the part that cannot be split: a force or constraint without
   /// localize, a fluid.
   std::unique_ptr<MassSpringSystem> localize(const LocalIndex& index) const;
-  /// Makes compute_forces() finish with exchange.complete(f) (a distributed piece; see
-  /// GhostExchange). Before or after finalize; the exchange must outlive the system's use.
-  void set_ghost_exchange(std::shared_ptr<const GhostExchange> exchange) {
-    m_ghosts = std::move(exchange);
+  /// Makes this system the piece of a distributed one: compute_forces() finishes with
+  /// distribution.complete(f) (see Distribution). Before or after finalize.
+  void set_distribution(std::shared_ptr<const Distribution> distribution) {
+    m_distribution = std::move(distribution);
   }
-  /// True for the piece of a distributed system (set_ghost_exchange).
-  bool distributed() const { return m_ghosts != nullptr; }
+  /// How this piece of a distributed system reaches the others; nullptr for a whole system.
+  const Distribution* distribution() const { return m_distribution.get(); }
 
   Index num_particles() const { return m_masses.size(); }
   /// Number of scalar unknowns of positions (3n).
@@ -117,7 +122,7 @@ class MassSpringSystem {
   unsigned long long revision() const { return m_revision; }
 
   /// f = sum of all forces at (x, v); f is overwritten (3n). On a distributed piece, the ghosts'
-  /// forces are then completed by the GhostExchange (collective).
+  /// forces are then completed by the Distribution (collective).
   void compute_forces(ConstRef x, ConstRef v, VecRef f) const;
   /// f = sum of the forces' discrete gradients between x0 and x1 (Force::add_discrete_gradient),
   /// with xm = (x0 + x1) / 2 and vm the midpoint velocity; f is overwritten (3n each).
@@ -156,7 +161,7 @@ class MassSpringSystem {
   std::vector<char> m_pinned;
   PinMotion m_pin_motion;
   std::shared_ptr<const FluidModel> m_fluid;
-  std::shared_ptr<const GhostExchange> m_ghosts;
+  std::shared_ptr<const Distribution> m_distribution;
   std::vector<std::unique_ptr<Force>> m_forces;
   std::vector<std::unique_ptr<Constraint>> m_constraints;
   BlockPattern m_pattern;
