@@ -56,6 +56,11 @@ const State& RunGroup::whole(const State& local) {
   m_model->gather(local, m_whole);
   return root() ? m_whole : local;
 }
+RunGroup::Traffic RunGroup::traffic() const {
+  if (!m_model) return {};
+  const DistributedModel::Traffic t = m_model->traffic();
+  return {t.ghosts, t.messages, t.bytes, t.max_ghosts};
+}
 bool RunGroup::all(bool value) const { return m_model ? m_model->all(value) : value; }
 long long RunGroup::max(long long value) const { return m_model ? m_model->max(value) : value; }
 double RunGroup::from_root(double value) const {
@@ -72,6 +77,7 @@ int RunGroup::size() const { return 1; }
 const MassSpringSystem& RunGroup::stepped(const MassSpringSystem& global) const { return global; }
 State RunGroup::local_state(const State& global) const { return global; }
 const State& RunGroup::whole(const State& local) { return local; }
+RunGroup::Traffic RunGroup::traffic() const { return {}; }
 bool RunGroup::all(bool value) const { return value; }
 long long RunGroup::max(long long value) const { return value; }
 double RunGroup::from_root(double value) const { return value; }

@@ -57,6 +57,13 @@ class RunGroup {
   /// rank 0 of a distributed run, the gathered state (valid until the next call), elsewhere
   /// `local`. Collective.
   const State& whole(const State& local);
+  /// The ghost traffic of one exchange (DistributedModel::Traffic: ghosts, messages, bytes,
+  /// summed over the processes, and the most ghosts of one); all zero in a serial run.
+  /// Collective.
+  struct Traffic {
+    long long ghosts = 0, messages = 0, bytes = 0, max_ghosts = 0;
+  };
+  Traffic traffic() const;
   /// True if `value` is true everywhere. Collective.
   bool all(bool value) const;
   /// The largest value. Collective.

@@ -37,16 +37,24 @@
 //   iisph              relaxed Jacobi, 10 iterations per step (water at rest needs fewer, and a
 //                      count that varied with the size would hide the scaling), h = 2e-3 s; an
 //                      iteration is a Jacobi iteration (with a tenth of the step's search)
+// Across MPI processes (issue 17): under `mpirun -n P hooke scaling` each cloth is split between
+// the P processes and only symplectic-euler and the implicit-petsc rows run; `hooke scaling --mpi`
+// starts such launches for P = 1, 2 (--processes) with one thread each and gathers their rows,
+// labelled METHOD xP, with each partition's ghost traffic per exchange (ghosts, messages, bytes:
+// the communication model of DistributedModel::Traffic, checked against PETSc's log in
+// Mpi.scaling).
 // Peak memory: VmHWM of this process, reset before each run (/proc/self/clear_refs) after the
 // freed heap is returned to the system (malloc_trim).
 #include "experiments/scaling_study.hpp"
 
 #include <malloc.h>
 #include <omp.h>
+#include <sys/wait.h>
 
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdlib>
 #include <filesystem>
 #include <fstream>
 #include <iomanip>
@@ -55,6 +63,7 @@
 
 #include "experiments/cli.hpp"
 #include "experiments/plot_script.hpp"
+#include "experiments/run_group.hpp"
 #include "experiments/study_methods.hpp"
 #include "experiments/study_output.hpp"
 #include "hooke/config.hpp"
@@ -163,7 +172,8 @@ std::string fluid_text(long long side, const MethodSpec& m) {
 
 struct Row {
   std::string method;
-  int threads = 1;
+  int threads = 1, processes = 1;
+  RunGroup::Traffic traffic;  // per ghost exchange (a distributed run)
   long long springs = 0, particles = 0;
   int steps = 0;
   double step_s = 0, iterations_per_step = 0, iteration_s = 0;
@@ -172,6 +182,12 @@ struct Row {
   double factor_nnz = 0;  // entries of the fast-mass-spring factor (0 when there is none)
   std::string status = "ok";
 };
+
+/// True if the method runs across MPI processes (the explicit ones, the implicit ones on petsc).
+bool runs_distributed(const MethodSpec& m) {
+  return m.fluid_dt == 0.0 &&
+         (m.label == "symplectic-euler" || m.label.rfind("implicit-petsc", 0) == 0);
+}
 
 Row run_one(const MethodSpec& m, long long side, int threads, int steps) {
   Row r;
@@ -186,9 +202,14 @@ Row run_one(const MethodSpec& m, long long side, int threads, int steps) {
   r.springs = static_cast<long long>(scene.edges.size());
   r.particles =
       scene.is_fluid() ? scene.system->fluid()->num_fluid() : scene.system->num_particles();
-  Simulation sim(*scene.system,
-                 make_stepper(scene.integrator.method, *scene.system, scene.integrator.options),
-                 scene.initial);
+  // Under an MPI launch: this process's piece of the cloth, stepped with the others.
+  const auto group = RunGroup::for_launch(*scene.system);
+  const MassSpringSystem& system = group->stepped(*scene.system);
+  r.processes = group->size();
+  r.traffic = group->traffic();
+  Simulation sim(system, make_stepper(scene.integrator.method, system, scene.integrator.options),
+                 group->local_state(scene.initial));
+  if (group->distributed()) sim.set_agreement([&](bool ok) { return group->all(ok); });
   const double h = scene.time.dt;
   StepSummary s = sim.advance(h);  // warm-up: analysis, first factorization
   r.setup_s = seconds_since(t_setup);
@@ -224,6 +245,78 @@ Row run_one(const MethodSpec& m, long long side, int threads, int steps) {
   return r;
 }
 
+const char* const kScalingHeader =
+    "method,threads,springs,particles,steps,step_s,iterations_per_step,iteration_s,assembly_s,"
+    "factor_s,solve_s,local_s,global_s,setup_s,peak_mib,factor_nnz,processes,ghosts,"
+    "exchange_messages,exchange_bytes,status\n";
+
+/// `s` in single quotes for the shell.
+std::string shell_quoted(const std::string& s) {
+  std::string q = "'";
+  for (const char c : s) q += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return q + "'";
+}
+
+/// hooke scaling --mpi: one `mpirun -q -n P hooke scaling` per process count (one thread per
+/// process) into OUT/mpi-P, their rows gathered into OUT/scaling.csv as "METHOD xP".
+int run_scaling_processes(const ScalingOptions& options) {
+  if (launched_size() > 1)
+    throw InputError("<command line>", "--mpi",
+                     "starts its own MPI launches: run hooke scaling --mpi without mpirun");
+  std::vector<std::string> methods;
+  for (const MethodSpec& m : specs())
+    if (runs_distributed(m) &&
+        (options.methods.empty() || std::find(options.methods.begin(), options.methods.end(),
+                                              m.label) != options.methods.end()))
+      methods.push_back(m.label);
+  if (methods.empty())
+    throw InputError("<command line>", "--methods",
+                     "none of these runs across MPI processes: with --mpi, symplectic-euler and "
+                     "the implicit-petsc methods do");
+  std::string method_list;
+  for (const std::string& m : methods) method_list += (method_list.empty() ? "" : ",") + m;
+  const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
+  StudyOutput out(options.out_dir, "scaling", {"scaling.csv"});
+  OutputFile& csv = out.file("scaling.csv");
+  csv.print(kScalingHeader);
+  int rows = 0;
+  for (const int P : options.processes) {
+    const std::string dir = options.out_dir + "/mpi-" + std::to_string(P);
+    std::ostringstream cmd;
+    cmd << "OMP_NUM_THREADS=1 mpirun -q -n " << P << ' ' << shell_quoted(self)
+        << " scaling --threads 1 --no-plot --steps " << options.steps << " --out "
+        << shell_quoted(dir) << " --methods " << shell_quoted(method_list);
+    if (!options.springs.empty()) {
+      std::ostringstream list;
+      for (const double s : options.springs) list << (list.tellp() > 0 ? "," : "") << s;
+      cmd << " --springs " << list.str();
+    }
+    if (options.full) cmd << " --full";
+    std::cout << "hooke scaling --mpi: " << cmd.str() << std::endl;
+    const int status = std::system(cmd.str().c_str());
+    if (status != 0)
+      throw std::runtime_error(
+          "hooke scaling --mpi: the launch on " + std::to_string(P) + " processes failed (" +
+          (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : "signal") +
+          "): is Open MPI's mpirun on PATH (scripts/install-deps.sh), and, as root, are "
+          "OMPI_ALLOW_RUN_AS_ROOT=1 and OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 set (README, Across MPI "
+          "processes)?");
+    std::ifstream in(dir + "/scaling.csv");
+    std::string line;
+    std::getline(in, line);  // the header
+    while (std::getline(in, line)) {
+      const size_t comma = line.find(',');
+      csv.write(line.substr(0, comma) + " x" + std::to_string(P) + line.substr(comma) + "\n");
+      ++rows;
+    }
+    csv.flush();
+    if (const int code = out.interrupted(std::to_string(rows) + " rows"); code != 0) return code;
+  }
+  std::cout << "wrote " << out.finish(std::to_string(rows) + " rows") << "\n";
+  if (options.plot) run_plot_script("scaling.py", options.out_dir);
+  return 0;
+}
+
 }  // namespace
 
 std::vector<std::string> scaling_methods() {
@@ -242,16 +335,21 @@ int run_scaling(const ScalingOptions& options) {
     if (std::none_of(specs().begin(), specs().end(),
                      [&](const MethodSpec& m) { return m.label == name; }))
       throw InputError("<command line>", "--methods", "unknown method '" + name + "'");
-  StudyOutput out(options.out_dir, "scaling", {"scaling.csv"});
-  OutputFile& csv = out.file("scaling.csv");
-  csv.print(
-      "method,threads,springs,particles,steps,step_s,iterations_per_step,iteration_s,"
-      "assembly_s,factor_s,solve_s,local_s,global_s,setup_s,peak_mib,factor_nnz,status\n");
+  if (!options.processes.empty()) return run_scaling_processes(options);
+  // Under an MPI launch every process runs the study's cases together; rank 0 writes and prints.
+  const bool launched = launched_size() > 1, root = launched_rank() == 0;
+  std::unique_ptr<StudyOutput> out;
+  if (root)
+    out = std::make_unique<StudyOutput>(options.out_dir, "scaling",
+                                        std::vector<std::string>{"scaling.csv"});
+  OutputFile* csv = root ? &out->file("scaling.csv") : nullptr;
+  if (csv) csv->print(kScalingHeader);
   int rows = 0;
   for (const MethodSpec& m : specs()) {
     if (!options.methods.empty() &&
         std::find(options.methods.begin(), options.methods.end(), m.label) == options.methods.end())
       continue;
+    if (launched && !runs_distributed(m)) continue;
     for (const double target : springs) {
       // Cloths: about 6 springs per particle; fluids: `target` particles in a cube.
       const bool fluid = m.fluid_dt > 0;
@@ -261,25 +359,33 @@ int run_scaling(const ScalingOptions& options) {
       if (size > 1.05 * m.max_springs) continue;
       for (const int t : options.threads) {
         const Row r = run_one(m, side, t, options.steps);
+        ++rows;
+        if (!root) continue;
         std::ostringstream row;
         row << std::setprecision(6) << r.method << ',' << r.threads << ',' << r.springs << ','
             << r.particles << ',' << r.steps << ',' << r.step_s << ',' << r.iterations_per_step
             << ',' << r.iteration_s << ',' << r.assembly_s << ',' << r.factor_s << ',' << r.solve_s
             << ',' << r.local_s << ',' << r.global_s << ',' << r.setup_s << ',' << r.peak_mib << ','
-            << r.factor_nnz << ",\"" << r.status << "\"\n";
-        csv.write(row.str());
-        csv.flush();
+            << r.factor_nnz << ',' << r.processes << ',' << r.traffic.ghosts << ','
+            << r.traffic.messages << ',' << r.traffic.bytes << ",\"" << r.status << "\"\n";
+        csv->write(row.str());
+        csv->flush();
         std::cout << std::left << std::setw(22) << r.method << " threads " << r.threads
+                  << (r.processes > 1 ? " processes " + std::to_string(r.processes) : "")
                   << (fluid ? "  particles " : "  springs ") << std::setw(9)
                   << (fluid ? r.particles : r.springs) << " step " << std::setw(10) << r.step_s
                   << " s  iteration " << std::setw(10) << r.iteration_s << " s  peak "
                   << std::setw(8) << r.peak_mib << " MiB  " << r.status << std::endl;
-        if (const int code = out.interrupted(std::to_string(++rows) + " rows"); code != 0)
+        // A stop signal reaches an MPI launch's processes at different cases: only a study on
+        // one process stops between them (mpirun stops its processes itself).
+        if (launched) continue;
+        if (const int code = out->interrupted(std::to_string(rows) + " rows"); code != 0)
           return code;
       }
     }
   }
-  std::cout << "wrote " << out.finish(std::to_string(rows) + " rows") << "\n";
+  if (!root) return 0;
+  std::cout << "wrote " << out->finish(std::to_string(rows) + " rows") << "\n";
   if (options.plot) run_plot_script("scaling.py", options.out_dir);
   return 0;
 }
@@ -290,7 +396,8 @@ namespace hooke::cli {
 
 Command add_scaling_command(CLI::App& app) {
   struct Args {
-    std::string springs, methods, threads, out;
+    std::string springs, methods, threads, out, processes;
+    bool mpi = false;
     ScalingOptions scal;
   };
   auto a = std::make_shared<Args>();
@@ -312,6 +419,11 @@ Command add_scaling_command(CLI::App& app) {
   add_list(cmd, "--methods", a->methods, "comma-separated: " + all + " (default: all)");
   add_list(cmd, "--threads", a->threads, "comma-separated thread counts (default 1,2)");
   cmd->add_option("--steps", a->scal.steps, "timed steps after one warm-up step (default 4)");
+  cmd->add_flag("--mpi", a->mpi,
+                "strong scaling across MPI processes: runs this study under mpirun -q -n P for "
+                "each P of --processes, one thread each, with the methods that run distributed "
+                "(symplectic-euler, implicit-petsc*); rows labelled METHOD xP");
+  add_list(cmd, "--processes", a->processes, "with --mpi: comma-separated counts (default 1,2)");
   add_out(cmd, a->out, "out/scaling");
   add_no_plot(cmd, a->scal.plot);
   return {cmd, [a] {
@@ -325,6 +437,11 @@ Command add_scaling_command(CLI::App& app) {
             if (s.steps < 1) throw InputError("<command line>", "--steps", "must be >= 1");
             s.methods = split_list(a->methods);
             if (!a->out.empty()) s.out_dir = a->out;
+            if (!a->processes.empty() && !a->mpi)
+              throw InputError("<command line>", "--processes", "goes with --mpi");
+            if (a->mpi)
+              s.processes = a->processes.empty() ? std::vector<int>{1, 2}
+                                                 : integers(a->processes, "--processes", 1, 4096);
             return run_scaling(s);
           }};
 }

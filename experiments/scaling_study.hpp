@@ -14,6 +14,11 @@ struct ScalingOptions {
   bool full = false;
   bool plot = true;
   std::string out_dir = "out/scaling";
+  /// --mpi: strong scaling across MPI processes. For each count P, the study runs as
+  /// `mpirun -q -n P hooke scaling ...` (one thread per process, the methods that run
+  /// distributed) into OUT/mpi-P, and OUT/scaling.csv gathers their rows with the method labelled
+  /// "METHOD xP". Empty: one process (or, under mpirun, this launch's processes).
+  std::vector<int> processes;
 };
 
 /// The labels `hooke scaling` knows, in table order.
@@ -25,7 +30,12 @@ std::vector<std::string> scaling_methods();
 /// thread count: time per step and per iteration, split into force and Jacobian
 /// assembly, factorization, solve, local and global steps; peak resident memory of each run.
 /// Writes OUT/scaling.csv and (experiments/plot/scaling.py) OUT/scaling.png and OUT/scaling.md
-/// with the fitted exponent of time per iteration against springs. Returns the exit code.
+/// with the fitted exponent of time per iteration against springs. Under an MPI launch of several
+/// processes (or with options.processes, which starts such launches) each cloth is split between
+/// them (DistributedModel), only methods that run distributed are timed (symplectic-euler and the
+/// implicit-petsc rows), rank 0 writes, and each row gives the processes and the partition's ghost
+/// traffic per exchange (the communication model, DistributedModel::Traffic). Returns the exit
+/// code.
 int run_scaling(const ScalingOptions& options);
 
 }  // namespace hooke

@@ -127,8 +127,61 @@ def timings(out):
                                                               for r in rows]))
 
 
+# The network the projection assumes (a commodity cluster, stated in the paper): per message
+# latency and bandwidth of one node's link, and the time of one global reduction per tree level.
+NET_LATENCY_S = 2e-6
+NET_BANDWIDTH_B_PER_S = 12.5e9  # 100 Gb/s
+PROJECT_SPRINGS = 1e8
+PROJECT_NODES = 64
+
+
+def mpi_findings(out):
+    """Strong scaling 1 -> 2 processes and the communication model, projected to PROJECT_NODES
+    nodes for a cloth of PROJECT_SPRINGS springs (scaling-mpi/scaling.csv)."""
+    rows = [r for r in read_csv(os.path.join(out, "scaling-mpi", "scaling.csv")) if r["status"] == "ok"]
+    table = []
+    for m in dict.fromkeys(r["method"].rsplit(" x", 1)[0] for r in rows):
+        one = {int(r["springs"]): r for r in rows if r["method"] == m + " x1"}
+        two = {int(r["springs"]): r for r in rows if r["method"] == m + " x2"}
+        for s in sorted(set(one) & set(two)):
+            side = round(math.sqrt(int(two[s]["particles"])))
+            table.append([m, s, g3(num(one[s]["step_s"])), g3(num(two[s]["step_s"])),
+                          g3(num(one[s]["step_s"]) / num(two[s]["step_s"])), two[s]["ghosts"],
+                          4 * side, two[s]["exchange_bytes"]])
+    text = markdown_table(["method", "springs", "s/step, 1 process", "2 processes", "speed-up",
+                           "ghosts (measured)", "ghosts (model: 4 side)", "bytes per exchange"], table)
+    # Projection: a square cloth of PROJECT_SPRINGS springs (6 per particle) in strips over
+    # PROJECT_NODES processes; compute time from the 1-process rate per spring at the largest size.
+    n = PROJECT_SPRINGS / 6.0
+    side = math.sqrt(n)
+    proj = []
+    for m in dict.fromkeys(r["method"].rsplit(" x", 1)[0] for r in rows):
+        ones = sorted((int(r["springs"]), r) for r in rows if r["method"] == m + " x1")
+        if not ones:
+            continue
+        springs, r = ones[-1]
+        per_iteration = num(r["iteration_s"]) / springs  # s per spring and iteration
+        compute = per_iteration * PROJECT_SPRINGS / PROJECT_NODES
+        ghost_bytes = 4 * side * 24  # an interior strip: two rows above, two below
+        exchange = 2 * NET_LATENCY_S + ghost_bytes / NET_BANDWIDTH_B_PER_S
+        # A CG iteration adds two global reductions (log2 P tree levels each).
+        reductions = 2 * math.log2(PROJECT_NODES) * NET_LATENCY_S if m.startswith("implicit") else 0.0
+        comm = exchange + reductions
+        proj.append([m, g3(compute), g3(ghost_bytes), g3(comm), g3(comm / compute)])
+    text += ("\n\nProjected to %d nodes (one process each) for a cloth of %s springs (%s x %s particles, "
+             "strips of the particle order), per iteration (a step for symplectic Euler, a CG iteration "
+             "for backward Euler, whose multigrid cycle's own messages are not modelled), with %g s "
+             "latency and %g GB/s per link:\n\n" % (PROJECT_NODES, g3(PROJECT_SPRINGS), g3(side), g3(side),
+                                                    NET_LATENCY_S, NET_BANDWIDTH_B_PER_S / 1e9))
+    text += markdown_table(["method", "compute per process (s)", "ghost bytes per exchange",
+                            "communication (s)", "communication / compute"], proj)
+    with open(os.path.join(out, "findings_mpi.md"), "w") as f:
+        f.write(text + "\n")
+
+
 def main(source, out):
     stability_findings(out)
+    mpi_findings(out)
     work_precision_findings(out)
     tolerance_findings(out)
     resolution_findings(out)

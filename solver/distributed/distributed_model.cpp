@@ -2,6 +2,7 @@
 
 #include <petscvec.h>
 
+#include <algorithm>
 #include <climits>
 #include <cstdlib>
 #include <stdexcept>
@@ -136,6 +137,23 @@ void DistributedModel::gather(const State& local, State& global) const {
                       m_rank == 0 ? (global.*part).data() : nullptr, counts.data(), displs.data(),
                       MPI_DOUBLE, 0, world()),
           "MPI_Gatherv");
+}
+
+DistributedModel::Traffic DistributedModel::traffic() const {
+  // The owner of ghost g is the process whose range holds it; ghosts are ascending, so owners are.
+  long long here[3] = {m_index.num_local() - m_index.num_owned, 0, 0};
+  int last = -1;
+  for (Index l = m_index.num_owned; l < m_index.num_local(); ++l) {
+    const Index g = m_index.global[size_t(l)];
+    const int owner =
+        int(std::upper_bound(m_starts.begin(), m_starts.end(), g) - m_starts.begin()) - 1;
+    if (owner != last) ++here[1], last = owner;
+  }
+  here[2] = 24 * here[0];
+  long long sum[3] = {0, 0, 0}, most = 0;
+  check(MPI_Allreduce(here, sum, 3, MPI_LONG_LONG, MPI_SUM, world()), "MPI_Allreduce");
+  check(MPI_Allreduce(&here[0], &most, 1, MPI_LONG_LONG, MPI_MAX, world()), "MPI_Allreduce");
+  return {sum[0], sum[1], sum[2], most};
 }
 
 bool DistributedModel::all(bool value) const {

@@ -55,6 +55,19 @@ class DistributedModel {
   /// resized to the whole system (untouched elsewhere); t is rank 0's. Collective.
   void gather(const State& local, State& global) const;
 
+  /// The communication of one ghost exchange over all processes (the model of issue 17, read off
+  /// the partition): each process receives 3 doubles per ghost particle, one message from each
+  /// process that owns some of its ghosts. The same ghosts are what an MPI matrix-vector product
+  /// of the implicit step gathers (its off-process columns), so a Krylov iteration moves as much.
+  struct Traffic {
+    long long ghosts = 0;      ///< ghost particles, summed over the processes
+    long long messages = 0;    ///< messages per exchange, summed
+    long long bytes = 0;       ///< bytes per exchange, summed (24 per ghost)
+    long long max_ghosts = 0;  ///< the most ghosts one process holds
+  };
+  /// This partition's Traffic. Collective.
+  Traffic traffic() const;
+
   /// True if `value` is true on every process. Collective.
   bool all(bool value) const;
   /// The largest of every process's `value`. Collective.

@@ -328,7 +328,7 @@ elseif(CASE STREQUAL "scaling")
   hooke_exec(scaling --springs 2000,8000 --steps 1 --out "${OUT}")
   expect_rc(0)
   expect_csv("${OUT}/scaling.csv"
-             "method,threads,springs,particles,steps,step_s,iterations_per_step,iteration_s,assembly_s,factor_s,solve_s,local_s,global_s,setup_s,peak_mib,factor_nnz,status"
+             "method,threads,springs,particles,steps,step_s,iterations_per_step,iteration_s,assembly_s,factor_s,solve_s,local_s,global_s,setup_s,peak_mib,factor_nnz,processes,ghosts,exchange_messages,exchange_bytes,status"
              ${rows})
   file(READ "${OUT}/scaling.csv" text)
   if(text MATCHES "failed")

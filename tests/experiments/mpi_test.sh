@@ -16,6 +16,11 @@
 #              Newton-iterated backward Euler (10 steps of 5 ms) on 2 processes within 1e-8 m
 #              of serial petsc; a
 #              one-process linear solver across processes is refused at integrator.linear_solver.
+#   scaling    hooke scaling --mpi on an 18 x 18 cloth: rows for 1 and 2 processes, and the
+#              communication model read off the partition as a strip of two rows (flexion springs
+#              reach two) on each side: 72 ghosts, 2 messages, 1728 bytes per exchange; PETSc's own
+#              log of a 2-process run of the 16 x 16 cloth (PETSC_OPTIONS=-log_view) counts 2
+#              messages per step and 2 x 32 x 24 bytes, as the model says.
 #   resume     A 2-process run stopped by --stop-after (exit 130, one checkpoint.bin of the whole
 #              system) resumes on 2 processes and on 1 to the uninterrupted serial run's final.csv.
 set -uo pipefail
@@ -154,6 +159,34 @@ implicit)
   expect_rc 2 "pcg across processes" "$OUT/cg.2"
   grep -q "integrator.linear_solver: linear solver 'pcg' solves on one process only" "$OUT/cg.2.err" ||
     fail "pcg across processes: $(cat "$OUT/cg.2.err")"
+  ok
+  ;;
+scaling)
+  "$HOOKE" scaling --mpi --springs 2000 --methods symplectic-euler,implicit-petsc --steps 1 \
+    --no-plot --out "$OUT/study" > "$OUT/study.out" 2> "$OUT/study.err"
+  rc=$?
+  expect_rc 0 "hooke scaling --mpi" "$OUT/study"
+  csv=$OUT/study/scaling.csv
+  for m in symplectic-euler implicit-petsc; do
+    grep -q "^$m x1,1,1766,324,.*,1,0,0,0,\"ok\"$" "$csv" || fail "no 1-process row of $m: $(cat "$csv")"
+    grep -q "^$m x2,1,1766,324,.*,2,72,2,1728,\"ok\"$" "$csv" || fail "no 2-process row of $m: $(cat "$csv")"
+    ok
+  done
+  # PETSc's log: 1000 exchanges (steps) of 2 messages, 2 x 32 ghosts x 24 bytes each (the
+  # run's other messages, a few at set-up, then weigh about 1%: the log gives shares in whole
+  # percent).
+  PETSC_OPTIONS=-log_view "$MPIRUN" -q -n 2 "$HOOKE" run "$SCENES/hanging_cloth_16.toml" \
+    --set integrator.method=symplectic-euler --set time.duration=0.5 --set output.every=0 \
+    --out "$OUT/logged" --no-progress > "$OUT/logged.out" 2> "$OUT/logged.err"
+  rc=$?
+  expect_rc 0 "a run with -log_view" "$OUT/logged"
+  awk -v want=$((1000 * 2 * 32 * 24)) '
+    /^MPI Msg Len \(bytes\):/ { total = $8 }
+    $1 == "VecScatterBegin" { calls = $2; messages = $8; share = $14 }
+    END { got = total * share / 100; d = got - want; if (d < 0) d = -d
+          printf "PETSc: %d scatters, %g messages, %.0f bytes (model %d)\n", calls, messages, got, want
+          exit !(calls == 1000 && messages == 2000 && d <= 0.01 * want) }' "$OUT/logged.out" ||
+    fail "PETSc's log disagrees with the model: $(grep -E 'MPI Msg|VecScatterBegin' "$OUT/logged.out")"
   ok
   ;;
 resume)
