@@ -258,45 +258,52 @@ std::string shell_quoted(const std::string& s) {
 }
 
 /// hooke scaling --mpi: one `mpirun -q -n P hooke scaling` per process count (one thread per
-/// process) into OUT/mpi-P, their rows gathered into OUT/scaling.csv as "METHOD xP".
+/// process) into OUT/mpi-P, their rows gathered into OUT/scaling.csv as "METHOD xP"; the methods
+/// named that run on one process only are the serial references, run as `hooke scaling` on the
+/// --threads counts into OUT/serial, their rows gathered as they are.
 int run_scaling_processes(const ScalingOptions& options) {
   if (launched_size() > 1)
     throw InputError("<command line>", "--mpi",
                      "starts its own MPI launches: run hooke scaling --mpi without mpirun");
-  std::vector<std::string> methods;
+  std::vector<std::string> methods, references;
   for (const MethodSpec& m : specs())
-    if (runs_distributed(m) &&
-        (options.methods.empty() || std::find(options.methods.begin(), options.methods.end(),
-                                              m.label) != options.methods.end()))
-      methods.push_back(m.label);
+    if (options.methods.empty() || std::find(options.methods.begin(), options.methods.end(),
+                                             m.label) != options.methods.end())
+      (runs_distributed(m) ? methods : references).push_back(m.label);
+  if (options.methods.empty()) references.clear();  // no serial study unless asked for
   if (methods.empty())
     throw InputError("<command line>", "--methods",
                      "none of these runs across MPI processes: with --mpi, symplectic-euler and "
                      "the implicit-petsc methods do");
-  std::string method_list;
-  for (const std::string& m : methods) method_list += (method_list.empty() ? "" : ",") + m;
+  const auto joined = [](const std::vector<std::string>& v) {
+    std::string s;
+    for (const std::string& m : v) s += (s.empty() ? "" : ",") + m;
+    return s;
+  };
   const std::string self = std::filesystem::read_symlink("/proc/self/exe").string();
   StudyOutput out(options.out_dir, "scaling", {"scaling.csv"});
   OutputFile& csv = out.file("scaling.csv");
   csv.print(kScalingHeader);
   int rows = 0;
-  for (const int P : options.processes) {
-    const std::string dir = options.out_dir + "/mpi-" + std::to_string(P);
+  // One study: its command's options, and the label suffix of its rows.
+  const auto study = [&](const std::string& launcher, const std::string& dir,
+                         const std::string& list, const std::string& threads,
+                         const std::string& suffix) {
     std::ostringstream cmd;
-    cmd << "OMP_NUM_THREADS=1 mpirun -q -n " << P << ' ' << shell_quoted(self)
-        << " scaling --threads 1 --no-plot --steps " << options.steps << " --out "
-        << shell_quoted(dir) << " --methods " << shell_quoted(method_list);
+    cmd << launcher << shell_quoted(self) << " scaling --threads " << threads
+        << " --no-plot --steps " << options.steps << " --out " << shell_quoted(dir)
+        << " --methods " << shell_quoted(list);
     if (!options.springs.empty()) {
-      std::ostringstream list;
-      for (const double s : options.springs) list << (list.tellp() > 0 ? "," : "") << s;
-      cmd << " --springs " << list.str();
+      std::ostringstream springs;
+      for (const double s : options.springs) springs << (springs.tellp() > 0 ? "," : "") << s;
+      cmd << " --springs " << springs.str();
     }
     if (options.full) cmd << " --full";
     std::cout << "hooke scaling --mpi: " << cmd.str() << std::endl;
     const int status = std::system(cmd.str().c_str());
     if (status != 0)
       throw std::runtime_error(
-          "hooke scaling --mpi: the launch on " + std::to_string(P) + " processes failed (" +
+          "hooke scaling --mpi: `" + cmd.str() + "` failed (" +
           (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : "signal") +
           "): is Open MPI's mpirun on PATH (scripts/install-deps.sh), and, as root, are "
           "OMPI_ALLOW_RUN_AS_ROOT=1 and OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 set (README, Across MPI "
@@ -306,11 +313,21 @@ int run_scaling_processes(const ScalingOptions& options) {
     std::getline(in, line);  // the header
     while (std::getline(in, line)) {
       const size_t comma = line.find(',');
-      csv.write(line.substr(0, comma) + " x" + std::to_string(P) + line.substr(comma) + "\n");
+      csv.write(line.substr(0, comma) + suffix + line.substr(comma) + "\n");
       ++rows;
     }
     csv.flush();
+  };
+  for (const int P : options.processes) {
+    study("OMP_NUM_THREADS=1 mpirun -q -n " + std::to_string(P) + " ",
+          options.out_dir + "/mpi-" + std::to_string(P), joined(methods), "1",
+          " x" + std::to_string(P));
     if (const int code = out.interrupted(std::to_string(rows) + " rows"); code != 0) return code;
+  }
+  if (!references.empty()) {
+    std::string threads;
+    for (const int t : options.threads) threads += (threads.empty() ? "" : ",") + std::to_string(t);
+    study("", options.out_dir + "/serial", joined(references), threads, "");
   }
   std::cout << "wrote " << out.finish(std::to_string(rows) + " rows") << "\n";
   if (options.plot) run_plot_script("scaling.py", options.out_dir);
@@ -422,7 +439,8 @@ Command add_scaling_command(CLI::App& app) {
   cmd->add_flag("--mpi", a->mpi,
                 "strong scaling across MPI processes: runs this study under mpirun -q -n P for "
                 "each P of --processes, one thread each, with the methods that run distributed "
-                "(symplectic-euler, implicit-petsc*); rows labelled METHOD xP");
+                "(symplectic-euler, implicit-petsc*; rows labelled METHOD xP), and the other "
+                "methods of --methods on one process and the --threads counts as references");
   add_list(cmd, "--processes", a->processes, "with --mpi: comma-separated counts (default 1,2)");
   add_out(cmd, a->out, "out/scaling");
   add_no_plot(cmd, a->scal.plot);

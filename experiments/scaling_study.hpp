@@ -17,7 +17,9 @@ struct ScalingOptions {
   /// --mpi: strong scaling across MPI processes. For each count P, the study runs as
   /// `mpirun -q -n P hooke scaling ...` (one thread per process, the methods that run
   /// distributed) into OUT/mpi-P, and OUT/scaling.csv gathers their rows with the method labelled
-  /// "METHOD xP". Empty: one process (or, under mpirun, this launch's processes).
+  /// "METHOD xP"; methods named in `methods` that run on one process only are run as references
+  /// on the `threads` counts (OUT/serial), their rows as they are. Empty: one process (or, under
+  /// mpirun, this launch's processes).
   std::vector<int> processes;
 };
 

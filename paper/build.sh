@@ -54,10 +54,11 @@ echo "paper: hooke scaling --methods wcsph,iisph ..."
 echo "scaling sph,$(( ($(date +%s%N) - t0) / 1000000 ))e-3" >> "$out/timings.csv"
 
 # One cloth across 1 and 2 MPI processes (one thread each): symplectic Euler and backward Euler on
-# PETSc, 1e4 to 1e6 springs (6e6 with --full), with the partition's ghost traffic.
+# PETSc, 1e4 to 1e6 springs (6e6 with --full), with the partition's ghost traffic; pcg-nodal on
+# one process (1 and 2 threads) as the reference.
 t0=$(date +%s%N)
 echo "paper: hooke scaling --mpi ..."
-"$hooke" scaling --mpi --methods symplectic-euler,implicit-petsc "${size[@]}" \
+"$hooke" scaling --mpi --methods symplectic-euler,implicit-petsc,implicit-pcg-nodal "${size[@]}" \
   --out "$out/scaling-mpi"
 echo "scaling mpi,$(( ($(date +%s%N) - t0) / 1000000 ))e-3" >> "$out/timings.csv"
 

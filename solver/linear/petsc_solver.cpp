@@ -474,8 +474,8 @@ struct PetscSolver::Impl {
   /// A distributed system's new values (factor): A's owned rows into M, in M's order.
   void copy_owned_rows(const SparseMatrix& A) {
     const double* a = A.valuePtr();
-    parallel_ranges(Index(csr_value.size()), [&](long long b, long long e) {
-      for (long long p = b; p < e; ++p) csr_value[size_t(p)] = a[csr_from[size_t(p)]];
+    parallel_ranges(Index(csr_value.size()), [&](long long lo, long long hi) {
+      for (long long p = lo; p < hi; ++p) csr_value[size_t(p)] = a[csr_from[size_t(p)]];
     });
     check(MatUpdateMPIAIJWithArray(M, csr_value.data()), "MatUpdateMPIAIJWithArray");
   }
