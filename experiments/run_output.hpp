@@ -65,7 +65,8 @@ class RunOutput {
   /// Appends the log row of `step` at state s; returns the total energy (J) it logged. control:
   /// the error control's columns, given exactly for adaptive scenes. fluid: the step's figures,
   /// given exactly for fluid scenes, in columns max_density_error, mean_density_error,
-  /// pressure_iterations, substeps, and front (the largest x of a fluid particle, m).
+  /// pressure_iterations, substeps, front (the largest x of a fluid particle, m) and lost (fluid
+  /// particles that have left the walls' domain so far, SphStepper).
   double log_row(long long step, const State& s, int iterations, double residual, double wall,
                  const ControlColumns* control = nullptr, const FluidStepStats* fluid = nullptr);
   /// Writes frame `step` (if [output] vtk) and rewrites frames.pvd; fluid: a fluid's fields.
