@@ -5,9 +5,6 @@
 
 #include "hooke/config.hpp"
 #include "problems/input_error.hpp"
-#if HOOKE_WITH_PETSC
-#include "hooke/distributed/distributed_model.hpp"
-#endif
 
 namespace hooke {
 
@@ -56,11 +53,7 @@ const State& RunGroup::whole(const State& local) {
   m_model->gather(local, m_whole);
   return root() ? m_whole : local;
 }
-RunGroup::Traffic RunGroup::traffic() const {
-  if (!m_model) return {};
-  const DistributedModel::Traffic t = m_model->traffic();
-  return {t.ghosts, t.messages, t.bytes, t.max_ghosts};
-}
+RunGroup::Traffic RunGroup::traffic() const { return m_model ? m_model->traffic() : Traffic{}; }
 bool RunGroup::all(bool value) const { return m_model ? m_model->all(value) : value; }
 long long RunGroup::max(long long value) const { return m_model ? m_model->max(value) : value; }
 double RunGroup::from_root(double value) const {

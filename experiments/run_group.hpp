@@ -3,12 +3,11 @@
 #include <memory>
 #include <string>
 
+#include "hooke/distributed/distributed_model.hpp"  // declarations only: no PETSc needed
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/model/state.hpp"
 
 namespace hooke {
-
-class DistributedModel;
 
 /// Thrown on the processes of an MPI run other than the one that met an error, so that every
 /// process stops with the same exit code while only rank 0 prints the message (main catches it
@@ -57,12 +56,9 @@ class RunGroup {
   /// rank 0 of a distributed run, the gathered state (valid until the next call), elsewhere
   /// `local`. Collective.
   const State& whole(const State& local);
-  /// The ghost traffic of one exchange (DistributedModel::Traffic: ghosts, messages, bytes,
-  /// summed over the processes, and the most ghosts of one); all zero in a serial run.
+  /// The ghost traffic of one exchange (DistributedModel::Traffic); all zero in a serial run.
   /// Collective.
-  struct Traffic {
-    long long ghosts = 0, messages = 0, bytes = 0, max_ghosts = 0;
-  };
+  using Traffic = DistributedModel::Traffic;
   Traffic traffic() const;
   /// True if `value` is true everywhere. Collective.
   bool all(bool value) const;

@@ -142,9 +142,8 @@ double RunOutput::log_row(long long step, const State& s, int iterations, double
     double front = -std::numeric_limits<double>::infinity();
     for (Index i = 0; i < m_scene.system->fluid()->num_fluid(); ++i)
       front = std::max(front, s.x[3 * i]);
-    m_log->print(",%.6g,%.6g,%d,%d,%.17g,%lld", fluid->max_density_error,
-                 fluid->mean_density_error, fluid->pressure_iterations, fluid->substeps, front,
-                 fluid->lost);
+    m_log->print(",%.6g,%.6g,%d,%d,%.17g,%lld", fluid->max_density_error, fluid->mean_density_error,
+                 fluid->pressure_iterations, fluid->substeps, front, fluid->lost);
   }
   m_log->print("\n");
   return K + U;

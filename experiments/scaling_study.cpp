@@ -267,8 +267,8 @@ int run_scaling_processes(const ScalingOptions& options) {
                      "starts its own MPI launches: run hooke scaling --mpi without mpirun");
   std::vector<std::string> methods, references;
   for (const MethodSpec& m : specs())
-    if (options.methods.empty() || std::find(options.methods.begin(), options.methods.end(),
-                                             m.label) != options.methods.end())
+    if (options.methods.empty() ||
+        std::find(options.methods.begin(), options.methods.end(), m.label) != options.methods.end())
       (runs_distributed(m) ? methods : references).push_back(m.label);
   if (options.methods.empty()) references.clear();  // no serial study unless asked for
   if (methods.empty())
@@ -291,8 +291,8 @@ int run_scaling_processes(const ScalingOptions& options) {
                          const std::string& suffix) {
     std::ostringstream cmd;
     cmd << launcher << shell_quoted(self) << " scaling --threads " << threads
-        << " --no-plot --steps " << options.steps << " --out " << shell_quoted(dir)
-        << " --methods " << shell_quoted(list);
+        << " --no-plot --steps " << options.steps << " --out " << shell_quoted(dir) << " --methods "
+        << shell_quoted(list);
     if (!options.springs.empty()) {
       std::ostringstream springs;
       for (const double s : options.springs) springs << (springs.tellp() > 0 ? "," : "") << s;
