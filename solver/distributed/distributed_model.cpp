@@ -96,6 +96,10 @@ DistributedModel::DistributedModel(const MassSpringSystem& global) {
                      std::to_string(m_size) + " processes");
   m_starts.resize(size_t(m_size) + 1);
   for (int r = 0; r <= m_size; ++r) m_starts[size_t(r)] = n * r / m_size;
+  for (int r = 0; r < m_size; ++r) {
+    m_gather_counts.push_back(int(3 * (m_starts[size_t(r) + 1] - m_starts[size_t(r)])));
+    m_gather_displs.push_back(int(3 * m_starts[size_t(r)]));
+  }
   const Index begin = m_starts[size_t(m_rank)], end = m_starts[size_t(m_rank) + 1];
 
   m_index = global.local_index(begin, end);
@@ -122,20 +126,15 @@ State DistributedModel::local_state(const State& global) const {
 }
 
 void DistributedModel::gather(const State& local, State& global) const {
-  std::vector<int> counts, displs;
   if (m_rank == 0) {
-    if (global.x.size() != 3 * num_global()) global = State(num_global());
+    if (global.x.size() != 3 * num_global()) global = State(num_global());  // once
     global.t = local.t;
-    for (int r = 0; r < m_size; ++r) {
-      counts.push_back(int(3 * (m_starts[size_t(r) + 1] - m_starts[size_t(r)])));
-      displs.push_back(int(3 * m_starts[size_t(r)]));
-    }
   }
   const int owned = int(3 * m_index.num_owned);
   for (const auto part : {&State::x, &State::v})
     check(MPI_Gatherv((local.*part).data(), owned, MPI_DOUBLE,
-                      m_rank == 0 ? (global.*part).data() : nullptr, counts.data(), displs.data(),
-                      MPI_DOUBLE, 0, world()),
+                      m_rank == 0 ? (global.*part).data() : nullptr, m_gather_counts.data(),
+                      m_gather_displs.data(), MPI_DOUBLE, 0, world()),
           "MPI_Gatherv");
 }
 

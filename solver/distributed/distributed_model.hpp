@@ -83,6 +83,7 @@ class DistributedModel {
   class Exchange;
   int m_rank = 0, m_size = 1;
   std::vector<Index> m_starts;
+  std::vector<int> m_gather_counts, m_gather_displs;  // gather(): 3 doubles per owned particle
   LocalIndex m_index;
   std::shared_ptr<Exchange> m_exchange;
   std::unique_ptr<MassSpringSystem> m_local;
