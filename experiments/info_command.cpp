@@ -46,7 +46,8 @@ void print_fluid_info(const Scene& scene, std::ostream& out) {
       << " kg each)\n";
   out << "boundary:   " << nb << " particles (tank walls and obstacles, Adami et al. 2012)\n";
   out << "kernel:     " << to_string(o.kernel) << ", support " << fluid.support() << " m ("
-      << o.support_factor << " spacings); viscosity " << o.viscosity << " m^2/s\n";
+      << o.support_factor << " spacings); viscosity " << o.viscosity << " m^2/s; gradient "
+      << (o.gradient_correction ? "corrected" : "uncorrected") << "\n";
   out << "forces:    ";
   for (const auto& f : sys.forces()) out << " " << f->name();
   if (sys.forces().empty()) out << " none";

@@ -144,6 +144,7 @@ void build_fluid(TableReader& fluid, const Vec3& gravity, Scene& scene) {
   o.kernel = fluid.choice("kernel", o.kernel);
   o.support_factor = fluid.number("support_factor", o.support_factor);
   o.viscosity = fluid.non_negative("viscosity", o.viscosity);
+  o.gradient_correction = fluid.boolean("gradient_correction", o.gradient_correction);
   fluid.check(o.validate());
   const int d = o.dimension;
   const double dx = o.spacing;

@@ -40,27 +40,71 @@ double FluidModel::particle_mass() const {
 
 void FluidModel::compute_density(const NeighbourSearch& nb, ConstRef x, ConstRef masses,
                                  VecRef rho) const {
+  density_pass<false>(nb, x, masses, rho, rho);
+}
+
+void FluidModel::compute_density(const NeighbourSearch& nb, ConstRef x, ConstRef masses, VecRef rho,
+                                 VecRef moment) const {
+  HOOKE_ASSERT(moment.size() >= m_num_fluid,
+               moment.size() << " moments for " << m_num_fluid << " fluid particles");
+  density_pass<true>(nb, x, masses, rho, moment);
+}
+
+template <bool kMoment>
+void FluidModel::density_pass(const NeighbourSearch& nb, ConstRef x, ConstRef masses, VecRef rho,
+                              VecRef moment) const {
   HOOKE_ASSERT(nb.num_queries() == m_num_fluid && x.size() == 3 * num_particles(),
                "neighbour lists of " << nb.num_queries() << " queries, " << x.size() / 3
                                      << " positions, for " << m_num_fluid << " + " << num_boundary()
                                      << " particles");
+  constexpr double kFull = 0.9;  // the smallest diagonal entry of a full kernel's M_i
+  const double inv_rho0 = 1.0 / rest_density();
+  const int d = dimension();
   with_kernel([&](const auto& kernel) {
     parallel_for(m_num_fluid, kParallelParticles, [&](long long i) {
       const Vec3 xi = position(x, i);
       double sum = masses[i] * kernel.W0();
+      // -M_i's diagonal: sum_j mass_j dW/dr / r (x_ij)_a^2, fluid and walls apart.
+      Vec3 fluid_diag = Vec3::Zero(), wall_diag = Vec3::Zero();
       for (const int* it = nb.begin(i); it != nb.end(i); ++it) {
         const Index j = *it;
-        const double w = kernel.W((xi - position(x, j)).norm());
-        sum += (j < m_num_fluid ? masses[j] : m_psi[j - m_num_fluid]) * w;
+        const Vec3 xij = xi - position(x, j);
+        const double r = xij.norm();
+        const bool fluid = j < m_num_fluid;
+        const double mj = fluid ? masses[j] : m_psi[j - m_num_fluid];
+        sum += mj * kernel.W(r);
+        if constexpr (kMoment) {
+          const Vec3 term = (mj * kernel.dW_over_r(r)) * xij.cwiseAbs2();
+          if (fluid)
+            fluid_diag += term;
+          else
+            wall_diag += term;
+        }
       }
       rho[i] = sum;
+      if constexpr (kMoment) {
+        const Vec3 diag = -(fluid_diag / sum + wall_diag * inv_rho0);
+        const double smallest = diag.head(d).minCoeff();
+        moment[i] = smallest >= kFull ? diag.head(d).sum() / d : -1.0;
+      }
     });
     return 0;
   });
 }
 
+double FluidModel::mean_gradient_moment(ConstRef moment) {
+  double sum = 0.0;
+  Index count = 0;
+  for (Index i = 0; i < moment.size(); ++i)
+    if (moment[i] > 0.0) {
+      sum += moment[i];
+      ++count;
+    }
+  return count > 0 ? sum / double(count) : 1.0;
+}
+
 void FluidModel::add_pressure_acceleration(const NeighbourSearch& nb, ConstRef x, ConstRef masses,
-                                           ConstRef rho, ConstRef p, VecRef a) const {
+                                           ConstRef rho, ConstRef p, VecRef a, double scale) const {
   const double inv_rho0_2 = 1.0 / (rest_density() * rest_density());
   with_kernel([&](const auto& kernel) {
     parallel_for(m_num_fluid, kParallelParticles, [&](long long i) {
@@ -92,14 +136,14 @@ void FluidModel::add_pressure_acceleration(const NeighbourSearch& nb, ConstRef x
         }
         ai -= (qi + sum_wp / sum_w * inv_rho0_2) * wall_grad;
       }
-      a.segment<3>(3 * i) += ai;
+      a.segment<3>(3 * i) += scale * ai;
     });
     return 0;
   });
 }
 
 void FluidModel::add_wall_support(const NeighbourSearch& nb, ConstRef x, ConstRef rho,
-                                  ConstRef body, VecRef a) const {
+                                  ConstRef body, VecRef a, double scale) const {
   if (num_boundary() == 0) return;
   const double inv_rho0_2 = 1.0 / (rest_density() * rest_density());
   with_kernel([&](const auto& kernel) {
@@ -129,7 +173,7 @@ void FluidModel::add_wall_support(const NeighbourSearch& nb, ConstRef x, ConstRe
         if (rise > 0.0)
           ai -= (m_psi[j - m_num_fluid] * rise * inv_rho0_2) * kernel.gradW(xij, xij.norm());
       }
-      a.segment<3>(3 * i) += ai;
+      a.segment<3>(3 * i) += scale * ai;
     });
     return 0;
   });

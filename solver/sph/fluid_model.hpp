@@ -27,6 +27,18 @@ struct FluidOptions {
   /// momentum exactly. Monaghan's artificial viscosity alpha with sound speed c
   /// is nu = alpha c (H / 2) / (2 (d + 2)). Between fluid particles only: the walls slip.
   double viscosity = 0.0;
+  /// Divide the pressure forces by the kernel gradient's mean first moment
+  /// (FluidModel::compute_density, mean_gradient_moment), so that they see a linear pressure
+  /// field with its true slope. The moment is 1 for the exact integral but the sum over a
+  /// particle arrangement makes it something else (cubic spline, support 2 dx: 0.981 on a
+  /// hexagonal lattice at rest density, 1.012 on a square one, about 0.985 on the arrangement
+  /// still water settles into), and uncorrected still water stands on a pressure 1.5-2% steeper
+  /// than rho0 g. One factor for the whole fluid, as a scalar, keeps the pair forces equal,
+  /// opposite and central (momentum and angular momentum conserved) and leaves an implicit
+  /// method's motion as it was (its pressures are Lagrange multipliers, scaled by the factor's
+  /// inverse). (The per-particle matrix of Bonet and Lok 1999, (L_i + L_j) / 2 gradW_ij, gives
+  /// the same pressures to 1% but its non-central forces spin still water up to 0.1-0.5 m/s.)
+  bool gradient_correction = true;
   OptionError validate() const;
 };
 
@@ -77,18 +89,36 @@ class FluidModel {
   /// rho_i = sum_j m_j W_ij (fluid, itself included) + sum_b psi_b W_ib, for i < num_fluid.
   /// x: 3n positions; masses: n; rho: at least num_fluid entries (kg/m^3).
   void compute_density(const NeighbourSearch& nb, ConstRef x, ConstRef masses, VecRef rho) const;
-  /// a_i += -sum_j m_j (p_i / rho_i^2 + p_j / rho_j^2) gradW_ij - sum_b psi_b (p_i / rho_i^2 +
-  /// p~_i / rho0^2) gradW_ib: the symmetric, momentum-conserving gradient, with the walls at the
-  /// fluid's Shepard-averaged pressure p~_i around i (rho_b = rho0), for fluid i. a: 3n; rho, p:
-  /// num_fluid entries (Pa).
+  /// The same densities, and in the same pass each particle's first moment of the kernel
+  /// gradient (FluidOptions::gradient_correction): with
+  ///   M_i = sum_j V_j gradW_ij (x_j - x_i)^T,
+  /// what the SPH gradient sum_j V_j (f_j - f_i) gradW_ij makes of the gradient of a linear f
+  /// (the identity for the exact integral), moment_i = tr(M_i) / d (d = 2: the in-plane part)
+  /// if no diagonal entry of M_i is below 0.9, else -1: particles at the free surface and in
+  /// spray, whose kernels are partly empty, have one near 1/2 (a surface at 45 degrees: two near
+  /// 3/4) and are left out. V_b = psi_b / rho0 for the walls and V_j = m_j / rho_i, the fluid
+  /// neighbours at i's density, so that the sum rides along with the density's: exact at
+  /// uniform density, and in the mean over a fluid the neighbours' own volumes would change it
+  /// only by the square of the density's variation over a kernel. moment: num_fluid entries.
+  void compute_density(const NeighbourSearch& nb, ConstRef x, ConstRef masses, VecRef rho,
+                       VecRef moment) const;
+  /// The mean of compute_density's moments over the particles it did not leave out (1 if it left
+  /// out all), summed in index order, so that it does not depend on the thread count.
+  static double mean_gradient_moment(ConstRef moment);
+  /// a_i += -s [sum_j m_j (p_i / rho_i^2 + p_j / rho_j^2) gradW_ij + sum_b psi_b (p_i / rho_i^2 +
+  /// p~_i / rho0^2) gradW_ib]: the symmetric, momentum-conserving gradient, with the walls at the
+  /// fluid's Shepard-averaged pressure p~_i around i (rho_b = rho0), for fluid i, times the
+  /// gradient scale s (1 / mean_gradient_moment with FluidOptions::gradient_correction, else 1).
+  /// a: 3n; rho, p: num_fluid entries (Pa).
   void add_pressure_acceleration(const NeighbourSearch& nb, ConstRef x, ConstRef masses,
-                                 ConstRef rho, ConstRef p, VecRef a) const;
-  /// a_i += -sum_b psi_b max(0, h_i + rho_i a_i . (x_b - x_i)) / rho0^2 gradW_ib: the rest of the
-  /// walls' push, the hydrostatic rise of their pressure over p~_i (class comment) under the body
-  /// accelerations `body` (3n). Independent of the fluid's pressures, so implicit methods count
-  /// it with the other non-pressure accelerations.
+                                 ConstRef rho, ConstRef p, VecRef a, double scale = 1.0) const;
+  /// a_i += -s sum_b psi_b max(0, h_i + rho_i a_i . (x_b - x_i)) / rho0^2 gradW_ib: the rest of
+  /// the walls' push, the hydrostatic rise of their pressure over p~_i (class comment) under the
+  /// body accelerations `body` (3n), with the pressure forces' gradient scale s. Independent of
+  /// the fluid's pressures, so implicit methods count it with the other non-pressure
+  /// accelerations.
   void add_wall_support(const NeighbourSearch& nb, ConstRef x, ConstRef rho, ConstRef body,
-                        VecRef a) const;
+                        VecRef a, double scale = 1.0) const;
   /// a_i += the viscous acceleration of FluidOptions::viscosity (nothing if it is 0).
   void add_viscous_acceleration(const NeighbourSearch& nb, ConstRef x, ConstRef v, ConstRef masses,
                                 ConstRef rho, VecRef a) const;
@@ -106,6 +136,10 @@ class FluidModel {
   }
 
  private:
+  template <bool kMoment>
+  void density_pass(const NeighbourSearch& nb, ConstRef x, ConstRef masses, VecRef rho,
+                    VecRef moment) const;
+
   FluidOptions m_options;
   Index m_num_fluid;
   Vec m_psi;

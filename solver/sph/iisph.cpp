@@ -108,7 +108,7 @@ void IisphStepper::compute_diagonal(ConstRef x, double h) {
           aii += psi[j - nf] * d.dot(g);
         }
       }
-      m_diag[i] = h * h * aii;
+      m_diag[i] = h * h * m_gradient_scale * aii;  // every d is a pressure acceleration
     });
     return 0;
   });
@@ -116,7 +116,8 @@ void IisphStepper::compute_diagonal(ConstRef x, double h) {
 
 void IisphStepper::apply(ConstRef x, double h) {
   m_ap.setZero();
-  m_fluid.add_pressure_acceleration(m_search, x, m_system.masses(), m_rho, m_p, m_ap);
+  m_fluid.add_pressure_acceleration(m_search, x, m_system.masses(), m_rho, m_p, m_ap,
+                                    m_gradient_scale);
   m_ap.array() *= m_moving.array();
   m_fluid.density_change(m_search, x, m_system.masses(), m_ap, m_div);
   m_Ap = h * h * m_div;

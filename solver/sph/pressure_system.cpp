@@ -16,7 +16,7 @@ Vec PressureSystem::pressures(ConstRef q, ConstRef rho) const {
 
 PressureSystem assemble_pressure_system(const FluidModel& fluid, const NeighbourSearch& search,
                                         ConstRef x, ConstRef masses, ConstRef rho, ConstRef source,
-                                        double h, const std::vector<char>& active) {
+                                        double h, const std::vector<char>& active, double scale) {
   const Index nf = fluid.num_fluid();
   HOOKE_ASSERT(Index(active.size()) == nf && rho.size() >= nf && source.size() >= nf,
                "active flags, densities and sources for " << nf << " fluid particles");
@@ -83,7 +83,7 @@ PressureSystem assemble_pressure_system(const FluidModel& fluid, const Neighbour
   F.setFromTriplets(f_entries.begin(), f_entries.end());
   Vec inv_m(3 * nf);
   for (Index i = 0; i < nf; ++i) inv_m.segment<3>(3 * i).setConstant(1.0 / masses[i]);
-  const SparseMatrix MinvF = inv_m.asDiagonal() * F;
+  const SparseMatrix MinvF = (scale * inv_m).asDiagonal() * F;
   out.S = SparseMatrix(E.transpose() * MinvF);
   out.rhs.resize(na);
   for (Index k = 0; k < na; ++k) {

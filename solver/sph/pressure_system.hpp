@@ -32,9 +32,11 @@ struct PressureSystem {
 
 /// Assembles the system at positions x (3n), masses (n), densities rho and source term
 /// s = rho0 - rho* (num_fluid each) of a step of size h, with the neighbours of `search`
-/// (updated at x); active: num_fluid flags. Allocates (an analysis tool, not a step).
+/// (updated at x); active: num_fluid flags; scale: the pressure forces' gradient scale
+/// (SphStepper::gradient_scale), which F carries. Allocates (an analysis tool, not a step).
 PressureSystem assemble_pressure_system(const FluidModel& fluid, const NeighbourSearch& search,
                                         ConstRef x, ConstRef masses, ConstRef rho, ConstRef source,
-                                        double h, const std::vector<char>& active);
+                                        double h, const std::vector<char>& active,
+                                        double scale = 1.0);
 
 }  // namespace hooke

@@ -27,6 +27,7 @@ SphStepper::SphStepper(const MassSpringSystem& system, double courant)
   if (courant > 0.0) m_sub[0] = m_sub[1] = State(n);
   m_rho = Vec::Constant(nf, m_fluid.rest_density());
   m_p = Vec::Zero(nf);
+  if (m_fluid.options().gradient_correction) m_moment = Vec::Zero(nf);
   m_a = Vec::Zero(3 * n);
   m_body = Vec::Zero(3 * n);
   m_force = Vec::Zero(3 * n);
@@ -131,7 +132,12 @@ bool SphStepper::prepare(ConstRef x, StepSummary& s) {
                 "; the fluid has exploded (reduce dt below the CFL step)";
     return false;
   }
-  m_fluid.compute_density(m_search, x, m_system.masses(), m_rho);
+  if (m_fluid.options().gradient_correction) {
+    m_fluid.compute_density(m_search, x, m_system.masses(), m_rho, m_moment);
+    m_gradient_scale = 1.0 / FluidModel::mean_gradient_moment(m_moment);
+  } else {
+    m_fluid.compute_density(m_search, x, m_system.masses(), m_rho);
+  }
   const auto [max_error, mean_error] = density_errors(m_rho, m_fluid.rest_density());
   m_last = {};
   m_last.max_density_error = max_error;
@@ -151,7 +157,7 @@ void SphStepper::external_acceleration(ConstRef x, ConstRef v) {
   m_body = m_system.free_inverse_mass().cwiseProduct(m_force).cwiseProduct(m_moving);
   m_a = m_body;
   m_fluid.add_viscous_acceleration(m_search, x, v, m_system.masses(), m_rho, m_a);
-  m_fluid.add_wall_support(m_search, x, m_rho, m_body, m_a);
+  m_fluid.add_wall_support(m_search, x, m_rho, m_body, m_a, m_gradient_scale);
   mask_acceleration();
 }
 

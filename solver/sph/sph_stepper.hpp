@@ -41,6 +41,9 @@ class SphStepper : public Stepper {
   const Vec& densities() const { return m_rho; }
   /// Pressures of the last substep (Pa), num_fluid entries.
   const Vec& pressures() const { return m_p; }
+  /// The pressure forces' gradient scale of the last substep: 1 / FluidModel::
+  /// mean_gradient_moment with FluidOptions::gradient_correction, else 1.
+  double gradient_scale() const { return m_gradient_scale; }
   const FluidModel& fluid() const { return m_fluid; }
   /// The largest speed of a fluid particle in state s (m/s), lost particles left out.
   double max_fluid_speed(const State& s) const;
@@ -56,8 +59,8 @@ class SphStepper : public Stepper {
   /// One substep of size h from s0 into s1 (the pressure method).
   virtual StepSummary substep(const State& s0, double h, State& s1) = 0;
 
-  /// Neighbours, densities and the moving mask at x (3n); false (with the message in `s`) if
-  /// the search failed.
+  /// Neighbours, densities, the gradient scale and the moving mask at x (3n); false (with the
+  /// message in `s`) if the search failed.
   bool prepare(ConstRef x, StepSummary& s);
   /// m_body = the body accelerations f/m of the system's forces at (x, v); m_a = m_body plus
   /// the viscous accelerations and the walls' hydrostatic support (FluidModel::add_wall_support);
@@ -75,7 +78,9 @@ class SphStepper : public Stepper {
   const double m_courant;
   State m_sub[2];  // the states between CFL substeps
   NeighbourSearch m_search;
-  Vec m_rho, m_p;            // num_fluid
+  Vec m_rho, m_p;  // num_fluid
+  Vec m_moment;    // num_fluid with FluidOptions::gradient_correction (compute_density), else empty
+  double m_gradient_scale = 1.0;
   Vec m_a, m_body, m_force;  // 3n
   Vec m_moving;  // 3n: the system's moving mask without the lost fluid particles (prepare)
   // The walls' box grown by the support (lost()), from the first state seen.

@@ -41,7 +41,8 @@ StepSummary WcsphStepper::substep(const State& s0, double h, State& s1) {
   for (Index i = 0; i < m_fluid.num_fluid(); ++i)
     m_p[i] = std::max(0.0, m_B * (std::pow(m_rho[i] * inv_rho0, gamma) - 1.0));
   external_acceleration(s0.x, s0.v);
-  m_fluid.add_pressure_acceleration(m_search, s0.x, m_system.masses(), m_rho, m_p, m_a);
+  m_fluid.add_pressure_acceleration(m_search, s0.x, m_system.masses(), m_rho, m_p, m_a,
+                                    m_gradient_scale);
   mask_acceleration();
   finish_step(s0, h, s1, m_options.max_density_error, s);
   s.residual = m_last.max_density_error;

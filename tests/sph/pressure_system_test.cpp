@@ -26,7 +26,8 @@ Vec predicted_density(const IisphStepper& stepper, const NeighbourSearch& search
   const FluidModel& fluid = stepper.fluid();
   const Index nf = fluid.num_fluid();
   Vec a = Vec::Zero(3 * system.num_particles()), div(nf);
-  fluid.add_pressure_acceleration(search, s.x, system.masses(), stepper.densities(), p, a);
+  fluid.add_pressure_acceleration(search, s.x, system.masses(), stepper.densities(), p, a,
+                                  stepper.gradient_scale());
   fluid.density_change(search, s.x, system.masses(), a, div);
   return (fluid.rest_density() - stepper.source().array() + h * h * div.array()).matrix();
 }
@@ -53,9 +54,9 @@ TEST(PressureSystem, ExactSolutionAgreesWithRelaxedJacobiWithinItsTolerance) {
     NeighbourSearch search(fluid.support());
     ASSERT_EQ(search.update(scene.state.x, nf), Status::Converged);
     const auto t1 = Clock::now();
-    const PressureSystem sys =
-        assemble_pressure_system(fluid, search, scene.state.x, scene.system->masses(),
-                                 stepper.densities(), stepper.source(), h, active);
+    const PressureSystem sys = assemble_pressure_system(
+        fluid, search, scene.state.x, scene.system->masses(), stepper.densities(), stepper.source(),
+        h, active, stepper.gradient_scale());
     const double assembly_seconds = seconds_since(t1);
     ASSERT_GT(sys.active.size(), size_t(nf / 2));
     ASSERT_EQ(sys.S.rows(), sys.S.cols());
