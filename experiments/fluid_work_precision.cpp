@@ -1,8 +1,9 @@
-// hooke workprecision, fluid cases: what does a density error cost, WCSPH against IISPH?
+// hooke workprecision, fluid cases: what does a density error cost, WCSPH against IISPH and DFSPH?
 //
 // Question: on the 2D dam break of Martin and Moyce (1952; a water column a = 0.25 m wide and 2a
 // high), how do the density error and the surge front's accuracy fall with the wall time spent,
-// when WCSPH's speed of sound c0 (its stiffness) and IISPH's pressure-solve tolerance are varied?
+// when WCSPH's speed of sound c0 (its stiffness) and the pressure-solve tolerance of IISPH and
+// DFSPH (both solves at that tolerance) are varied?
 // Both take CFL substeps at courant 0.4 within steps of 5 ms, so each point is a method at its
 // own stable step: WCSPH's ~0.4 dx / c0, IISPH's 0.4 dx / max|v|.
 // Figures per run: the mean density error (the time average over steps of the mean compression
@@ -13,7 +14,8 @@
 // over a finite time, so simulations lead it by a near-constant offset).
 // Writes: DIR/fluid.csv (kFluidWorkPrecisionHeader), DIR/fronts.csv (every run's Z(T) and the
 //         experiments'); experiments/plot/work_precision.py draws DIR/fluid_<case>.png and .md
-//         (wall time against density error, with WCSPH's wall time over IISPH's at matched mean
+//         (wall time against density error, with WCSPH's wall time over IISPH's and DFSPH's at
+//         matched mean
 //         density error) and DIR/front_<case>.png (Z(T) of each method at its scene settings,
 //         c0 = 31.3 m/s and tolerance 1e-3, beside both experiments).
 #include "experiments/fluid_work_precision.hpp"
@@ -160,8 +162,9 @@ void sweep_fluid_case(const FluidWorkPrecisionCase& c, const std::vector<std::st
                                        : std::vector<double>{1e-2, 3e-3, 1e-3, 3e-4};
   if (wanted("wcsph"))
     for (double v : c0) runs.push_back({"wcsph", "sound_speed", v});
-  if (wanted("iisph"))
-    for (double v : tol) runs.push_back({"iisph", "tolerance", v});
+  for (const char* implicit : {"iisph", "dfsph"})
+    if (wanted(implicit))
+      for (double v : tol) runs.push_back({implicit, "tolerance", v});
   const std::vector<FrontPoint> mm52 = experiment_front(scenes_dir, "MM52");
   for (const char* source : {"MM52", "KO96"})
     for (const FrontPoint& p :
@@ -173,7 +176,7 @@ void sweep_fluid_case(const FluidWorkPrecisionCase& c, const std::vector<std::st
     sets.push_back("integrator.method=" + run.method);
     sets.push_back("integrator.courant=0.4");
     sets.push_back("integrator." + run.parameter + "=" + exact_number(run.value));
-    if (run.method == "iisph") sets.push_back("integrator.max_iterations=2000");
+    if (run.method != "wcsph") sets.push_back("integrator.max_iterations=2000");
     // Steps of 5 ms, split into CFL substeps: each method at its own stable step (IISPH's is
     // about 1.5 ms once the front runs at 3 m/s), the front sampled every 5 ms (0.044 in T).
     sets.push_back("time.dt=0.005");

@@ -79,6 +79,7 @@ void print_fluid_info(const Scene& scene, std::ostream& out) {
   double c0 = 0.0, courant = 0.0;
   if (const auto* w = m.get<WcsphOptions>()) c0 = w->sound_speed, courant = w->courant;
   if (const auto* i = m.get<IisphOptions>()) courant = i->courant;
+  if (const auto* d = m.get<DfsphOptions>()) courant = d->courant;
   const double cfl = 0.4 * o.spacing / (c0 + v);
   out << "CFL step:   0.4 dx / " << (c0 > 0 ? "(c0 + v)" : "v") << " = " << cfl << " s with ";
   if (c0 > 0) out << "c0 = " << c0 << " m/s and ";

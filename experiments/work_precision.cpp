@@ -313,9 +313,10 @@ Command add_workprecision_command(CLI::App& app) {
   add_list(cmd, "--cases", a->cases,
            "comma-separated: chain,hanging_cloth,stiff_cloth,dam_break_2d (with --full also "
            "dam_break_2d_fine; default: all)");
-  add_list(cmd, "--methods", a->methods,
-           "comma-separated study labels or method names, wcsph and iisph for the fluid cases "
-           "(default: all)");
+  add_list(
+      cmd, "--methods", a->methods,
+      "comma-separated study labels or method names, wcsph, iisph and dfsph for the fluid cases "
+      "(default: all)");
   add_list(cmd, "--rtols", a->rtols,
            "comma-separated tolerances of cvode, ida and the *-adaptive methods (default "
            "1e-3,1e-5,1e-7)");

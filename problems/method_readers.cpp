@@ -279,6 +279,14 @@ MethodOptions read_iisph(TableReader& r, const std::string&) {
   return o;
 }
 
+MethodOptions read_dfsph(TableReader& r, const std::string& method) {
+  DfsphOptions o;
+  static_cast<IisphOptions&>(o) = *read_iisph(r, method).get<IisphOptions>();
+  o.divergence_tolerance = r.number("divergence_tolerance", o.divergence_tolerance);
+  r.check(o.validate());
+  return o;
+}
+
 struct ReaderEntry {
   const char* method;
   MethodReader read;
@@ -304,6 +312,7 @@ const std::vector<ReaderEntry>& readers() {
     {"xpbd", read_xpbd},
     {"wcsph", read_wcsph},
     {"iisph", read_iisph},
+    {"dfsph", read_dfsph},
   };
   return table;
 }

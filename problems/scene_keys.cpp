@@ -582,10 +582,11 @@ void add_implicit_keys(std::vector<SceneKey>& t) {
           .def("'symplectic-euler'")
           .choices({"forward-euler", "symplectic-euler", "midpoint", "trapezoid", "rk4", "dopri5",
                     "bs32", "implicit", "implicit-midpoint", "bdf2", "cvode", "ida",
-                    "ceres-implicit", "fast-mass-spring", "vbd", "xpbd", "wcsph", "iisph"})
-          .meaning("the time stepper; explicit methods (the first seven) take no other keys "
-                   "but the error control's; wcsph and iisph step [fluid] scenes, and only they "
-                   "do"));
+                    "ceres-implicit", "fast-mass-spring", "vbd", "xpbd", "wcsph", "iisph", "dfsph"})
+          .meaning(
+              "the time stepper; explicit methods (the first seven) take no other keys "
+              "but the error control's; wcsph, iisph and dfsph step [fluid] scenes, and only they "
+              "do"));
   add(K("integrator.adaptive", T::Boolean)
           .in(kFixedStepFamilies)
           .def("false")
@@ -978,10 +979,11 @@ void add_fluid_keys(std::vector<SceneKey>& t) {
           .meaning(layers + " (all of it when thinner)"));
 }
 
-/// Adds the keys of the fluid methods (wcsph, iisph).
+/// Adds the keys of the fluid methods (wcsph, iisph, dfsph).
 void add_sph_method_keys(std::vector<SceneKey>& t) {
   auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
-  const std::vector<std::string> sph = {"wcsph", "iisph"};
+  const std::vector<std::string> sph = {"wcsph", "iisph", "dfsph"};
+  const std::vector<std::string> implicit_sph = {"iisph", "dfsph"};
   add(K("integrator.sound_speed", T::Number)
           .in({"wcsph"})
           .unit("m/s")
@@ -995,24 +997,30 @@ void add_sph_method_keys(std::vector<SceneKey>& t) {
           .range(1, false, std::nullopt, false)
           .meaning("Tait exponent: p = B ((rho / rho0)^gamma - 1), clamped at 0"));
   add(K("integrator.tolerance", T::Number)
-          .in({"iisph"})
+          .in(implicit_sph)
           .def("0.001")
           .positive()
           .meaning("the pressure solve stops when the mean density residual is at most this "
                    "times rho0 (0.001: 0.1%)"));
   add(K("integrator.min_iterations", T::Integer)
-          .in({"iisph"})
+          .in(implicit_sph)
           .def("2")
           .int_from(1)
           .meaning("fewest relaxed Jacobi iterations of the pressure solve per step"));
   add(K("integrator.max_iterations", T::Integer)
-          .in({"iisph"})
+          .in(implicit_sph)
           .def("200")
           .int_from(1)
           .meaning("most relaxed Jacobi iterations per step (then the step has not converged; "
                    ">= min_iterations)"));
+  add(K("integrator.divergence_tolerance", T::Number)
+          .in({"dfsph"})
+          .def("0.001")
+          .positive()
+          .meaning("the divergence solve stops when the mean residual of the density change the "
+                   "velocities would make in one step is at most this times rho0"));
   add(K("integrator.omega", T::Number)
-          .in({"iisph"})
+          .in(implicit_sph)
           .def("0.5")
           .range(0, true, 1, false)
           .meaning("Jacobi relaxation (Ihmsen et al. 2014: 0.5)"));
@@ -1026,9 +1034,10 @@ void add_sph_method_keys(std::vector<SceneKey>& t) {
           .in(sph)
           .def("0.4")
           .non_negative()
-          .meaning("split each time.dt step into the fewest equal substeps of at most courant dx "
-                   "/ (c0 + max|v|) (wcsph) or courant dx / max|v| (iisph); 0: steps of time.dt "
-                   "exactly, as the stability study needs to cross the CFL limit"));
+          .meaning(
+              "split each time.dt step into the fewest equal substeps of at most courant dx "
+              "/ (c0 + max|v|) (wcsph) or courant dx / max|v| (iisph, dfsph); 0: steps of time.dt "
+              "exactly, as the stability study needs to cross the CFL limit"));
 }
 
 /// Adds [time], [output] and [run].

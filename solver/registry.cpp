@@ -134,6 +134,11 @@ const std::vector<WholeStepEntry>& whole_step_table() {
         "implicit incompressible SPH (Ihmsen et al. 2014): the pressure Poisson equation by "
         "relaxed Jacobi to a density-error tolerance; fluids only",
         sph_unsupported, 0, MethodKind::Fluid),
+    whole_step<DfsphStepper>(
+        "dfsph",
+        "divergence-free SPH (Bender and Koschier 2015): IISPH's density solve after a solve that "
+        "makes the velocities divergence-free; fluids only",
+        sph_unsupported, 0, MethodKind::Fluid),
   };
   return table;
 }

@@ -11,6 +11,7 @@
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "hooke/sph/dfsph.hpp"
 #include "hooke/sph/iisph.hpp"
 #include "hooke/sph/wcsph.hpp"
 #include "hooke/whole_step/ceres_implicit_stepper.hpp"
@@ -34,8 +35,8 @@ enum class MethodKind {
 
 /// The options of one method: a value of that method's own Options type (ImplicitOptions for
 /// implicit, implicit-midpoint and bdf2; CvodeOptions, IdaOptions, CeresImplicitOptions,
-/// FastMassSpringOptions, VbdOptions, XpbdOptions for the whole-step methods, WcsphOptions and
-/// IisphOptions for the fluid methods; explicit methods take
+/// FastMassSpringOptions, VbdOptions, XpbdOptions for the whole-step methods, WcsphOptions,
+/// IisphOptions and DfsphOptions for the fluid methods; explicit methods take
 /// none), or empty for the method's defaults. Scene readers fill it once with the method's type;
 /// make_stepper checks that it holds the type the method takes.
 class MethodOptions {

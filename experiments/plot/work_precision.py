@@ -16,11 +16,12 @@ trajectory against the requested rtol, one line per method, beside the lines err
 error = 10 rtol (the cases' sizes are about 1 m, and atol = 1e-3 rtol x size); errors the
 reference cannot resolve are left out.
 
-Fluid cases (OUT_DIR/fluid.csv, the dam break by WCSPH over its speed of sound and IISPH over its
-tolerance): OUT_DIR/fluid_<case>.png, wall time against the time-averaged mean density error, one
-line per method, each point annotated with its c0 or tolerance and its surge-front speed over the
-experiment's; and OUT_DIR/fluid_<case>.md, every run as a table row and, at each IISPH point whose
-density error WCSPH's sweep spans, WCSPH's wall time there (log-log interpolation) over IISPH's.
+Fluid cases (OUT_DIR/fluid.csv, the dam break by WCSPH over its speed of sound and IISPH and DFSPH
+over their tolerance): OUT_DIR/fluid_<case>.png, wall time against the time-averaged mean density
+error, one line per method, each point annotated with its c0 or tolerance and its surge-front speed
+over the experiment's; and OUT_DIR/fluid_<case>.md, every run as a table row and, at each IISPH or
+DFSPH point whose density error WCSPH's sweep spans, WCSPH's wall time there (log-log
+interpolation) over the point's.
 OUT_DIR/front.png (from OUT_DIR/fronts.csv): the surge front Z = x / a against T = t sqrt(2 g / a)
 of WCSPH at c0 = 31.3 m/s and IISPH at tolerance 1e-3 (the shipped scene's settings) for every
 fluid case (resolution), beside Martin and Moyce's and Koshizuka and Oka's experiments.
@@ -159,17 +160,18 @@ def plot_fluid(out_dir):
         wc = [(num(r["mean_density_error"]), num(r["wall_s"])) for r in sub if r["method"] == "wcsph"]
         matched = []
         for r in sub:
-            if r["method"] != "iisph":
+            if r["method"] not in ("iisph", "dfsph"):
                 continue
             e, w = num(r["mean_density_error"]), num(r["wall_s"])
             w_wc = interpolate_loglog(wc, e)
             if w_wc is not None and w > 0:
-                matched.append([g3(num(r["value"])), g3(e), g3(w), g3(w_wc), f"{w_wc / w:.2f}"])
+                matched.append([r["method"], g3(num(r["value"])), g3(e), g3(w), g3(w_wc),
+                                f"{w_wc / w:.2f}"])
         if matched:
             text += ("\nAt matched mean density error, WCSPH's wall time (interpolated on its c0 "
-                     "sweep) over IISPH's:\n\n")
-            text += markdown_table(["IISPH tolerance", "mean density error", "IISPH wall (s)",
-                                    "WCSPH wall (s)", "WCSPH / IISPH"], matched)
+                     "sweep) over the implicit method's:\n\n")
+            text += markdown_table(["method", "tolerance", "mean density error", "wall (s)",
+                                    "WCSPH wall (s)", "WCSPH / method"], matched)
         write_text(os.path.join(out_dir, f"fluid_{case}.md"), text)
     if rows:
         print(f"work_precision.py: wrote {out_dir}/fluid_*.png and fluid_*.md")

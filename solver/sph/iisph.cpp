@@ -114,32 +114,21 @@ void IisphStepper::compute_diagonal(ConstRef x, double h) {
   });
 }
 
-void IisphStepper::apply(ConstRef x, double h) {
+void IisphStepper::apply(ConstRef x, double h, ConstRef p) {
   m_ap.setZero();
-  m_fluid.add_pressure_acceleration(m_search, x, m_system.masses(), m_rho, m_p, m_ap,
+  m_fluid.add_pressure_acceleration(m_search, x, m_system.masses(), m_rho, p, m_ap,
                                     m_gradient_scale);
   m_ap.array() *= m_moving.array();
   m_fluid.density_change(m_search, x, m_system.masses(), m_ap, m_div);
   m_Ap = h * h * m_div;
 }
 
-StepSummary IisphStepper::substep(const State& s0, double h, State& s1) {
-  const auto t0 = Clock::now();
-  StepSummary s;
-  if (!prepare(s0.x, s)) return s;
+int IisphStepper::pressure_solve(ConstRef x, double h, Vec& p, double tolerance, double& error) {
   const Index nf = m_fluid.num_fluid();
-  const double rho0 = m_fluid.rest_density();
-  external_acceleration(s0.x, s0.v);
-  m_v_adv = s0.v + h * m_a;
-  m_fluid.density_change(m_search, s0.x, m_system.masses(), m_v_adv, m_div);
-  m_source = (rho0 - m_rho.array() - h * m_div.array()).matrix();
-  compute_diagonal(s0.x, h);
-  m_p *= 0.5;  // warm start (Ihmsen et al. 2014, sec. 3.3)
+  const double rho0 = m_fluid.rest_density(), omega = m_options.omega;
   int iterations = 0;
-  double error = 0.0;
-  const double omega = m_options.omega;
   while (true) {
-    apply(s0.x, h);
+    apply(x, h, p);
     // The residual of the complementarity problem, with (A p - s)_i = rho_i(p) - rho0: a particle
     // under pressure must reach rho0 (either sign counts), a particle at p = 0 may expand but not
     // be compressed. Counting compression alone would let the solve stop with pressures far from
@@ -147,18 +136,32 @@ StepSummary IisphStepper::substep(const State& s0, double h, State& s1) {
     double sum = 0.0;
     for (Index i = 0; i < nf; ++i) {
       const double r = m_Ap[i] - m_source[i];
-      sum += m_p[i] > 0.0 ? std::abs(r) : std::max(r, 0.0);
+      sum += p[i] > 0.0 ? std::abs(r) : std::max(r, 0.0);
     }
     error = sum / (double(nf) * rho0);
     if (iterations >= m_options.min_iterations &&
-        (error <= m_options.tolerance || iterations >= m_options.max_iterations))
-      break;
+        (error <= tolerance || iterations >= m_options.max_iterations))
+      return iterations;
     for (Index i = 0; i < nf; ++i)
-      m_p[i] = m_diag[i] != 0.0
-                   ? std::max(0.0, m_p[i] + omega * (m_source[i] - m_Ap[i]) / m_diag[i])
-                   : 0.0;
+      p[i] = m_diag[i] != 0.0 ? std::max(0.0, p[i] + omega * (m_source[i] - m_Ap[i]) / m_diag[i])
+                              : 0.0;
     ++iterations;
   }
+}
+
+StepSummary IisphStepper::substep(const State& s0, double h, State& s1) {
+  const auto t0 = Clock::now();
+  StepSummary s;
+  if (!prepare(s0.x, s)) return s;
+  const double rho0 = m_fluid.rest_density();
+  external_acceleration(s0.x, s0.v);
+  m_v_adv = s0.v + h * m_a;
+  m_fluid.density_change(m_search, s0.x, m_system.masses(), m_v_adv, m_div);
+  m_source = (rho0 - m_rho.array() - h * m_div.array()).matrix();
+  compute_diagonal(s0.x, h);
+  m_p *= 0.5;  // warm start (Ihmsen et al. 2014, sec. 3.3)
+  double error = 0.0;
+  const int iterations = pressure_solve(s0.x, h, m_p, m_options.tolerance, error);
   m_a += m_ap;
   finish_step(s0, h, s1, m_options.max_density_error, s);
   m_last.pressure_iterations = iterations;

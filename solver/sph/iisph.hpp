@@ -40,7 +40,7 @@ struct IisphOptions {
 /// matrix-free, warm-started from half the last step's pressures, with p clamped at 0 after each
 /// update (a particle at the free surface cannot pull: with the clamp the problem is a linear
 /// complementarity problem, not a linear system). Then v1 = v* + h a(p), x1 = x0 + h v1.
-class IisphStepper final : public SphStepper {
+class IisphStepper : public SphStepper {
  public:
   using Options = IisphOptions;
   IisphStepper(const MassSpringSystem& system, Options options);
@@ -60,11 +60,15 @@ class IisphStepper final : public SphStepper {
   std::vector<double> history() const override;
   void restore_history(const std::vector<double>& history) override;
 
- private:
+ protected:
   /// m_diag = A_ii at the current neighbours and densities, for step h.
   void compute_diagonal(ConstRef x, double h);
-  /// m_ap = the pressure accelerations of m_p; m_Ap = A m_p.
-  void apply(ConstRef x, double h);
+  /// m_ap = the pressure accelerations of p; m_Ap = A p.
+  void apply(ConstRef x, double h, ConstRef p);
+  /// Relaxed Jacobi on A p = m_source from the warm start in p, to `tolerance` (the class
+  /// comment's residual, at most max_iterations), p clamped at 0. Returns the iterations taken;
+  /// the residual reached in `error`; m_ap holds the pressure accelerations of the final p.
+  int pressure_solve(ConstRef x, double h, Vec& p, double tolerance, double& error);
 
   Options m_options;
   Vec m_v_adv, m_ap;                             // 3n

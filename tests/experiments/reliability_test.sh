@@ -3,8 +3,8 @@
 #   reliability_test.sh CASE HOOKE SCENES_DIR OUT
 # Cases:
 #   stop_resume  For rk4, implicit on pcg (warm start), bdf2 (multistep history),
-#                implicit-midpoint on cholmod, and the 2D dam break by wcsph and iisph (warm
-#                start): a run stopped by --stop-after (exit 130, checkpoint
+#                implicit-midpoint on cholmod, and the 2D dam break by wcsph, iisph and dfsph
+#                (warm starts): a run stopped by --stop-after (exit 130, checkpoint
 #                written, no final.csv) and resumed (twice for bdf2: stop, resume with another
 #                --stop-after, resume) gives a final.csv identical byte for byte to an
 #                uninterrupted run, the same log.csv (every column but wall_time: no step missing
@@ -101,8 +101,8 @@ stop_resume)
     stopped "${cfg// /-}" "$cloth" "${args[@]}"
   done
   # The fluid methods, with CFL substeps: IISPH's checkpoint carries its warm start (the last
-  # pressures), and the neighbour lists depend on the positions alone.
-  for m in wcsph iisph; do
+  # pressures; DFSPH's, both solves'), and the neighbour lists depend on the positions alone.
+  for m in wcsph iisph dfsph; do
     stopped "$m" "$SCENES/dam_break_2d.toml" --set time.duration=0.03 --set output.every=7 \
       --set output.png=false --set integrator.method=$m
   done

@@ -4,8 +4,8 @@
 // sources): the front speed dZ/dT over 1.4 <= T <= 3.0 (least-squares slopes of both) within 5%,
 // and the simulated front at most 0.35 ahead in T (Z_sim(T) between Z_exp(T) and Z_exp(T + 0.35));
 // the gate of the experiment is not lifted instantly, so simulations lead it by a near-constant
-// offset. WCSPH and IISPH at coarse resolution (dx = a / 20), with the viscosity of the shipped
-// scene (problems/scenes/dam_break_2d.toml).
+// offset. WCSPH, IISPH and DFSPH at coarse resolution (dx = a / 20), with the viscosity of the
+// shipped scene (problems/scenes/dam_break_2d.toml).
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -14,6 +14,7 @@
 #include <string>
 #include <vector>
 
+#include "hooke/sph/dfsph.hpp"
 #include "hooke/sph/iisph.hpp"
 #include "hooke/sph/surge_front.hpp"
 #include "hooke/sph/wcsph.hpp"
@@ -116,6 +117,16 @@ TEST(SphValidation, DamBreakSurgeFrontIisph) {
                                                  return s.cfl_step(st, 0.4, 0.4 * dx / v_max);
                                                });
   compare_with_experiment(front, "iisph, a / dx = 20");
+}
+
+TEST(SphValidation, DamBreakSurgeFrontDfsph) {
+  const double a = 0.25, dx = a / 20, v_max = std::sqrt(2 * kG * 2 * a);
+  DfsphOptions options;  // both solves at 0.1%
+  const auto front = surge_front<DfsphStepper>(20, options, 0.02 * 10 * v_max * dx / 8,
+                                               [&](const DfsphStepper& s, const State& st) {
+                                                 return s.cfl_step(st, 0.4, 0.4 * dx / v_max);
+                                               });
+  compare_with_experiment(front, "dfsph, a / dx = 20");
 }
 
 }  // namespace

@@ -4,6 +4,8 @@
 // 1 / gradient_moment, is the analytic -G / rho0 to round-off, on square and hexagonal lattices
 // in 2D and a cubic one in 3D; unscaled it is off by the lattice's moment (printed), which is
 // what the correction is for. Particles whose kernel is partly empty are left out of the moment.
+#include "hooke/sph/fluid_model.hpp"
+
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -12,7 +14,6 @@
 #include <functional>
 #include <vector>
 
-#include "hooke/sph/fluid_model.hpp"
 #include "hooke/sph/neighbours.hpp"
 #include "hooke/sph/sampling.hpp"
 
@@ -95,9 +96,9 @@ std::vector<Vec3> at_rest_density(const std::function<std::vector<Vec3>(double)>
     const std::vector<Vec3> points = lattice(s);
     Vec3 centre = Vec3::Zero();
     for (const Vec3& p : points) centre += p / double(points.size());
-    const Vec3 c = *std::min_element(points.begin(), points.end(), [&](const Vec3& a, const Vec3& b) {
-      return (a - centre).norm() < (b - centre).norm();
-    });
+    const Vec3 c = *std::min_element(
+        points.begin(), points.end(),
+        [&](const Vec3& a, const Vec3& b) { return (a - centre).norm() < (b - centre).norm(); });
     return fluid.with_kernel([&](const auto& kernel) {
       double sum = 0.0;
       for (const Vec3& p : points) sum += fluid.particle_mass() * kernel.W((p - c).norm());
@@ -121,7 +122,9 @@ TEST(FluidModel, ScaledPressureGradientOfALinearFieldIsExactOnALattice) {
     std::function<std::vector<Vec3>(double)> lattice;
   };
   const double dx = 0.01;
-  const auto square = [](double s) { return sample_box(Vec3::Zero(), Vec3(30 * s, 30 * s, 0), s, 2); };
+  const auto square = [](double s) {
+    return sample_box(Vec3::Zero(), Vec3(30 * s, 30 * s, 0), s, 2);
+  };
   const std::vector<Case> cases = {
       {"square 2D", 2, 2.0, square},
       {"square 2D, support 3 dx", 2, 3.0, square},
@@ -138,9 +141,10 @@ TEST(FluidModel, ScaledPressureGradientOfALinearFieldIsExactOnALattice) {
     double moment = 0.0;
     const double corrected = gradient_error(l, options, G, 0.0, &moment);
     const double uncorrected = gradient_error(l, options, G, 1.0, &moment);
-    std::printf("[ %-23s] moment %.5f: gradient of a linear field off by %.2e (corrected), "
-                "%.2e (uncorrected)\n",
-                c.name, moment, corrected, uncorrected);
+    std::printf(
+        "[ %-23s] moment %.5f: gradient of a linear field off by %.2e (corrected), "
+        "%.2e (uncorrected)\n",
+        c.name, moment, corrected, uncorrected);
     EXPECT_LT(corrected, 1e-10) << c.name;
     // What the correction removes: the lattice's moment is not 1.
     EXPECT_NEAR(uncorrected, std::abs(moment - 1.0), 1e-10) << c.name;

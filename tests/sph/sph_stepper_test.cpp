@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "hooke/registry.hpp"
+#include "hooke/sph/dfsph.hpp"
 #include "hooke/sph/iisph.hpp"
 #include "hooke/sph/wcsph.hpp"
 #include "sph/sph_scenes.hpp"
@@ -30,6 +31,11 @@ std::unique_ptr<SphStepper> make(const char* method, const MassSpringSystem& sys
     options.sound_speed = 30;
     return std::make_unique<WcsphStepper>(system, options);
   }
+  if (std::string(method) == "dfsph") {
+    DfsphOptions options;
+    options.max_iterations = 1000;  // the first step starts cold
+    return std::make_unique<DfsphStepper>(system, options);
+  }
   IisphOptions options;
   options.max_iterations = 1000;  // the first step starts cold
   return std::make_unique<IisphStepper>(system, options);
@@ -38,7 +44,7 @@ std::unique_ptr<SphStepper> make(const char* method, const MassSpringSystem& sys
 TEST(SphStepper, SameBitsOnOneOrTwoThreads) {
 #ifdef _OPENMP
   const int threads = omp_get_max_threads();
-  for (const char* method : {"wcsph", "iisph"}) {
+  for (const char* method : {"wcsph", "iisph", "dfsph"}) {
     State end[2];
     for (int t : {1, 2}) {
       omp_set_num_threads(t);
@@ -77,8 +83,8 @@ TEST(SphStepper, OnlyTheFluidMethodsStepAFluidAndTheyStepNothingElse) {
           << m.name << ": '" << why << "'";
     }
   }
-  EXPECT_EQ(fluid_methods, 2);
-  EXPECT_EQ(fluid_method_names(), "wcsph, iisph");
+  EXPECT_EQ(fluid_methods, 3);
+  EXPECT_EQ(fluid_method_names(), "wcsph, iisph, dfsph");
   EXPECT_GE(refused, 10);
 }
 
@@ -138,7 +144,7 @@ TEST(SphStepper, CflSubstepsLandOnTheStepAndAreTheStepsTakenOneByOne) {
 }
 
 TEST(SphStepper, AParticleThatLeavesTheWallsIsLostAndStopsWhereItIs) {
-  for (const char* method : {"wcsph", "iisph"}) {
+  for (const char* method : {"wcsph", "iisph", "dfsph"}) {
     SCOPED_TRACE(method);
     // Water in a tank 0.2 m wide; one particle of the block moved far below the floor (spray
     // that fell out), falling at 5 m/s, and one high above the open top, rising at 1 m/s.
