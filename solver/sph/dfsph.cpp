@@ -1,6 +1,5 @@
 #include "hooke/sph/dfsph.hpp"
 
-#include <sstream>
 #include <stdexcept>
 
 namespace hooke {
@@ -21,8 +20,7 @@ const DfsphOptions& checked(const DfsphOptions& o) {
 }  // namespace
 
 DfsphStepper::DfsphStepper(const MassSpringSystem& system, Options options)
-    : IisphStepper(system, checked(options)),
-      m_divergence_tolerance(options.divergence_tolerance) {
+    : IisphStepper(system, checked(options)), m_divergence_tolerance(options.divergence_tolerance) {
   const Index nf = m_fluid.num_fluid(), n = system.num_particles();
   m_p_div = Vec::Zero(nf);
   m_a_div = m_v_div = Vec::Zero(3 * n);
@@ -47,45 +45,21 @@ StepSummary DfsphStepper::substep(const State& s0, double h, State& s1) {
   const auto t0 = Clock::now();
   StepSummary s;
   if (!prepare(s0.x, s)) return s;
-  const double rho0 = m_fluid.rest_density();
   compute_diagonal(s0.x, h);
   // The divergence solve: cancel the density change the velocities v0 would make in h.
   m_fluid.density_change(m_search, s0.x, m_system.masses(), s0.v, m_div);
   m_source = -h * m_div;
   m_p_div *= 0.5;
-  double divergence_error = 0.0;
-  m_divergence_iterations =
-      pressure_solve(s0.x, h, m_p_div, m_divergence_tolerance, divergence_error);
+  Solve divergence{"divergence", 0, 0.0, m_divergence_tolerance};
+  divergence.iterations = pressure_solve(s0.x, h, m_p_div, divergence.tolerance, divergence.error);
+  m_divergence_iterations = divergence.iterations;
   m_a_div = m_ap;
   m_v_div = s0.v + h * m_a_div;
-  // Then IISPH from the divergence-free velocities.
+  // Then IISPH from the divergence-free velocities (v* = v0 + h (a(p_v) + the rest)).
   external_acceleration(s0.x, m_v_div);
   m_a += m_a_div;
-  m_v_adv = s0.v + h * m_a;
-  m_fluid.density_change(m_search, s0.x, m_system.masses(), m_v_adv, m_div);
-  m_source = (rho0 - m_rho.array() - h * m_div.array()).matrix();
-  m_p *= 0.5;
-  double error = 0.0;
-  const int iterations = pressure_solve(s0.x, h, m_p, m_options.tolerance, error);
-  m_a += m_ap;
-  finish_step(s0, h, s1, m_options.max_density_error, s);
-  const int total = iterations + m_divergence_iterations;
-  m_last.pressure_iterations = total;
-  m_last.pressure_residual = error;
-  m_stats.iterations += total;
-  s.iterations = total;
-  s.residual = error;
-  if (s.status == Status::Converged &&
-      (error > m_options.tolerance || divergence_error > m_divergence_tolerance)) {
-    std::ostringstream os;
-    os << "dfsph: the " << (error > m_options.tolerance ? "density" : "divergence")
-       << " solve stopped at max_iterations " << m_options.max_iterations << " with a mean "
-       << (error > m_options.tolerance ? "density error " : "divergence error ")
-       << (error > m_options.tolerance ? error : divergence_error) << " > tolerance "
-       << (error > m_options.tolerance ? m_options.tolerance : m_divergence_tolerance);
-    s.status = Status::NotConverged;
-    s.message = os.str();
-  }
+  const Solve density = density_solve(s0, h);
+  close_step(s0, h, s1, {density, divergence}, s);
   m_stats.total_seconds += seconds_since(t0);
   return s;
 }

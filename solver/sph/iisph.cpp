@@ -3,6 +3,7 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <string>
 
 namespace hooke {
 
@@ -149,33 +150,45 @@ int IisphStepper::pressure_solve(ConstRef x, double h, Vec& p, double tolerance,
   }
 }
 
+IisphStepper::Solve IisphStepper::density_solve(const State& s0, double h) {
+  m_v_adv = s0.v + h * m_a;
+  m_fluid.density_change(m_search, s0.x, m_system.masses(), m_v_adv, m_div);
+  m_source = (m_fluid.rest_density() - m_rho.array() - h * m_div.array()).matrix();
+  m_p *= 0.5;  // warm start (Ihmsen et al. 2014, sec. 3.3)
+  Solve solve{"density", 0, 0.0, m_options.tolerance};
+  solve.iterations = pressure_solve(s0.x, h, m_p, solve.tolerance, solve.error);
+  m_a += m_ap;
+  return solve;
+}
+
+void IisphStepper::close_step(const State& s0, double h, State& s1,
+                              std::initializer_list<Solve> solves, StepSummary& s) {
+  finish_step(s0, h, s1, m_options.max_density_error, s);
+  int iterations = 0;
+  for (const Solve& solve : solves) {
+    iterations += solve.iterations;
+    if (s.status == Status::Converged && solve.error > solve.tolerance) {
+      std::ostringstream os;
+      os << name() << ": the " << solve.what << " solve stopped at max_iterations "
+         << m_options.max_iterations << " with a mean " << solve.what << " error " << solve.error
+         << " > tolerance " << solve.tolerance;
+      s.status = Status::NotConverged;
+      s.message = os.str();
+    }
+    if (solve.what == std::string("density")) m_last.pressure_residual = s.residual = solve.error;
+  }
+  m_last.pressure_iterations = iterations;
+  m_stats.iterations += iterations;
+  s.iterations = iterations;
+}
+
 StepSummary IisphStepper::substep(const State& s0, double h, State& s1) {
   const auto t0 = Clock::now();
   StepSummary s;
   if (!prepare(s0.x, s)) return s;
-  const double rho0 = m_fluid.rest_density();
-  external_acceleration(s0.x, s0.v);
-  m_v_adv = s0.v + h * m_a;
-  m_fluid.density_change(m_search, s0.x, m_system.masses(), m_v_adv, m_div);
-  m_source = (rho0 - m_rho.array() - h * m_div.array()).matrix();
   compute_diagonal(s0.x, h);
-  m_p *= 0.5;  // warm start (Ihmsen et al. 2014, sec. 3.3)
-  double error = 0.0;
-  const int iterations = pressure_solve(s0.x, h, m_p, m_options.tolerance, error);
-  m_a += m_ap;
-  finish_step(s0, h, s1, m_options.max_density_error, s);
-  m_last.pressure_iterations = iterations;
-  m_last.pressure_residual = error;
-  m_stats.iterations += iterations;
-  s.iterations = iterations;
-  s.residual = error;
-  if (s.status == Status::Converged && error > m_options.tolerance) {
-    std::ostringstream os;
-    os << "iisph: the pressure solve stopped at max_iterations " << m_options.max_iterations
-       << " with a mean density error " << error << " > tolerance " << m_options.tolerance;
-    s.status = Status::NotConverged;
-    s.message = os.str();
-  }
+  external_acceleration(s0.x, s0.v);
+  close_step(s0, h, s1, {density_solve(s0, h)}, s);
   m_stats.total_seconds += seconds_since(t0);
   return s;
 }

@@ -1,4 +1,5 @@
 #pragma once
+#include <initializer_list>
 #include <limits>
 #include <vector>
 
@@ -69,6 +70,19 @@ class IisphStepper : public SphStepper {
   /// comment's residual, at most max_iterations), p clamped at 0. Returns the iterations taken;
   /// the residual reached in `error`; m_ap holds the pressure accelerations of the final p.
   int pressure_solve(ConstRef x, double h, Vec& p, double tolerance, double& error);
+  /// What a pressure solve of a substep reached.
+  struct Solve {
+    const char* what;  ///< "density" or "divergence"
+    int iterations;
+    double error, tolerance;
+  };
+  /// IISPH's solve, from the non-pressure accelerations m_a at (s0.x, s0.v): v* = v0 + h m_a,
+  /// the source rho0 - rho*, the warm start, relaxed Jacobi; then m_a += a(p).
+  Solve density_solve(const State& s0, double h);
+  /// Ends a substep: finish_step, the figures (iterations of every solve; the density solve's
+  /// residual), NotConverged naming the first solve above its tolerance.
+  void close_step(const State& s0, double h, State& s1, std::initializer_list<Solve> solves,
+                  StepSummary& s);
 
   Options m_options;
   Vec m_v_adv, m_ap;                             // 3n
