@@ -37,6 +37,7 @@
 //   iisph              relaxed Jacobi, 10 iterations per step (water at rest needs fewer, and a
 //                      count that varied with the size would hide the scaling), h = 2e-3 s; an
 //                      iteration is a Jacobi iteration (with a tenth of the step's search)
+//   dfsph              the same with its divergence solve: 10 + 10 Jacobi iterations per step
 // Across MPI processes (issue 17): under `mpirun -n P hooke scaling` each cloth is split between
 // the P processes and only symplectic-euler and the implicit-petsc rows run; `hooke scaling --mpi`
 // starts such launches for P = 1, 2 (--processes) with one thread each and gathers their rows,
@@ -122,6 +123,8 @@ const std::vector<MethodSpec>& specs() {
 #endif
     {"wcsph", "method = \"wcsph\"\nsound_speed = 30.0\ncourant = 0\n", 1.1e6, 1e-4},
     {"iisph", "method = \"iisph\"\ncourant = 0\nmin_iterations = 10\nmax_iterations = 10\n", 1.1e6,
+     2e-3},
+    {"dfsph", "method = \"dfsph\"\ncourant = 0\nmin_iterations = 10\nmax_iterations = 10\n", 1.1e6,
      2e-3},
   };
   return s;
@@ -424,14 +427,14 @@ Command add_scaling_command(CLI::App& app) {
       "scaling",
       "Scaling study: time per step and per iteration against springs (cloth grids of 1e4 "
       "to 1e6 springs; 6e6, and 2.4e7 for implicit-petsc, with --full) or fluid particles "
-      "(wcsph, iisph: a 3D cube of water, 1e4 to 1.1e6) per method, on 1 and 2 "
+      "(wcsph, iisph, dfsph: a 3D cube of water, 1e4 to 1.1e6) per method, on 1 and 2 "
       "threads, with peak memory; "
       "writes scaling.csv, scaling.png and scaling.md (fitted exponents)");
   cmd->add_flag("--full", a->scal.full,
                 "add 3e6 and 6e6 springs (1000 x 1000 particles), and 2.4e7 (2000 x 2000) for "
                 "implicit-petsc");
   add_list(cmd, "--springs", a->springs,
-           "comma-separated spring counts, fluid particles for wcsph and iisph (default "
+           "comma-separated spring counts, fluid particles for wcsph, iisph and dfsph (default "
            "1e4,3e4,1e5,3e5,1e6)");
   add_list(cmd, "--methods", a->methods, "comma-separated: " + all + " (default: all)");
   add_list(cmd, "--threads", a->threads, "comma-separated thread counts (default 1,2)");

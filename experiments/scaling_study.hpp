@@ -28,13 +28,13 @@ std::vector<std::string> scaling_methods();
 
 /// `hooke scaling`: cloth grids (structural 1e4, shear 1e3, flexion 1e2 N/m, 1 kg, two corners
 /// pinned, gravity, h = 0.01 s) from about 1e4 to 1e6 springs (6e6 with --full: 1000 x 1000), and
-/// for the fluid methods (wcsph, iisph) a 3D cube of water of as many particles, per method and
-/// thread count: time per step and per iteration, split into force and Jacobian
-/// assembly, factorization, solve, local and global steps; peak resident memory of each run.
-/// Writes OUT/scaling.csv and (experiments/plot/scaling.py) OUT/scaling.png and OUT/scaling.md
-/// with the fitted exponent of time per iteration against springs. Under an MPI launch of several
-/// processes (or with options.processes, which starts such launches) each cloth is split between
-/// them (DistributedModel), only methods that run distributed are timed (symplectic-euler and the
+/// for the fluid methods (wcsph, iisph, dfsph) a 3D cube of water of as many particles, per method
+/// and thread count: time per step and per iteration, split into force and Jacobian assembly,
+/// factorization, solve, local and global steps; peak resident memory of each run. Writes
+/// OUT/scaling.csv and (experiments/plot/scaling.py) OUT/scaling.png and OUT/scaling.md with the
+/// fitted exponent of time per iteration against springs. Under an MPI launch of several processes
+/// (or with options.processes, which starts such launches) each cloth is split between them
+/// (DistributedModel), only methods that run distributed are timed (symplectic-euler and the
 /// implicit-petsc rows), rank 0 writes, and each row gives the processes and the partition's ghost
 /// traffic per exchange (the communication model, DistributedModel::Traffic). Returns the exit
 /// code.

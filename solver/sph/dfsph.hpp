@@ -47,8 +47,8 @@ class DfsphStepper final : public IisphStepper {
 
  private:
   double m_divergence_tolerance;
-  Vec m_p_div;                // num_fluid
-  Vec m_a_div, m_v_div;       // 3n: a(p_v) and v0 + h a(p_v)
+  Vec m_p_div;           // num_fluid
+  Vec m_a_div, m_v_div;  // 3n: a(p_v) and v0 + h a(p_v)
   int m_divergence_iterations = 0;
 };
 

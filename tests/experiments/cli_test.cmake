@@ -320,7 +320,7 @@ elseif(CASE STREQUAL "factor_over_budget")
 elseif(CASE STREQUAL "scaling")
   # Two small grids, every method, 1 and 2 threads: one CSV row each, all "ok", and the plot
   # script's figure and table of fitted exponents. An unknown method is an input error.
-  # 10 methods (13 with the PETSc backend) x 2 sizes x 2 thread counts, the 2 fluid methods at as
+  # 10 methods (13 with the PETSc backend) x 2 sizes x 2 thread counts, the 3 fluid methods at as
   # many particles (cubes of 13^3 and 20^3), and the header.
   set(methods symplectic-euler xpbd fast-mass-spring fast-mass-spring-jacobi vbd vbd-chebyshev
               implicit-pcg implicit-pcg-cholmod implicit-pcg-nodal implicit-cholmod)
@@ -328,7 +328,7 @@ elseif(CASE STREQUAL "scaling")
     list(APPEND methods implicit-petsc implicit-petsc-gamg implicit-petsc-boomeramg)
   endif()
   list(LENGTH methods n_methods)
-  math(EXPR rows "4 * ${n_methods} + 8 + 1")
+  math(EXPR rows "4 * ${n_methods} + 12 + 1")
   hooke_exec(scaling --springs 2000,8000 --steps 1 --out "${OUT}")
   expect_rc(0)
   expect_csv("${OUT}/scaling.csv"
@@ -341,7 +341,7 @@ elseif(CASE STREQUAL "scaling")
   foreach(m IN LISTS methods)
     expect_contains("${text}" "${m},2,7846,1369," "scaling.csv")
   endforeach()
-  foreach(m IN ITEMS wcsph iisph)
+  foreach(m IN ITEMS wcsph iisph dfsph)
     expect_contains("${text}" "${m},2,0,8000," "scaling.csv")
   endforeach()
   expect_file("${OUT}/scaling.png")

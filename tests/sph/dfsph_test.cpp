@@ -26,7 +26,8 @@ double divergence_residual(const DfsphStepper& stepper, const NeighbourSearch& s
   Vec div(nf);
   fluid.density_change(search, s.x, masses, u, div);
   double sum = 0.0;
-  for (Index i = 0; i < nf; ++i) sum += p[i] > 0.0 ? std::abs(h * div[i]) : std::max(h * div[i], 0.0);
+  for (Index i = 0; i < nf; ++i)
+    sum += p[i] > 0.0 ? std::abs(h * div[i]) : std::max(h * div[i], 0.0);
   return sum / (double(nf) * fluid.rest_density());
 }
 
@@ -55,12 +56,13 @@ TEST(Dfsph, DivergenceSolveLeavesVelocitiesWithinItsTolerance) {
   const Vec& p_v = stepper.divergence_pressures();
   const double before = divergence_residual(stepper, search, scene.state, scene.system->masses(),
                                             scene.state.v, p_v, h);
-  const double after = divergence_residual(stepper, search, scene.state, scene.system->masses(),
-                                           v_div, p_v, h);
-  std::printf("[ dfsph    ] divergence residual %.2e before the solve, %.2e after (%d iterations; "
-              "tolerance %.0e); %lld particles under divergence pressure\n",
-              before, after, stepper.divergence_iterations(), options.divergence_tolerance,
-              static_cast<long long>((p_v.array() > 0.0).count()));
+  const double after =
+      divergence_residual(stepper, search, scene.state, scene.system->masses(), v_div, p_v, h);
+  std::printf(
+      "[ dfsph    ] divergence residual %.2e before the solve, %.2e after (%d iterations; "
+      "tolerance %.0e); %lld particles under divergence pressure\n",
+      before, after, stepper.divergence_iterations(), options.divergence_tolerance,
+      static_cast<long long>((p_v.array() > 0.0).count()));
   EXPECT_LE(after, options.divergence_tolerance);
   // There was something to remove: the last step's density solve leaves about 2e-4.
   EXPECT_GT(before, 10 * options.divergence_tolerance);
