@@ -71,7 +71,8 @@ fuzz:
 # clang-format every C++ source in place (.clang-format); check-format only lists the unformatted.
 format:
 	bash scripts/install-deps.sh format
-	git ls-files '*.cpp' '*.hpp' '*.inc' | grep -v '^tests/problems/malformed/' | xargs clang-format -i
+	git ls-files --cached --others --exclude-standard '*.cpp' '*.hpp' '*.inc' | \
+	  grep -v '^tests/problems/malformed/' | xargs clang-format -i
 
 check-format:
 	bash scripts/check-format.sh

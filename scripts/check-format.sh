@@ -5,7 +5,9 @@
 set -euo pipefail
 cd "$(dirname "$0")/.."
 command -v clang-format >/dev/null 2>&1 || bash scripts/install-deps.sh format
-mapfile -t files < <(git ls-files '*.cpp' '*.hpp' '*.inc' | grep -v '^tests/problems/malformed/')
+# Tracked files and new ones not yet added (a file about to be committed is checked too).
+mapfile -t files < <(git ls-files --cached --others --exclude-standard '*.cpp' '*.hpp' '*.inc' |
+  grep -v '^tests/problems/malformed/')
 bad=()
 for f in "${files[@]}"; do
   clang-format --dry-run -Werror "$f" >/dev/null 2>&1 || bad+=("$f")
