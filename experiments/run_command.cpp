@@ -6,6 +6,7 @@
 #include <chrono>
 #include <cstdarg>
 #include <cstdio>
+#include <cstring>
 #include <filesystem>
 #include <limits>
 #include <memory>
@@ -134,6 +135,10 @@ class MassSpringRun {
   /// [output] interval: true (once) when t reached or passed the next multiple of the interval
   /// (to round-off: a step landing on it counts), and the next one is then the first above t.
   bool interval_frame_due(double t);
+  /// Frame `step` (if [output] vtk) of this process's state: the whole state in a serial run,
+  /// written by RunOutput; in an MPI run, each process writes its piece and rank 0 the .pvtu that
+  /// lists them. Collective.
+  void write_frame(long long step);
   int report_failure(long long step, const StepSummary& sum);
   int report_divergence(long long step, double E);
   int stop(long long step, int sig);
@@ -165,6 +170,7 @@ class MassSpringRun {
   double m_wall = 0.0;
   double m_last_h = 0.0;  // size of the last step (s): a log column under error control
   std::unique_ptr<RunOutput> m_out;
+  std::unique_ptr<FramePiece> m_piece;  // what this process writes of a frame (an MPI run)
   double m_E0 = 0.0, m_scale = 0.0, m_E_limit = 0.0;
   Progress m_progress;
   Clock::time_point m_last_checkpoint = Clock::now();
@@ -227,6 +233,15 @@ MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const R
   m_E0 = m_sys.kinetic_energy(s0.v) + m_sys.potential_energy(s0.x);
   m_scale = std::max({divergence_energy_scale(m_sys, s0), std::abs(m_E0), 1e-30});
   m_E_limit = m_E0 + scene.run.energy_growth_limit * m_scale;
+  if (group.distributed() && scene.output.vtk) {
+    m_piece = std::make_unique<FramePiece>(group.frame_piece(
+        FrameMesh{scene.edges, scene.edge_rest, scene.triangles, m_sys.pinned(), m_sys.masses()}));
+    if (m_piece->dropped_triangles > 0 && group.root())
+      std::fprintf(stderr,
+                   "note: %s: the frames of this MPI run leave out %lld of %zu surface triangles: "
+                   "no process holds all three of their particles (every spring is drawn)\n",
+                   scene.file.c_str(), m_piece->dropped_triangles, scene.triangles.size());
+  }
   for (const auto& c : m_sys.constraints())
     if (const auto* limit = dynamic_cast<const StrainLimit*>(c.get())) m_strain_limit = limit;
   if (const FluidModel* fluid = m_sys.fluid()) {
@@ -333,8 +348,8 @@ int MassSpringRun::run_steps() {
     const State& s = m_group.whole(m_sim.state());
     m_group.on_root([&] {
       m_out->log_row(0, s, 0, 0.0, m_wall, m_adaptive ? &start : nullptr, fluid_stats(0, s));
-      m_out->frame(0, s, fluid_fields(s));
     });
+    write_frame(0);
   }
   const StopSignals stop_signals;
   for (long long step = m_first_step; !done(step - 1); ++step) {
@@ -379,8 +394,10 @@ int MassSpringRun::after_step(long long step, const StepSummary& sum) {
   const bool log = step % m_scene.output.log_every == 0 || last;
   const bool frame = (m_scene.output.every > 0 && step % m_scene.output.every == 0) || last ||
                      interval_frame_due(m_sim.state().t);
-  // The whole state, where rank 0 writes it from (a serial run's own).
-  const State& s = log || frame ? m_group.whole(m_sim.state()) : m_sim.state();
+  // The whole state, where rank 0 logs it from (a serial run's own); an MPI run's processes write
+  // their own pieces of a frame.
+  const State& s =
+      log || (frame && !m_group.distributed()) ? m_group.whole(m_sim.state()) : m_sim.state();
   if (log) {
     RunOutput::ControlColumns control;
     if (m_adaptive) control = {m_last_h, m_sim.accepted_steps(), m_sim.rejected_steps()};
@@ -399,7 +416,7 @@ int MassSpringRun::after_step(long long step, const StepSummary& sum) {
       }
     }
   }
-  if (frame) m_group.on_root([&] { m_out->frame(step, s, fluid_fields(s)); });
+  if (frame) write_frame(step);
   m_progress.update(step, s.t);
   if (last) return -1;
   // A signal reaches the processes of an MPI run at different steps: all stop at the first.
@@ -440,10 +457,20 @@ int MassSpringRun::report_failure(long long step, const StepSummary& failed) {
   return 3;
 }
 
+void MassSpringRun::write_frame(long long step) {
+  const State& s = m_sim.state();
+  if (!m_group.distributed()) return m_out->frame(step, s, fluid_fields(s));
+  if (!m_piece) return;  // [output] vtk = false
+  const double t = m_adaptive ? s.t : m_scene.time.time_at(step);
+  m_group.on_every([&] {
+    write_vtu_piece(RunOutput::frame_piece_path(m_dir, step, m_group.rank()), s, t, *m_piece);
+  });
+  m_group.on_root([&] { m_out->parallel_frame(step, t, m_group.size()); });
+}
+
 int MassSpringRun::report_divergence(long long step, double E) {
   m_progress.done();
-  const State& s = m_group.whole(m_sim.state());
-  m_group.on_root([&] { m_out->frame(step, s, fluid_fields(s)); });
+  write_frame(step);
   if (!m_group.root()) return 3;
   const std::string what = strprintf(
       "diverged at step %lld (t = %.9g, %s): total energy %.6g J exceeds the initial %.6g J by "
@@ -479,12 +506,27 @@ void MassSpringRun::checkpoint(long long step) {
   c.not_converged = m_not_converged;
   c.halved_steps = m_sim.halved_steps();
   c.wall = m_wall;
+  if (m_group.distributed()) {
+    // Each process writes its piece first: its local state and its stepper's history (warm
+    // starts, BDF2's states), which a resume on as many processes takes back (resume_run).
+    Checkpoint piece = c;
+    RunOutput::identify(piece, m_scene);
+    piece.state = m_sim.state();
+    piece.history = m_sim.stepper().history();
+    m_group.on_every([&] {
+      write_checkpoint(
+          RunOutput::checkpoint_piece_path(m_dir, step, m_group.rank(), m_group.size()), piece);
+    });
+  } else {
+    c.history = m_sim.stepper().history();
+    if (m_adaptive) append_error_control(m_sim, c.history);  // restore() takes it back off
+  }
   c.state = m_group.whole(m_sim.state());
-  // A distributed run's stepper history (warm starts, BDF2's states) is per process: none is
-  // kept, and a resumed run starts its stepper afresh (restore() says so).
-  if (!m_group.distributed()) c.history = m_sim.stepper().history();
-  if (m_adaptive) append_error_control(m_sim, c.history);  // restore() takes it back off
-  m_group.on_root([&] { m_out->checkpoint(std::move(c)); });
+  // checkpoint.bin, the whole state, commits the step's checkpoint; then the older pieces go.
+  m_group.on_root([&] {
+    m_out->checkpoint(std::move(c));
+    if (m_group.distributed()) m_out->remove_checkpoint_pieces(step, m_group.size());
+  });
 }
 
 int MassSpringRun::finish() {
@@ -610,6 +652,49 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
   return 0;
 }
 
+/// A resume on as many processes as wrote checkpoint `c` (an MPI run): each takes its stepper's
+/// history from its piece of the checkpoint (RunOutput::checkpoint_piece_path) into c.history, so
+/// that the run continues bit for bit. A piece must belong to c (same version, method, scene,
+/// step and time) and hold exactly this process's part of c's state; if any process finds its
+/// piece missing (the checkpoint was written by another number of processes) or not fit, none
+/// takes a history: the steppers restart from c's state, as restore() notes, and rank 0 says why
+/// a piece that exists was not used. Collective.
+void take_piece_history(Checkpoint& c, RunGroup& group, const std::string& dir) {
+  const std::string path =
+      RunOutput::checkpoint_piece_path(dir, c.step, group.rank(), group.size());
+  std::error_code ec;
+  const bool exists = fs::is_regular_file(path, ec);
+  std::string why;
+  std::vector<double> history;
+  if (exists) {
+    try {
+      const State local = group.local_state(c.state);
+      const Checkpoint piece = read_checkpoint(path, local.x.size());
+      auto same_bits = [](const Vec& a, const Vec& b) {
+        return a.size() == b.size() &&
+               std::memcmp(a.data(), b.data(), size_t(a.size()) * sizeof(double)) == 0;
+      };
+      if (piece.version != c.version || piece.method != c.method || piece.scene != c.scene ||
+          piece.initial_hash != c.initial_hash || piece.step != c.step ||
+          piece.state.t != c.state.t || !same_bits(piece.state.x, local.x) ||
+          !same_bits(piece.state.v, local.v))
+        throw InputError(path, "checkpoint",
+                         "does not belong to " + dir + "/checkpoint.bin (another run or step)");
+      history = piece.history;
+    } catch (const InputError& e) {
+      why = e.what();
+    }
+  }
+  if (!group.all(exists)) return;  // written by another number of processes
+  if (group.first(!why.empty(), why) >= 0) {
+    if (group.root())
+      std::fprintf(stderr, "note: %s; resuming from the whole state of %s/checkpoint.bin\n",
+                   why.c_str(), dir.c_str());
+    return;
+  }
+  c.history = std::move(history);
+}
+
 /// The processes the run of `scene` spans (RunGroup::for_launch): under an MPI launch of several
 /// processes, its system split between them, refused (InputError, on every process alike) for
 /// what does not run distributed yet.
@@ -688,7 +773,8 @@ int resume_run(const std::string& dir, const RunOptions& options) {
   group->on_root([&] {
     if (lock_error) std::rethrow_exception(lock_error);
   });
-  const Checkpoint c = read_checkpoint(dir + "/checkpoint.bin", scene.system->dofs());
+  Checkpoint c = read_checkpoint(dir + "/checkpoint.bin", scene.system->dofs());
+  if (group->distributed()) take_piece_history(c, *group, dir);
   // Checks c against the scene.
   MassSpringRun run(scene, dir, options, &c, std::move(locked), *group);
   if (!group->root()) return run.run();

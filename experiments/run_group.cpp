@@ -53,6 +53,10 @@ const State& RunGroup::whole(const State& local) {
   m_model->gather(local, m_whole);
   return root() ? m_whole : local;
 }
+FramePiece RunGroup::frame_piece(const FrameMesh& mesh) const {
+  HOOKE_ASSERT(m_model, "a frame piece of a serial run");
+  return make_frame_piece(mesh, m_model->index(), m_model->starts(), m_rank);
+}
 RunGroup::Traffic RunGroup::traffic() const { return m_model ? m_model->traffic() : Traffic{}; }
 bool RunGroup::all(bool value) const { return m_model ? m_model->all(value) : value; }
 long long RunGroup::max(long long value) const { return m_model ? m_model->max(value) : value; }
@@ -70,6 +74,10 @@ int RunGroup::size() const { return 1; }
 const MassSpringSystem& RunGroup::stepped(const MassSpringSystem& global) const { return global; }
 State RunGroup::local_state(const State& global) const { return global; }
 const State& RunGroup::whole(const State& local) { return local; }
+FramePiece RunGroup::frame_piece(const FrameMesh&) const {
+  HOOKE_ASSERT(false, "a frame piece of a serial run");
+  return {};
+}
 RunGroup::Traffic RunGroup::traffic() const { return {}; }
 bool RunGroup::all(bool value) const { return value; }
 long long RunGroup::max(long long value) const { return value; }

@@ -1,8 +1,10 @@
 #pragma once
 #include <exception>
 #include <memory>
+#include <stdexcept>
 #include <string>
 
+#include "experiments/output/vtu_writer.hpp"
 #include "hooke/distributed/distributed_model.hpp"  // declarations only: no PETSc needed
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/model/state.hpp"
@@ -31,7 +33,8 @@ int launched_size();
 /// The processes one `hooke run` spans (issue 17): this process alone (a serial run), or every
 /// process of an MPI launch, each stepping its piece of the system (DistributedModel). The run loop
 /// asks it for what the processes must agree on: the whole state at output times (gathered on
-/// rank 0, which alone writes files and prints), the step's outcome, stop requests and the
+/// rank 0, which alone prints and writes the run's files but for the pieces each process writes
+/// of frames and checkpoints), the step's outcome, stop requests and the
 /// figures rank 0 decides. In a serial run every call is trivial. Calls marked collective must be
 /// made by all processes together.
 class RunGroup {
@@ -47,6 +50,7 @@ class RunGroup {
   bool distributed() const { return m_model != nullptr; }
   /// Rank 0, or the process of a serial run: the one that writes files and prints.
   bool root() const { return m_rank == 0; }
+  int rank() const { return m_rank; }
   int size() const;
   /// The system this process steps: its piece of `global`, or `global` itself.
   const MassSpringSystem& stepped(const MassSpringSystem& global) const;
@@ -56,6 +60,9 @@ class RunGroup {
   /// rank 0 of a distributed run, the gathered state (valid until the next call), elsewhere
   /// `local`. Collective.
   const State& whole(const State& local);
+  /// What this process writes of a frame of the whole system's `mesh` (make_frame_piece). Only
+  /// for a distributed run.
+  FramePiece frame_piece(const FrameMesh& mesh) const;
   /// The ghost traffic of one exchange (DistributedModel::Traffic); all zero in a serial run.
   /// Collective.
   using Traffic = DistributedModel::Traffic;
@@ -86,6 +93,33 @@ class RunGroup {
     code = int(max(code));
     if (error) std::rethrow_exception(error);
     if (code != 0) throw PeerFailure(code);
+  }
+  /// Runs f() on every process (e.g. each writing its piece of a frame). If it throws anywhere,
+  /// every process stops together: rank 0 rethrows its own exception, or else throws
+  /// std::runtime_error with the message of the lowest rank that failed (so that rank 0 alone
+  /// says why, as for its own errors), and the others throw PeerFailure with the exit code main
+  /// gives that exception. Collective.
+  template <typename F>
+  void on_every(F&& f) {
+    std::exception_ptr error;
+    std::string text;
+    int code = 0;
+    try {
+      f();
+    } catch (const std::exception& e) {
+      error = std::current_exception();
+      text = e.what();
+    } catch (...) {
+      error = std::current_exception();
+      text = "unknown error";
+    }
+    if (error) code = exit_code_of(error);
+    code = int(max(code));
+    if (code == 0) return;
+    first(error != nullptr, text);
+    if (!root()) throw PeerFailure(code);
+    if (error) std::rethrow_exception(error);
+    throw std::runtime_error(text);
   }
 
  private:

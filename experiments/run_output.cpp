@@ -8,6 +8,7 @@
 
 #include "experiments/output/png_writer.hpp"
 #include "experiments/output/vtk_writer.hpp"
+#include "experiments/output/vtu_writer.hpp"
 #include "experiments/plot_script.hpp"
 #include "hooke/config.hpp"
 
@@ -28,6 +29,12 @@ void write_resolved_scene(const Scene& scene, const std::string& path) {
 }
 
 namespace {
+/// frame_STEP, the stem of frame `step`'s files.
+std::string frame_stem(long long step) {
+  char name[64];
+  std::snprintf(name, sizeof name, "frame_%08lld", step);
+  return name;
+}
 
 /// DIR/log.csv of a resumed run, cut back to the checkpointed step (rows after it are written
 /// again) and opened for appending.
@@ -92,6 +99,7 @@ void RunOutput::start_fresh(bool force) {
   m_dir->remove_files({"final.csv", "status.txt", "final.png", "final.vtk", "checkpoint.bin",
                        "frames.pvd", "log.csv", "final.csv.tmp", "final.png.tmp", "final.vtk.tmp",
                        "checkpoint.bin.tmp", "frames.pvd.tmp", "scene.toml.tmp", "status.txt.tmp"});
+  remove_checkpoint_pieces(-1, 0);
   m_dir->set_status("running");
   write_resolved_scene(m_scene, m_dir->file("scene.toml"));
   m_log = std::make_unique<OutputFile>(OutputFile::stream(m_dir->file("log.csv")));
@@ -117,7 +125,9 @@ void RunOutput::prepare_frames(const Checkpoint* resume) {
     const std::string name = e.path().filename().string();
     if (name.rfind("frame_", 0) != 0) continue;
     const long long frame_step = std::atoll(name.c_str() + 6);
-    if (!resume || frame_step > resume->step || e.path().extension() != ".vtk") {
+    const std::string ext = e.path().extension().string();
+    if (!resume || frame_step > resume->step ||
+        (ext != ".vtk" && ext != ".pvtu" && ext != ".vtu")) {
       fs::remove(e.path(), ec);
       if (ec) throw OutputError(e.path().string(), "remove", ec.value());
     }
@@ -151,8 +161,7 @@ double RunOutput::log_row(long long step, const State& s, int iterations, double
 
 void RunOutput::frame(long long step, const State& s, const FluidFields* fluid) {
   if (!m_scene.output.vtk) return;
-  char name[64];
-  std::snprintf(name, sizeof name, "frame_%08lld.vtk", step);
+  const std::string name = frame_stem(step) + ".vtk";
   // Frames of fixed steps carry the step's nominal time (0.1, not a sum of steps
   // 0.10000000000000002); error control lands on its frame times exactly.
   const double t = m_scene.integrator.adaptive ? s.t : m_scene.time.time_at(step);
@@ -161,14 +170,57 @@ void RunOutput::frame(long long step, const State& s, const FluidFields* fluid) 
   write_pvd(m_dir->file("frames.pvd"), m_frames);
 }
 
+std::string RunOutput::frame_piece_path(const std::string& dir, long long step, int rank) {
+  return dir + "/frames/" + frame_stem(step) + "_" + std::to_string(rank) + ".vtu";
+}
+
+void RunOutput::parallel_frame(long long step, double t, int pieces) {
+  if (!m_scene.output.vtk) return;
+  const std::string stem = frame_stem(step);
+  std::vector<std::string> names;
+  for (int r = 0; r < pieces; ++r) names.push_back(stem + "_" + std::to_string(r) + ".vtu");
+  write_pvtu(m_frames_dir + "/" + stem + ".pvtu", names);
+  m_frames.emplace_back(t, "frames/" + stem + ".pvtu");
+  write_pvd(m_dir->file("frames.pvd"), m_frames);
+}
+
 void RunOutput::checkpoint(Checkpoint c) {
   m_log->sync();
   c.log_bytes = m_log->tell();
   c.frames = m_frames;
-  c.version = HOOKE_VERSION;
-  c.scene = resolved_scene_text(m_scene);
-  c.initial_hash = initial_state_hash(m_scene.initial, m_scene.system->pinned());
+  identify(c, m_scene);
   write_checkpoint(checkpoint_path(), c);
+}
+
+void RunOutput::identify(Checkpoint& c, const Scene& scene) {
+  c.version = HOOKE_VERSION;
+  c.scene = resolved_scene_text(scene);
+  c.initial_hash = initial_state_hash(scene.initial, scene.system->pinned());
+}
+
+std::string RunOutput::checkpoint_piece_path(const std::string& dir, long long step, int rank,
+                                             int size) {
+  return dir + "/checkpoint." + std::to_string(step) + "." + std::to_string(rank) + "-of-" +
+         std::to_string(size) + ".bin";
+}
+
+void RunOutput::remove_checkpoint_pieces(long long keep_step, int keep_size) {
+  std::error_code ec;
+  for (const auto& e : fs::directory_iterator(m_dir->path(), ec)) {
+    const std::string name = e.path().filename().string();
+    long long step = -1;
+    int rank = -1, size = -1, end = 0;
+    // checkpoint.STEP.RANK-of-SIZE.bin, or its .tmp
+    if (std::sscanf(name.c_str(), "checkpoint.%lld.%d-of-%d.bin%n", &step, &rank, &size, &end) !=
+            3 ||
+        (name.size() != size_t(end) && name.substr(size_t(end)) != ".tmp"))
+      continue;
+    if (step == keep_step && size == keep_size && name.size() == size_t(end)) continue;
+    std::error_code removed;
+    fs::remove(e.path(), removed);
+    if (removed) throw OutputError(e.path().string(), "remove", removed.value());
+  }
+  if (ec) throw OutputError(m_dir->path(), "list", ec.value());
 }
 
 void RunOutput::flush() { m_log->sync(); }
@@ -222,6 +274,7 @@ std::vector<std::string> RunOutput::finish(const State& s, const std::string& su
     std::error_code ec;
     fs::remove(checkpoint_path(), ec);
     if (ec) throw OutputError(checkpoint_path(), "remove", ec.value());
+    remove_checkpoint_pieces(-1, 0);
     m_dir->set_status("finished", summary);
   } catch (...) {
     std::error_code ignored;

@@ -26,14 +26,14 @@ void check_no_stopped_run(const OutputDir& dir, bool force);
 /// The files of one mass-spring run in its locked output folder (OutputDir), over their whole
 /// life. A fresh run refuses a folder that holds a resumable checkpoint (unless forced), marks the
 /// folder "running" in status.txt, removes every output of an earlier run (final.csv, final.png,
-/// final.vtk, checkpoint.bin, frames) and writes scene.toml and a new log.csv. A resumed run cuts
-/// log.csv back to the checkpointed step and removes the frames written after it. Then one row per
-/// logged step, VTK frames with their frames.pvd, checkpoints, and at the end final.vtk,
-/// final.png and final.csv, after which status.txt says "finished". final.csv lists the fluid
-/// particles only in a fluid scene (its boundary particles are the tank and obstacles, in the
-/// frames with pinned = 1). Every file of a run is
-/// opened, written and named here and nowhere else, through OutputFile (a failed write throws
-/// OutputError), except final.png, which experiments/plot/final.py draws from final.vtk and
+/// final.vtk, checkpoint.bin and its pieces, frames) and writes scene.toml and a new log.csv. A
+/// resumed run cuts log.csv back to the checkpointed step and removes the frames written after it.
+/// Then one row per logged step, VTK frames (an MPI run's as .pvtu with one .vtu piece per process)
+/// with their frames.pvd, checkpoints, and at the end final.vtk, final.png and final.csv, after
+/// which status.txt says "finished". final.csv lists the fluid particles only in a fluid scene (its
+/// boundary particles are the tank and obstacles, in the frames with pinned = 1). Every file of a
+/// run is opened, written and named here and nowhere else, through OutputFile (a failed write
+/// throws OutputError), except final.png, which experiments/plot/final.py draws from final.vtk and
 /// writes just as atomically (common.save_figure), or the built-in renderer if it cannot.
 class RunOutput {
  public:
@@ -71,9 +71,28 @@ class RunOutput {
                  const ControlColumns* control = nullptr, const FluidStepStats* fluid = nullptr);
   /// Writes frame `step` (if [output] vtk) and rewrites frames.pvd; fluid: a fluid's fields.
   void frame(long long step, const State& s, const FluidFields* fluid = nullptr);
+  /// Where process `rank` of an MPI run writes its piece of frame `step` (write_vtu_piece) in the
+  /// run folder `dir`: DIR/frames/frame_STEP_RANK.vtu.
+  static std::string frame_piece_path(const std::string& dir, long long step, int rank);
+  /// Frame `step` of an MPI run of `pieces` processes, whose pieces are written: writes its
+  /// frames/frame_STEP.pvtu, which lists them, and rewrites frames.pvd. t: the frame's time.
+  void parallel_frame(long long step, double t, int pieces);
   /// Makes log.csv durable and writes DIR/checkpoint.bin from c, with the log position, frames
-  /// and the scene's identity (version, resolved scene, initial-state hash) filled in.
+  /// and the scene's identity (identify) filled in.
   void checkpoint(Checkpoint c);
+  /// Fills in what ties a checkpoint to its run: hooke's version, the resolved scene and the
+  /// initial-state hash.
+  static void identify(Checkpoint& c, const Scene& scene);
+  /// Where process `rank` of an MPI run of `size` processes writes its piece of the checkpoint of
+  /// step `step` (its local state and stepper history, in write_checkpoint's format) in the run
+  /// folder `dir`: DIR/checkpoint.STEP.RANK-of-SIZE.bin. The pieces of a step are written before
+  /// rank 0 commits checkpoint.bin (the whole state) for that step, and the older pieces removed
+  /// after it (remove_checkpoint_pieces), so checkpoint.bin always has its complete set.
+  static std::string checkpoint_piece_path(const std::string& dir, long long step, int rank,
+                                           int size);
+  /// Removes every checkpoint piece in the folder but those of step `keep_step` written by
+  /// `keep_size` processes (all of them for keep_step < 0).
+  void remove_checkpoint_pieces(long long keep_step, int keep_size);
   /// Flushes log.csv to disk, so that it is complete up to the last row when the run stops.
   void flush();
   /// The run stopped with a checkpoint (signal or --stop-after): status.txt says "stopped".

@@ -1,49 +1,19 @@
 #include "experiments/output/vtk_writer.hpp"
 
 #include <cstdint>
-#include <cstring>
 #include <limits>
 #include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "experiments/output/buffered_writer.hpp"
 #include "experiments/output/output_file.hpp"
 #include "problems/scene_keys.hpp"
 
 namespace hooke {
 
 namespace {
-/// Writes a frame through a fixed 64 KiB buffer into its OutputFile: a frame of a large cloth
-/// (hundreds of MB at 1000 x 1000) is never held in memory whole, which would add to a run's peak.
-class FrameWriter {
- public:
-  explicit FrameWriter(OutputFile& f) : m_f(f) { m_buf.reserve(kSize); }
-  void text(const std::string& t) {
-    for (const char c : t) byte(c);
-  }
-  /// Legacy VTK binary data is big-endian.
-  template <typename T>
-  void be(T value) {
-    unsigned char b[sizeof(T)];
-    std::memcpy(b, &value, sizeof(T));
-    for (size_t k = sizeof(T); k-- > 0;) byte(char(b[k]));
-  }
-  void flush() {
-    if (!m_buf.empty()) m_f.write(m_buf.data(), m_buf.size());
-    m_buf.clear();
-  }
-
- private:
-  static constexpr size_t kSize = 1 << 16;
-  void byte(char c) {
-    m_buf.push_back(c);
-    if (m_buf.size() == kSize) flush();
-  }
-  OutputFile& m_f;
-  std::vector<char> m_buf;
-};
-
 std::string number(double v) {
   std::ostringstream os;
   os << v;
@@ -56,7 +26,7 @@ void write_vtk_frame(const std::string& path, const State& s, double t, const Fr
   const auto& triangles = mesh.triangles;
   const auto& pinned = mesh.pinned;
   OutputFile file = OutputFile::replace(path);
-  FrameWriter out(file);
+  BufferedWriter out(file);
   const Index n = s.num_particles();
   out.text("# vtk DataFile Version 3.0\nhooke frame t=" + number(t) +
            "\nBINARY\nDATASET POLYDATA\nFIELD FieldData 1\nTIME 1 1 double\n");

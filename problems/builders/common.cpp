@@ -33,6 +33,15 @@ void pin_ids(TableReader& mesh, const std::string& key, const std::vector<long l
 namespace {
 constexpr double kGiB = double(1ull << 30);
 
+/// The processes of this MPI launch that share this machine (1 outside one), from the launcher's
+/// environment: every process of a run across processes builds the whole scene (issue 17), so
+/// each may take only its share of the machine's memory.
+long processes_on_this_machine() {
+  for (const char* name : {"OMPI_COMM_WORLD_LOCAL_SIZE", "MPI_LOCALNRANKS", "PMIX_LOCAL_SIZE"})
+    if (const char* value = std::getenv(name)) return std::max(1L, std::atol(value));
+  return 1;
+}
+
 double default_memory_limit() {
   if (const char* env = std::getenv("HOOKE_MAX_MEMORY_GIB")) {
     char* end = nullptr;
@@ -43,7 +52,8 @@ double default_memory_limit() {
   }
   double limit = 64.0 * kGiB;
   const long pages = sysconf(_SC_PHYS_PAGES), page = sysconf(_SC_PAGESIZE);
-  if (pages > 0 && page > 0) limit = std::min(limit, double(pages) * double(page));
+  if (pages > 0 && page > 0)
+    limit = std::min(limit, double(pages) * double(page) / double(processes_on_this_machine()));
   return limit;
 }
 
@@ -78,7 +88,11 @@ void check_size(TableReader& mesh, const std::string& key, double particles, dou
     os.precision(3);
     os << "a mesh of " << particles << " particles and " << springs << " springs would need about "
        << bytes / kGiB << " GiB, above the memory budget of " << limit / kGiB
-       << " GiB (default: the smaller of 64 GiB and physical memory; HOOKE_MAX_MEMORY_GIB sets it)";
+       << " GiB (default: the smaller of 64 GiB and physical memory";
+    if (const long p = processes_on_this_machine(); p > 1)
+      os << " divided among the " << p << " processes of this MPI run on this machine";
+    os << "; HOOKE_MAX_MEMORY_GIB sets it"
+       << (processes_on_this_machine() > 1 ? " per process" : "") << ")";
     if (particles > 2147483647.0) os << " and above 2^31 - 1 particles";
     throw MemoryBudgetError(mesh.file(), mesh.path(key), os.str(), particles, springs, bytes);
   }

@@ -4,10 +4,13 @@
 # Every process runs one OpenMP thread; mpirun may oversubscribe the two cores and run as root.
 # Cases:
 #   explicit   The explicit steppers on 1, 2 and 3 processes give the serial run's final.csv byte
-#              for byte and its log.csv (every column but wall_time): symplectic Euler, midpoint
+#              for byte and its log.csv (every column but wall_time), and its frames as .pvtu
+#              files of one .vtu piece per process: symplectic Euler, midpoint
 #              and RK4 on the 16 x 16 hanging cloth, RK4 on the cloth pulled by a scripted corner
 #              and on the cloth falling on two spheres (colliders).
 #   failures   Bad input and refused scenes exit 2 with the serial run's message, printed once; a
+#              mesh above the memory budget is refused with half the serial budget on 2 processes
+#              (each builds the whole scene, sharing this machine's memory); a
 #              diverging run and a run whose state turns non-finite (with one halving) exit 3 at the
 #              serial run's step with its message, keeping the same log.csv.
 #   implicit   Backward Euler with the PETSc backend at linear_tolerance = 1e-12, 10 steps of a
@@ -23,6 +26,10 @@
 #              messages per step and 2 x 32 x 24 bytes, as the model says.
 #   resume     A 2-process run stopped by --stop-after (exit 130, one checkpoint.bin of the whole
 #              system) resumes on 2 processes and on 1 to the uninterrupted serial run's final.csv.
+#              BDF2 and backward Euler on PETSc stopped on 2 processes (each writing its piece of
+#              the checkpoint: local state and stepper history) resume on 2 to the uninterrupted
+#              2-process run's final.csv byte for byte; with a damaged piece, the resume says so
+#              and continues from the whole state.
 set -uo pipefail
 CASE=${1:?case} HOOKE=${2:?hooke binary} MPIRUN=${3:?mpirun} SCENES=${4:?scenes dir} OUT=${5:?scratch dir}
 rm -rf "$OUT" && mkdir -p "$OUT"
@@ -60,6 +67,21 @@ close_x() {
     "$1/final.csv" "$2/final.csv" || fail "final.csv of $1 and $2 differ by more than $3 m"
   ok
 }
+# same_frames SERIAL_DIR MPI_DIR P: the MPI run wrote the serial run's frames, at the same times,
+# each as a .pvtu listing its P .vtu pieces (the pieces' contents: VtuWriter.* in CTest).
+same_frames() {
+  diff -q <(sed 's/\.vtk"/.pvtu"/' "$1/frames.pvd") "$2/frames.pvd" > /dev/null ||
+    fail "frames.pvd: $(diff <(sed 's/\.vtk"/.pvtu"/' "$1/frames.pvd") "$2/frames.pvd")"
+  local frame pieces
+  for frame in "$2"/frames/*.pvtu; do
+    pieces=$(grep -o 'Source="[^"]*"' "$frame" | sed 's/Source="//; s/"$//')
+    [ "$(echo "$pieces" | wc -l)" = "$3" ] || fail "$frame lists $(echo "$pieces" | wc -l) pieces, not $3"
+    for piece in $pieces; do
+      [ -s "$2/frames/$piece" ] || fail "$frame: no piece $piece"
+    done
+  done
+  ok
+}
 # The messages of a serial and an MPI run, with their output folders' names made equal.
 same_err() {
   diff <(sed "s|$1|DIR|g" "$1.err") <(sed "s|$2|DIR|g" "$2.err") > /dev/null ||
@@ -77,6 +99,7 @@ explicit)
       run $p "$OUT/$m.$p" "${args[@]}"
       expect_rc 0 "$m on $p processes" "$OUT/$m.$p"
       same_run "$OUT/$m" "$OUT/$m.$p"
+      [ "$p" = 1 ] || same_frames "$OUT/$m" "$OUT/$m.$p" $p
     done
   done
   for scene in cloth_pulled_by_corner cloth_on_two_spheres; do
@@ -108,6 +131,20 @@ failures)
   ok
   run 2 "$OUT/fluid.2" run "$SCENES/dam_break_2d.toml"
   expect_rc 2 "a fluid on 2 processes" "$OUT/fluid.2"
+  # The memory budget is per process: each builds the whole scene, so the processes sharing this
+  # machine share its memory (unless HOOKE_MAX_MEMORY_GIB sets the budget).
+  big=(run "$cloth" --set mesh.nx=40000 --set mesh.ny=40000)
+  run 0 "$OUT/big" "${big[@]}"
+  expect_rc 2 "a mesh above the budget, serial" "$OUT/big"
+  run 2 "$OUT/big.2" "${big[@]}"
+  expect_rc 2 "a mesh above the budget, 2 processes" "$OUT/big.2"
+  grep -q "divided among the 2 processes of this MPI run on this machine" "$OUT/big.2.err" ||
+    fail "2 processes: $(cat "$OUT/big.2.err")"
+  budget() { grep -o 'memory budget of [0-9.e+]* GiB' "$1" | awk '{ print $4 }'; }
+  awk -v one="$(budget "$OUT/big.err")" -v two="$(budget "$OUT/big.2.err")" \
+    'BEGIN { exit !(one > 0 && two > 0 && (two == 64 || (one / two > 1.98 && one / two < 2.02))) }' ||
+    fail "the budget of 2 processes is not half of one's: $(budget "$OUT/big.err") and $(budget "$OUT/big.2.err") GiB"
+  ok
   # Divergence: the same step, message and log.
   args=(run "$SCENES/two_particle.toml" --set integrator.method=rk4 --set time.dt=0.05
         --set time.duration=5)
@@ -208,7 +245,40 @@ resume)
     rc=$?
     expect_rc 0 "resume on $p processes" "$OUT/resume.$p"
     same_run "$OUT/whole" "$OUT/stopped.$p"
+    ! ls "$OUT/stopped.$p"/checkpoint* > /dev/null 2>&1 || fail "a finished run left a checkpoint"
+    ok
   done
+  # Implicit steps keep a history (BDF2: the previous state; every Krylov solve: its warm start).
+  # Each process writes it in its piece of the checkpoint, and a resume on as many processes
+  # takes it back: the resumed run is the uninterrupted one, bit for bit. (Without the pieces it
+  # is not: BDF2 restarts with a backward Euler step, the solves from a zero guess.)
+  for m in bdf2 implicit; do
+    args=(run "$SCENES/hanging_cloth_16.toml" --set integrator.method="$m" --set time.dt=0.02
+          --set time.duration=0.2 --set integrator.linear_solver=petsc
+          --set integrator.linear_tolerance=1e-8)
+    run 2 "$OUT/$m.whole" "${args[@]}"
+    expect_rc 0 "uninterrupted $m on 2 processes" "$OUT/$m.whole"
+    run 2 "$OUT/$m.stopped" "${args[@]}" --stop-after 4
+    expect_rc 130 "$m --stop-after on 2 processes" "$OUT/$m.stopped"
+    for r in 0 1; do
+      [ -s "$OUT/$m.stopped/checkpoint.4.$r-of-2.bin" ] || fail "no checkpoint piece of process $r: $(ls "$OUT/$m.stopped")"
+    done
+    ok
+    "$MPIRUN" -q -n 2 "$HOOKE" resume "$OUT/$m.stopped" --no-progress > /dev/null 2> "$OUT/$m.resume.err"
+    rc=$?
+    expect_rc 0 "$m resumed on 2 processes" "$OUT/$m.resume"
+    same_run "$OUT/$m.whole" "$OUT/$m.stopped"
+  done
+  # A damaged piece is not used: the run resumes from checkpoint.bin's whole state and says why.
+  run 2 "$OUT/damaged" "${args[@]}" --stop-after 4
+  expect_rc 130 "--stop-after on 2 processes" "$OUT/damaged"
+  printf '\001' | dd of="$OUT/damaged/checkpoint.4.1-of-2.bin" bs=1 seek=300 conv=notrunc 2> /dev/null
+  "$MPIRUN" -q -n 2 "$HOOKE" resume "$OUT/damaged" --no-progress > /dev/null 2> "$OUT/damaged.resume.err"
+  rc=$?
+  expect_rc 0 "resume with a damaged piece" "$OUT/damaged.resume"
+  grep -q "checkpoint.4.1-of-2.bin: checkpoint: corrupt (checksum mismatch); resuming from the whole state" \
+    "$OUT/damaged.resume.err" || fail "damaged piece: $(cat "$OUT/damaged.resume.err")"
+  ok
   ;;
 *)
   fail "unknown case $CASE"
