@@ -41,7 +41,7 @@ struct Fixture {
   hooke::linear_detail::CsrMirror csr;
   std::unique_ptr<hooke::FastMassSpringStepper> fms;
   std::unique_ptr<hooke::CholmodSolver> chol;
-  std::unique_ptr<hooke::SupernodalSolver> sn;
+  std::unique_ptr<hooke::SupernodalSolver> sn, sn_single;
   Fixture() {
     const auto& sys = *scene.system;
     sys.assemble_jacobians(scene.initial.x, scene.initial.v, J);
@@ -61,6 +61,9 @@ struct Fixture {
     chol->factor(fms->global_matrix());
     sn = std::make_unique<hooke::SupernodalSolver>(3);
     sn->bind(chol->supernodal_view());
+    sn_single =
+        std::make_unique<hooke::SupernodalSolver>(3, hooke::SupernodalSolver::Precision::Single);
+    sn_single->bind(chol->supernodal_view());
   }
 };
 Fixture& fixture() {
@@ -197,31 +200,41 @@ void BM_PcgIteration(benchmark::State& state) {
 
 /// One forward and back substitution with 3 right-hand sides (x, y, z) on the fast-mass-spring
 /// factor (n x n, METIS), by SupernodalSolver: its packed factor (inverted diagonal blocks and
-/// off-diagonal blocks, 4-column panels) is read once per sweep; 2 flops per entry and right-hand
-/// side per sweep.
-void BM_TriangularSolves3(benchmark::State& state) {
+/// off-diagonal blocks, 4-column panels) is read once per sweep, 8 bytes an entry (4 for
+/// .../Single, the factor rounded to float); 2 flops per entry and right-hand side per sweep.
+void triangular_solves(benchmark::State& state, hooke::SupernodalSolver& sn, double entry_bytes) {
   const int t = threads(state);
   Fixture& fx = fixture();
   const hooke::Index n = fx.fms->global_matrix().rows();
   const hooke::Vec b = hooke::Vec::Ones(3 * n);
   hooke::Vec x(3 * n);
   for (auto _ : state) {
-    fx.sn->solve(b.data(), x.data());
+    sn.solve(b.data(), x.data());
     benchmark::DoNotOptimize(x.data());
   }
-  const auto shape = fx.sn->shape();
+  const auto shape = sn.shape();
   const double entries = shape.diagonal_entries + shape.off_diagonal_entries;
-  report(state, 2 * 8.0 * entries + 4 * 8.0 * 3 * double(n), 2 * 2 * 3 * entries, t);
+  report(state, 2 * entry_bytes * entries + 4 * 8.0 * 3 * double(n), 2 * 2 * 3 * entries, t);
   state.counters["factor_entries"] = entries;
+  state.counters["packed_entries"] = shape.packed_entries;
+  state.counters["supernodes"] = double(shape.supernodes);
+}
+void BM_TriangularSolves3(benchmark::State& state) { triangular_solves(state, *fixture().sn, 8.0); }
+void BM_TriangularSolves3Single(benchmark::State& state) {
+  triangular_solves(state, *fixture().sn_single, 4.0);
 }
 
 /// One local/global iteration of fast-mass-spring (local step over the springs, then the global
 /// solve above): the springs' data and positions, the right-hand side, and the solve's bytes.
+/// .../single:1 reads the factor rounded to float (factor_precision = "single") and adds the
+/// residual's product with the global matrix (12 bytes per stored entry) and its vectors.
 void BM_LocalGlobalIteration(benchmark::State& state) {
   const int t = threads(state);
+  const bool single = state.range(1) != 0;
   Fixture& fx = fixture();
   hooke::FastMassSpringOptions o;
   o.iterations = 10;
+  if (single) o.factor_precision = hooke::FactorPrecision::Single;
   hooke::FastMassSpringStepper fms(*fx.undamped.system, o);
   hooke::State s0 = fx.undamped.initial, s1;
   fms.step(s0, kH, s1);  // factors
@@ -235,8 +248,12 @@ void BM_LocalGlobalIteration(benchmark::State& state) {
   const auto shape = fx.sn->shape();
   const double entries = shape.diagonal_entries + shape.off_diagonal_entries;
   const double springs = double(fx.undamped.edges.size()), n = double(fms.global_matrix().rows());
-  report(state, 2 * 8.0 * entries + 4 * 8.0 * 3 * n + 24.0 * springs + 6 * 8.0 * 3 * n,
-         2 * 2 * 3 * entries + 40.0 * springs, t);
+  const double nnz = double(fms.global_matrix().nonZeros());
+  const double residual_bytes = single ? 12.0 * nnz + 3 * 8.0 * 3 * n : 0.0;
+  report(state,
+         2 * (single ? 4.0 : 8.0) * entries + 4 * 8.0 * 3 * n + 24.0 * springs + 6 * 8.0 * 3 * n +
+             residual_bytes,
+         2 * 2 * 3 * entries + 40.0 * springs + (single ? 6.0 * nnz : 0.0), t);
 }
 
 const int registered = [] {
@@ -254,10 +271,14 @@ const int registered = [] {
   both(benchmark::RegisterBenchmark("Roofline/MatrixFreeOperator", BM_MatrixFreeOperator));
   both(benchmark::RegisterBenchmark("Roofline/PcgIteration", BM_PcgIteration));
   both(benchmark::RegisterBenchmark("Roofline/TriangularSolves3", BM_TriangularSolves3));
+  both(
+      benchmark::RegisterBenchmark("Roofline/TriangularSolves3Single", BM_TriangularSolves3Single));
   benchmark::RegisterBenchmark("Roofline/LocalGlobalIteration", BM_LocalGlobalIteration)
-      ->Arg(1)
-      ->Arg(2)
-      ->ArgName("threads")
+      ->Args({1, 0})
+      ->Args({2, 0})
+      ->Args({1, 1})
+      ->Args({2, 1})
+      ->ArgNames({"threads", "single"})
       ->Unit(benchmark::kMillisecond)
       ->UseManualTime()
       ->Iterations(3);

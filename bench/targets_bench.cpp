@@ -4,7 +4,8 @@
 //    fast-mass-spring (Liu et al. 2013). Counters: one-off analysis and factorization, nnz(L), and
 //    one local/global iteration split into its local step and its global solve (3 right-hand
 //    sides), averaged over steps of 10 iterations after a warm-up step. The target is 27 ms per
-//    iteration (4x a typical public implementation's 107 ms).
+//    iteration (4x a typical public implementation's 107 ms). .../single:1 reads the factor
+//    rounded to float (integrator.factor_precision = "single", issue 18).
 //  - BackwardEuler256/<linear solver>: target_backward_euler_256.toml, a 256 x 256 cloth (391k
 //    springs), one linearised backward-Euler step (beta = 1) per h = 0.01 s at linear tolerance
 //    1e-6, averaged over a run of steps from rest (the first, with the first factorization,
@@ -61,7 +62,9 @@ class CaseThreads {
 void BM_LocalGlobal411(benchmark::State& state) {
   const CaseThreads threads(state);
   const hooke::bench::BusyCore busy(state.range(1) != 0);
-  const hooke::Scene scene = hooke::load_scene(scene_path("target_local_global_411.toml"));
+  const hooke::Scene scene = hooke::load_scene(
+      scene_path("target_local_global_411.toml"),
+      {std::string("integrator.factor_precision=") + (state.range(2) ? "single" : "double")});
   const auto o = scene.integrator.options.as<hooke::FastMassSpringOptions>("fast-mass-spring");
   const double h = scene.time.dt;
   auto t0 = Clock::now();
@@ -144,10 +147,16 @@ const int registered = [] {
     benchmark::AddCustomContext(v, value ? value : "(unset)");
   }
   benchmark::RegisterBenchmark("Target/LocalGlobal411/Iteration", BM_LocalGlobal411)
-      ->Args({0, 0})
-      ->Args({1, 1})
-      ->Args({2, 1})
-      ->ArgNames({"threads", "busy"})
+      ->Args({0, 0, 0})
+      ->Args({1, 0, 0})
+      ->Args({2, 0, 0})
+      ->Args({1, 0, 1})
+      ->Args({2, 0, 1})
+      ->Args({1, 1, 0})
+      ->Args({2, 1, 0})
+      ->Args({1, 1, 1})
+      ->Args({2, 1, 1})
+      ->ArgNames({"threads", "busy", "single"})
       ->UseManualTime()
       ->Iterations(3)
       ->Unit(benchmark::kMillisecond);

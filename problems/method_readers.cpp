@@ -228,6 +228,7 @@ MethodOptions read_fast_mass_spring(TableReader& r, const std::string&) {
     refuse_ignored(r, "lbfgs_history", acceleration, "only L-BFGS acceleration keeps a history",
                    "set acceleration = 'lbfgs'");
   o.global_solver = r.choice("global_solver", o.global_solver);
+  o.factor_precision = r.choice("factor_precision", o.factor_precision);
   r.check(o.validate());
   return o;
 }

@@ -839,6 +839,14 @@ void add_local_global_keys(std::vector<SceneKey>& t) {
           .build("CHOLMOD")
           .meaning("global step: exact prefactored solve, or one Jacobi sweep (pair it with "
                    "Chebyshev; not with L-BFGS)"));
+  add(K("integrator.factor_precision", T::String)
+          .in({"fast-mass-spring"})
+          .def("'double'")
+          .choices({"double", "single"})
+          .build("CHOLMOD")
+          .meaning("the factor the global step's solves read: as computed, or rounded to float "
+                   "(half the bytes; each global step then corrects the iterate with its residual "
+                   "in double, so the converged step is the same); global_solver = 'cholmod'"));
 }
 
 /// Adds the keys of vertex block descent (vbd).

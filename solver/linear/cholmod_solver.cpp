@@ -232,7 +232,9 @@ LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K
   if (m->L->is_super) {
     auto& sn = m->sn[size_t(K - 1)];
     if (!sn) {
-      sn = std::make_unique<SupernodalSolver>(K);
+      sn = std::make_unique<SupernodalSolver>(K, m->options.single_precision_solve
+                                                     ? SupernodalSolver::Precision::Single
+                                                     : SupernodalSolver::Precision::Double);
       sn->bind(m->view());
     }
     sn->solve(b, x);

@@ -31,6 +31,10 @@ struct CholmodOptions {
   /// factorization took 3.8 s against 0.11 s for a solve, i.e. 35 solves. A machine whose BLAS-3
   /// runs relatively faster than its memory streams wants a larger value.
   double flop_rate_ratio = 6.0;
+  /// The supernodal solves of solve_interleaved read a copy of the factor rounded to single
+  /// precision (SupernodalSolver::Precision::Single): half the bytes per sweep, solutions accurate
+  /// only to about cond(L) x 6e-8 relative. For callers that correct them (a residual in double).
+  bool single_precision_solve = false;
   /// The first field that breaks a rule, if any (OptionError::ok() when valid).
   OptionError validate() const;
 };

@@ -1,14 +1,17 @@
 #include "hooke/linear/supernodal_solve.hpp"
 
 #include <algorithm>
+#include <type_traits>
 
 #include "hooke/config.hpp"
 #include "hooke/core.hpp"
 
-// The AVX2 copy of the kernels needs an x86 target (the ISA, __builtin_cpu_supports("avx2")) and
-// GCC's `#pragma GCC target`, which clang ignores (it would compile a second baseline copy and
-// warn about the unknown pragma). The compiler macros keep any other build, e.g. aarch64, on the
-// portable kernels even where CMake's processor check was wrong (a cross build).
+// The AVX2 copy of the kernels (with FMA: every AVX2 CPU has it, but GCC's target "avx2" alone does
+// not fuse the kernels' multiply-adds, which then cost two instructions each) needs an x86 target
+// (the ISA, __builtin_cpu_supports) and GCC's `#pragma GCC target`, which clang ignores (it would
+// compile a second baseline copy and warn about the unknown pragma). The compiler macros keep any
+// other build, e.g. aarch64, on the portable kernels even where CMake's processor check was wrong
+// (a cross build).
 #if HOOKE_X86_SIMD && (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__) && \
     !defined(__clang__)
 #define HOOKE_SUPERNODAL_AVX2 1
@@ -52,10 +55,12 @@ inline int thread_index() {
 
 /// The factor repacked by bind() (see "Panels" in supernodal_kernels.inc): per supernode, its
 /// inverted diagonal block at value + inv_start[s] and its off-diagonal block at off_start[s].
+/// S: double, or float for a single-precision copy of the factor.
+template <typename S>
 struct Packed {
   const I* inv_start;
   const I* off_start;
-  const double* value;
+  const S* value;
 };
 
 /// One thread's scratch.
@@ -72,20 +77,19 @@ struct Work {
 #if HOOKE_SUPERNODAL_AVX2
 namespace sn_avx2 {
 #pragma GCC push_options
-#pragma GCC target("avx2")
+#pragma GCC target("avx2,fma")
 #include "supernodal_kernels.inc"
 #pragma GCC pop_options
 }  // namespace sn_avx2
 #endif
 
-namespace sn_base {
 // 32-byte vectors passed between the (inlined, file-local) helpers without AVX: on x86 the
 // compilers warn that the ABI differs from AVX code, which matters only across separately
-// compiled files.
-#pragma GCC diagnostic push
+// compiled files. Off for the rest of this file: the kernels are templates, instantiated (and
+// warned about) at its end.
 #pragma GCC diagnostic ignored "-Wpsabi"
+namespace sn_base {
 #include "supernodal_kernels.inc"
-#pragma GCC diagnostic pop
 }  // namespace sn_base
 
 namespace {
@@ -190,11 +194,11 @@ void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<
 }
 }  // namespace
 
-SupernodalSolver::SupernodalSolver(int K) : m_K(K) {
+SupernodalSolver::SupernodalSolver(int K, Precision precision) : m_K(K), m_precision(precision) {
   HOOKE_ASSERT(K >= 1 && K <= 4, "SupernodalSolver: K = " << K << " right-hand sides (1..4)");
 #if HOOKE_SUPERNODAL_AVX2
   __builtin_cpu_init();
-  m_avx2 = __builtin_cpu_supports("avx2");
+  m_avx2 = __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
 #else
   m_avx2 = false;  // only the portable kernels in this build
 #endif
@@ -234,16 +238,22 @@ void SupernodalSolver::bind(const SupernodalFactorView& f) {
   if (m_delta.size() < deltas) m_delta.resize(deltas);
   m_cols_max = cols;
   m_rows_below_max = rows_below;
-  if (m_packed.size() < size_t(packed)) m_packed.resize(size_t(packed));
+  m_packed_entries = packed;
+  if (m_precision == Precision::Double && m_packed.size() < size_t(packed))
+    m_packed.resize(size_t(packed));
+  if (m_precision == Precision::Single && m_packed_single.size() < size_t(packed))
+    m_packed_single.resize(size_t(packed));
   if (m_block.size() < size_t(diagonal)) m_block.resize(size_t(diagonal));
   // Pack chunk q of an rows x cols block A (A(i, j) = get(i, j), zero outside) from row group g0.
-  auto pack = [&round4](double* out, I rows, I cols_, I q, I g0, const auto& get) {
+  // (out: double, or float, rounding each entry to nearest.)
+  auto pack = [&round4](auto* out, I rows, I cols_, I q, I g0, const auto& get) {
+    using S = std::remove_pointer_t<decltype(out)>;
     const I groups = round4(rows) / 4;
     for (I g = g0; g < groups; ++g)
       for (int u = 0; u < 4; ++u)
         for (int r = 0; r < 4; ++r) {
           const I i = 4 * g + r, j = 4 * q + u;
-          *out++ = i < rows && j < cols_ ? get(i, j) : 0.0;
+          *out++ = S(i < rows && j < cols_ ? get(i, j) : 0.0);
         }
   };
   for (I s = 0; s < f.nsuper; ++s) {
@@ -259,16 +269,22 @@ void SupernodalSolver::bind(const SupernodalFactorView& f) {
     dtrtri_("L", "N", &n, A, &n, &info);
     HOOKE_ASSERT(info == 0, "SupernodalSolver: diagonal block of supernode "
                                 << s << " is singular (dtrtri info " << info << ")");
-    double* out = m_packed.data() + m_inv_start[size_t(s)];
-    for (I q = 0; q < c4 / 4; ++q) {
-      pack(out, ncol, ncol, q, q, [&](I i, I j) { return i >= j ? A[j * ncol + i] : 0.0; });
-      out += 16 * (c4 / 4 - q);
-    }
-    out = m_packed.data() + m_off_start[size_t(s)];
-    for (I q = 0; q < c4 / 4; ++q) {
-      pack(out, m, ncol, q, 0, [&](I i, I j) { return L[j * nrow + ncol + i]; });
-      out += 4 * m4;
-    }
+    auto pack_blocks = [&](auto* packed) {
+      auto* out = packed + m_inv_start[size_t(s)];
+      for (I q = 0; q < c4 / 4; ++q) {
+        pack(out, ncol, ncol, q, q, [&](I i, I j) { return i >= j ? A[j * ncol + i] : 0.0; });
+        out += 16 * (c4 / 4 - q);
+      }
+      out = packed + m_off_start[size_t(s)];
+      for (I q = 0; q < c4 / 4; ++q) {
+        pack(out, m, ncol, q, 0, [&](I i, I j) { return L[j * nrow + ncol + i]; });
+        out += 4 * m4;
+      }
+    };
+    if (m_precision == Precision::Single)
+      pack_blocks(m_packed_single.data());
+    else
+      pack_blocks(m_packed.data());
   }
 }
 
@@ -285,6 +301,7 @@ SupernodalSolver::Shape SupernodalSolver::shape() const {
     const double ncol = double(m_f.super[s + 1] - m_f.super[s]);
     return ncol * (ncol + 1) / 2 + double(m_f.pi[s + 1] - m_f.pi[s] - ncol) * ncol;
   };
+  out.packed_entries = double(m_packed_entries);
   const double total = out.diagonal_entries + out.off_diagonal_entries;
   for (const I s : m_top_supernode) out.top_fraction += entries(s) / total;
   out.bins = int(m_bin_start.size()) - 1;
@@ -318,14 +335,19 @@ void SupernodalSolver::solve(const double* b, double* x) {
   if (run_parallel(static_cast<long long>(m_work_total), 100000))
     threads = std::min(omp_get_max_threads(), m_threads);
 #endif
-  const Packed pk{m_inv_start.data(), m_off_start.data(), m_packed.data()};
+  auto run = [&](const auto& pk) {
 #if HOOKE_SUPERNODAL_AVX2
-  if (m_avx2) {
-    sn_avx2::solve_any(m_K, m_f, pk, split, threads, b, x, m_y.data(), work, m_delta.data());
-    return;
-  }
+    if (m_avx2) {
+      sn_avx2::solve_any(m_K, m_f, pk, split, threads, b, x, m_y.data(), work, m_delta.data());
+      return;
+    }
 #endif
-  sn_base::solve_any(m_K, m_f, pk, split, threads, b, x, m_y.data(), work, m_delta.data());
+    sn_base::solve_any(m_K, m_f, pk, split, threads, b, x, m_y.data(), work, m_delta.data());
+  };
+  if (m_precision == Precision::Single)
+    run(Packed<float>{m_inv_start.data(), m_off_start.data(), m_packed_single.data()});
+  else
+    run(Packed<double>{m_inv_start.data(), m_off_start.data(), m_packed.data()});
 }
 
 }  // namespace hooke

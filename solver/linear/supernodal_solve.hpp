@@ -36,8 +36,14 @@ struct SupernodalFactorView {
 /// bit for bit with one thread or two. bind() allocates, solve() does not.
 class SupernodalSolver {
  public:
+  /// The precision of the factor the sweeps read: Double, or Single, a copy of the factor rounded
+  /// to float (the inverted diagonal blocks after their inversion in double), half the bytes per
+  /// sweep. The arithmetic is double either way. A Single solve is A^-1 up to a relative error of
+  /// about cond(L) x 6e-8: for a preconditioner, or an outer iteration that corrects it with
+  /// residuals in double (FastMassSpringOptions::factor_precision).
+  enum class Precision { Double, Single };
   /// K right-hand sides (1..4).
-  explicit SupernodalSolver(int K);
+  explicit SupernodalSolver(int K, Precision precision = Precision::Double);
   /// Solves with factor f from now on: inverts its diagonal blocks (call again after every
   /// refactorization); grows the workspace if f needs more (the only allocation).
   void bind(const SupernodalFactorView& f);
@@ -51,8 +57,9 @@ class SupernodalSolver {
   struct Shape {
     std::int64_t supernodes = 0;
     double diagonal_entries = 0.0, off_diagonal_entries = 0.0;
-    double top_fraction = 0.0;  ///< share of the entries in the serial top of the tree split
-    int bins = 0;               ///< bins of subtrees the threads take in turn
+    double packed_entries = 0.0;  ///< what the sweeps read: the blocks padded to 4 x 4 groups
+    double top_fraction = 0.0;    ///< share of the entries in the serial top of the tree split
+    int bins = 0;                 ///< bins of subtrees the threads take in turn
     std::array<double, kMaxBins> bin_fraction{};  ///< shares of the bins, heaviest first
   };
   Shape shape() const;
@@ -60,6 +67,7 @@ class SupernodalSolver {
  private:
   SupernodalFactorView m_f;
   int m_K;
+  Precision m_precision;
   bool m_avx2 = false;
   std::vector<double> m_y;  // permuted right-hand sides, K n interleaved
   // Per thread (m_threads, at most one per bin): a supernode's own rows twice and its rows below,
@@ -74,7 +82,9 @@ class SupernodalSolver {
   // The factor repacked into 4-column panels: each supernode's inverted diagonal block and its
   // off-diagonal block (see supernodal_kernels.inc), and the dense scratch for one inversion.
   std::vector<std::int64_t> m_inv_start, m_off_start;
+  std::int64_t m_packed_entries = 0;
   std::vector<double> m_packed, m_block;
+  std::vector<float> m_packed_single;  // the same, rounded (Precision::Single; m_packed unused)
 };
 
 }  // namespace hooke

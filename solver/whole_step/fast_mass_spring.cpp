@@ -37,6 +37,10 @@ OptionError FastMassSpringOptions::validate() const {
   } else if (lbfgs_history < 1 || lbfgs_history > 1000) {
     field = "lbfgs_history";
     e << "lbfgs_history = " << lbfgs_history << ": must be in [1, 1000]";
+  } else if (global_solver == GlobalSolver::Jacobi && factor_precision == FactorPrecision::Single) {
+    field = "factor_precision";
+    e << "factor_precision = 'single' rounds the factor of global_solver = 'cholmod'; "
+         "global_solver = 'jacobi' has none";
   } else if (global_solver == GlobalSolver::Jacobi && acceleration == Acceleration::Lbfgs) {
     field = "global_solver";
     e << "global_solver = 'jacobi': acceleration = 'lbfgs' needs the factored global matrix "
@@ -115,6 +119,7 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
     CholmodOptions chol_options;
     chol_options.ordering = hooke::CholmodOrdering::Metis;  // nested dissection: the least fill on
                                                             // cloth grids (measured)
+    chol_options.single_precision_solve = m_opt.factor_precision == FactorPrecision::Single;
     m_chol = std::make_unique<CholmodSolver>(chol_options);
   }
   if (m_chol && nf > 0) {
@@ -125,6 +130,7 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
   const Index dofs = 3 * n;
   for (Vec* v : {&m_y, &m_acc, &m_x, &m_xprev, &m_xhat, &m_spring_grad}) v->setZero(dofs);
   for (Rows3* M : {&m_const, &m_B, &m_X, &m_G, &m_Gnew, &m_D, &m_Xtrial}) M->setZero(nf, 3);
+  if (m_opt.factor_precision == FactorPrecision::Single) m_R.setZero(nf, 3);
   if (m_opt.acceleration == Acceleration::Lbfgs) {
     m_s.assign(size_t(m_opt.lbfgs_history), Rows3::Zero(nf, 3));
     m_t = m_s;
@@ -309,10 +315,9 @@ void FastMassSpringStepper::scatter(const Rows3& X, VecRef x) const {
     x.segment<3>(3 * m_free[r]) = X.row(Index(r)).transpose();
 }
 
-void FastMassSpringStepper::jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X) {
-  // A is symmetric with both triangles stored, so column r lists row r's entries. Rows are
-  // independent: the parallel loop gives the same bits on any thread count.
-  const auto t0 = Clock::now();
+template <typename F>
+void FastMassSpringStepper::for_each_row_product(ConstRef x, F&& f) const {
+  // A is symmetric with both triangles stored, so column r lists row r's entries.
   const long long nf = static_cast<long long>(m_free.size());
   const int* start = m_A.outerIndexPtr();
   const int* index = m_A.innerIndexPtr();
@@ -327,13 +332,39 @@ void FastMassSpringStepper::jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X) {
       s1 += value[k] * xk[1];
       s2 += value[k] * xk[2];
     }
-    const double* xr = px + 3 * free[r];
+    f(r, s0, s1, s2);
+  });
+}
+
+void FastMassSpringStepper::jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X) {
+  const auto t0 = Clock::now();
+  for_each_row_product(x, [&](long long r, double s0, double s1, double s2) {
+    const double* xr = x.data() + 3 * m_free[size_t(r)];
     const double d = m_inv_diag[Index(r)];
     X(Index(r), 0) = xr[0] + d * (B(Index(r), 0) - s0);
     X(Index(r), 1) = xr[1] + d * (B(Index(r), 1) - s1);
     X(Index(r), 2) = xr[2] + d * (B(Index(r), 2) - s2);
   });
   m_global_seconds += seconds_since(t0);
+}
+
+Status FastMassSpringStepper::global_step(const Rows3& B, ConstRef x, Rows3& X,
+                                          std::string& message) {
+  if (m_opt.factor_precision == FactorPrecision::Double) return global_solve(B, X, message);
+  const auto t0 = Clock::now();
+  for_each_row_product(x, [&](long long r, double s0, double s1, double s2) {
+    m_R(Index(r), 0) = B(Index(r), 0) - s0;
+    m_R(Index(r), 1) = B(Index(r), 1) - s1;
+    m_R(Index(r), 2) = B(Index(r), 2) - s2;
+  });
+  m_global_seconds += seconds_since(t0);
+  const Status st = global_solve(m_R, X, message);  // the correction A~^-1 (b - A x)
+  if (st != Status::Converged) return st;
+  const auto t1 = Clock::now();
+  for (size_t r = 0; r < m_free.size(); ++r)
+    X.row(Index(r)) += x.segment<3>(3 * m_free[r]).transpose();
+  m_global_seconds += seconds_since(t1);
+  return st;
 }
 
 Status FastMassSpringStepper::global_solve(const Rows3& B, Rows3& X, std::string& message) {
@@ -425,7 +456,7 @@ bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
     // Global step: xhat = A^{-1} b(d(x_k)), or one Jacobi sweep towards it from x_k.
     if (!m_chol) {
       jacobi_sweep(m_B, m_x, m_X);
-    } else if (global_solve(m_B, m_X, out.message) != Status::Converged) {
+    } else if (global_step(m_B, m_x, m_X, out.message) != Status::Converged) {
       out.status = Status::Fatal;
       return false;
     }

@@ -35,6 +35,13 @@ struct EnumNames<GlobalSolver> {
   static constexpr std::array<const char*, 2> names = {"cholmod", "jacobi"};
 };
 
+/// Precision of the factor the global step's solves read (FastMassSpringOptions::factor_precision).
+enum class FactorPrecision { Double, Single };
+template <>
+struct EnumNames<FactorPrecision> {
+  static constexpr std::array<const char*, 2> names = {"double", "single"};
+};
+
 /// Options of FastMassSpringStepper fixed for its lifetime.
 struct FastMassSpringOptions {
   /// Iterations per step: exactly this many when tolerance = 0 (Liu et al. 2013 use 10), at most
@@ -66,6 +73,13 @@ struct FastMassSpringOptions {
   /// and a tolerance or a large iteration count. Both converge to the same exact backward-Euler
   /// step. "jacobi" cannot take acceleration = "lbfgs" (its initial Hessian is A^-1).
   GlobalSolver global_solver = GlobalSolver::Cholmod;
+  /// global_solver = "cholmod": "double" solves with the factor as CHOLMOD computed it; "single"
+  /// with a copy rounded to float (half the bytes the triangular solves stream, which bound the
+  /// iteration's speed), as a correction from the current iterate with the residual in double:
+  /// x <- x + A~^-1 (b - A x). The fixed point, the exact backward-Euler step, is the same; each
+  /// iteration differs from the double one by about cond(A) x 6e-8 of its update. With L-BFGS the
+  /// rounded factor is the initial inverse Hessian.
+  FactorPrecision factor_precision = FactorPrecision::Double;
   /// Called after every iteration with the iteration number (1-based) and the current positions
   /// (3n vector, pinned particles included). For convergence studies; empty = none. Its time is
   /// not counted in report().
@@ -164,6 +178,13 @@ class FastMassSpringStepper final : public Stepper {
   void gather(ConstRef x, Rows3& X) const;
   void scatter(const Rows3& X, VecRef x) const;
   Status global_solve(const Rows3& B, Rows3& X, std::string& message);
+  /// The local/global iteration's global step from iterate x (3n): X = A^-1 B, or with a
+  /// single-precision factor X = x + A~^-1 (B - A x) (FastMassSpringOptions::factor_precision).
+  Status global_step(const Rows3& B, ConstRef x, Rows3& X, std::string& message);
+  /// f(r, (A x)_r) for every free row r, in parallel (rows independent: the same bits on any
+  /// thread count); x is the 3n iterate, pinned particles included.
+  template <typename F>
+  void for_each_row_product(ConstRef x, F&& f) const;
   /// X = x + D^-1 (B - A x) on the free rows, x the current 3n iterate (global_solver = "jacobi").
   void jacobi_sweep(const Rows3& B, ConstRef x, Rows3& X);
   /// The iterations of one step from m_x (plain or Chebyshev-accelerated local/global, or
@@ -190,8 +211,9 @@ class FastMassSpringStepper final : public Stepper {
     size_t set, spring;
   };
   std::vector<PinLink> m_pin_links;
-  std::unique_ptr<CholmodSolver> m_chol;      // null with global_solver = "jacobi"
-  Vec m_inv_diag;                             // 1 / A_rr (global_solver = "jacobi")
+  std::unique_ptr<CholmodSolver> m_chol;  // null with global_solver = "jacobi"
+  Vec m_inv_diag;                         // 1 / A_rr (global_solver = "jacobi")
+  Rows3 m_R;  // b - A x of the global step (factor_precision = "single")
   static constexpr double kSameStep = 1e-12;  // relative: the same h for the factor (prepare)
   double m_factored_h = 0.0;
   bool m_factor_ready = false;  // the factor of m_factored_h is computed (not just restored)

@@ -753,6 +753,61 @@ TEST(SupernodalSolve, MatchesCholmodForOneToFourRightHandSides) {
   EXPECT_EQ(checks, 10);
 }
 
+TEST(SupernodalSolve, SinglePrecisionFactorIsAPreconditionerThatRefinementMakesExact) {
+  // A factor rounded to float solves to about cond x 6e-8 (it must differ from the double solve:
+  // the floats are really read), and the correction x <- x + A~^-1 (b - A x) with the residual in
+  // double converges to the double solve's answer (what fast-mass-spring's global step does).
+  const SparseMatrix& A = cloth_problem().A();
+  hooke::CholmodSolver chol;
+  ASSERT_EQ(setup(chol, A).status, Status::Converged);
+  hooke::SupernodalSolver sd(3), ss(3, hooke::SupernodalSolver::Precision::Single);
+  sd.bind(chol.supernodal_view());
+  ss.bind(chol.supernodal_view());
+  const Index n = A.rows();
+  const Vec b = random_vector(3 * n, 97);
+  Vec xd(b.size()), xs(b.size());
+  sd.solve(b.data(), xd.data());
+  ss.solve(b.data(), xs.data());
+  const double scale = xd.cwiseAbs().maxCoeff();
+  const double rounded = (xs - xd).cwiseAbs().maxCoeff() / scale;
+  EXPECT_GT(rounded, 1e-12) << "the single-precision solve reads the rounded factor";
+  EXPECT_LT(rounded, 1e-4);
+  // The interleaved right-hand sides as an n x 3 row-major block, for A's products.
+  auto product = [&](const Vec& x) {
+    Vec y(x.size());
+    for (int c = 0; c < 3; ++c) {
+      Vec xc(n);
+      for (Index r = 0; r < n; ++r) xc[r] = x[3 * r + c];
+      const Vec yc = A * xc;
+      for (Index r = 0; r < n; ++r) y[3 * r + c] = yc[r];
+    }
+    return y;
+  };
+  std::vector<double> history = {rounded};
+  Vec correction(b.size());
+  for (int k = 0; k < 6; ++k) {
+    const Vec residual = b - product(xs);
+    ss.solve(residual.data(), correction.data());
+    xs += correction;
+    history.push_back((xs - xd).cwiseAbs().maxCoeff() / scale);
+  }
+  std::printf(
+      "[ single   ] relative distance from the double solve: %.1e, refined %.1e %.1e %.1e\n",
+      history[0], history[1], history[2], history[6]);
+  EXPECT_LT(history[6], 1e-12);
+  for (size_t k = 1; k < 4; ++k) EXPECT_LT(history[k], 1e-2 * history[k - 1] + 1e-14);
+#ifdef _OPENMP
+  Vec x1(b.size()), x2(b.size());
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  ss.solve(b.data(), x1.data());
+  omp_set_num_threads(2);
+  ss.solve(b.data(), x2.data());
+  omp_set_num_threads(threads);
+  EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0) << "the same bits on one or two threads";
+#endif
+}
+
 TEST(SupernodalSolve, FollowsARefactorizationWithNewValues) {
   SparseMatrix A = cloth_problem().A();
   hooke::CholmodSolver chol;

@@ -108,10 +108,12 @@ struct Variant {
   const char* acceleration;
   int iterations;  // enough for 1e-8 on this scene (measured: see the test's output)
   const char* global_solver = "cholmod";
+  const char* factor_precision = "double";
 };
 
 void PrintTo(const Variant& v, std::ostream* os) {
-  *os << v.acceleration << " / " << v.global_solver << " x " << v.iterations;
+  *os << v.acceleration << " / " << v.global_solver << " (" << v.factor_precision << ") x "
+      << v.iterations;
 }
 
 class FastMassSpringConvergence : public ::testing::TestWithParam<Variant> {};
@@ -128,13 +130,16 @@ TEST_P(FastMassSpringConvergence, ConvergesToTheExactBackwardEulerStep) {
   ASSERT_EQ(newton->step(s0, h, exact).status, Status::Converged);
   FastMassSpringOptions options = with(variant.acceleration, variant.iterations);
   options.global_solver = hooke::from_string<hooke::GlobalSolver>(variant.global_solver).value();
+  options.factor_precision =
+      hooke::from_string<hooke::FactorPrecision>(variant.factor_precision).value();
   FastMassSpringStepper fms(*scene.system, options);
   const StepSummary r = fms.step(s0, h, s1);
   ASSERT_EQ(r.status, Status::Converged) << r.message;
   EXPECT_EQ(r.iterations, variant.iterations);
   const double ex = relative(s1.x, exact.x, exact.x - s0.x), ev = relative(s1.v, exact.v, exact.v);
-  std::printf("[ fms      ] %-9s %-7s %5d iterations: x %.2e, v %.2e relative to Newton\n",
-              variant.acceleration, variant.global_solver, variant.iterations, ex, ev);
+  std::printf("[ fms      ] %-9s %-7s %-6s %5d iterations: x %.2e, v %.2e relative to Newton\n",
+              variant.acceleration, variant.global_solver, variant.factor_precision,
+              variant.iterations, ex, ev);
   EXPECT_LT(ex, 1e-8);
   EXPECT_LT(ev, 1e-8);
   EXPECT_DOUBLE_EQ(s1.t, s0.t + h);
@@ -147,15 +152,47 @@ TEST_P(FastMassSpringConvergence, ConvergesToTheExactBackwardEulerStep) {
 #endif
 }
 
-INSTANTIATE_TEST_SUITE_P(Accelerations, FastMassSpringConvergence,
-                         ::testing::Values(Variant{"none", 600}, Variant{"chebyshev", 250},
-                                           Variant{"lbfgs", 60}, Variant{"none", 300, "jacobi"},
-                                           Variant{"chebyshev", 100, "jacobi"}),
-                         [](const auto& info) {
-                           return std::string(info.param.acceleration) +
-                                  (std::string(info.param.global_solver) == "jacobi" ? "Jacobi"
-                                                                                     : "");
-                         });
+INSTANTIATE_TEST_SUITE_P(
+    Accelerations, FastMassSpringConvergence,
+    ::testing::Values(Variant{"none", 600}, Variant{"chebyshev", 250}, Variant{"lbfgs", 60},
+                      Variant{"none", 300, "jacobi"}, Variant{"chebyshev", 100, "jacobi"},
+                      Variant{"none", 600, "cholmod", "single"},
+                      Variant{"chebyshev", 250, "cholmod", "single"},
+                      Variant{"lbfgs", 60, "cholmod", "single"}),
+    [](const auto& info) {
+      return std::string(info.param.acceleration) +
+             (std::string(info.param.global_solver) == "jacobi" ? "Jacobi" : "") +
+             (std::string(info.param.factor_precision) == "single" ? "Single" : "");
+    });
+
+TEST(FastMassSpring, SinglePrecisionFactorLeavesTheConvergedStepUnchanged) {
+  // The global step with a factor rounded to float corrects the iterate with its residual in
+  // double, so the iteration has the same fixed point: converged to tolerance 1e-12 from a moving
+  // state, every variant's step agrees with its double-precision twin to 1e-10 relative to the
+  // positions (issue 18), and to 1e-8 relative to the step's displacement.
+  const Scene scene = hanging_cloth(6, 0.05, 1.0, 0.1);
+  const double h = 1e-2;
+  const State s0 = moving_state(scene, h, 5);
+  for (const char* a : {"none", "chebyshev", "lbfgs"}) {
+    State d1, f1;
+    FastMassSpringOptions o = with(a, 100000, 1e-12);
+    FastMassSpringStepper dbl(*scene.system, o);
+    o.factor_precision = FactorPrecision::Single;
+    FastMassSpringStepper sgl(*scene.system, o);
+    const StepSummary rd = dbl.step(s0, h, d1), rs = sgl.step(s0, h, f1);
+    ASSERT_EQ(rd.status, Status::Converged) << a << ": " << rd.message;
+    ASSERT_EQ(rs.status, Status::Converged) << a << ": " << rs.message;
+    const double of_x = relative(f1.x, d1.x, d1.x), of_step = relative(f1.x, d1.x, d1.x - s0.x);
+    std::printf(
+        "[ fms f32  ] %-9s iterations %d (double %d); x differs by %.2e of x, %.2e of the "
+        "step\n",
+        a, rs.iterations, rd.iterations, of_x, of_step);
+    EXPECT_GT(of_x, 0.0) << a << ": the rounded factor changes the iterates";
+    EXPECT_LT(of_x, 1e-10) << a;
+    EXPECT_LT(of_step, 1e-8) << a;
+    EXPECT_LE(rs.iterations, rd.iterations + rd.iterations / 10 + 2) << a;
+  }
+}
 
 TEST(FastMassSpring, PlainIterationsLowerTheObjectiveEveryTime) {
   // Local and global steps each minimise g exactly over their own variables (the directions, then
