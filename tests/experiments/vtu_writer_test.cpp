@@ -22,6 +22,7 @@
 #include <vector>
 
 #include "problems/scene.hpp"
+#include "tests/support/random.hpp"
 
 namespace hooke {
 namespace {
@@ -99,13 +100,10 @@ TEST(VtuWriter, PiecesHoldEveryParticleSpringAndTriangleOnce) {
       "vtu_test.toml");
   const MassSpringSystem& sys = *scene.system;
   const Index n = sys.num_particles();
-  State s = scene.initial;
+  State s = scene.initial;  // perturbed and moving
   std::mt19937 rng(7);
-  std::uniform_real_distribution<double> u(-0.05, 0.05);
-  for (Index k = 0; k < s.x.size(); ++k) {
-    s.x[k] += u(rng);
-    s.v[k] = 10 * u(rng);
-  }
+  s.x += test::random_vec(s.x.size(), -0.05, 0.05, rng);
+  s.v = test::random_vec(s.v.size(), -0.5, 0.5, rng);
   const FrameMesh mesh{scene.edges, scene.edge_rest, scene.triangles, sys.pinned(), sys.masses()};
   std::multiset<std::pair<int, int>> springs_expected;
   for (const auto& e : scene.edges) springs_expected.insert(std::minmax(e[0], e[1]));

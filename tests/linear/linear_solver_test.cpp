@@ -23,6 +23,7 @@
 #include <random>
 #include <string>
 #include <unsupported/Eigen/KroneckerProduct>
+#include <utility>
 #include <vector>
 
 #include "hooke/config.hpp"
@@ -753,6 +754,20 @@ TEST(SupernodalSolve, MatchesCholmodForOneToFourRightHandSides) {
   EXPECT_EQ(checks, 10);
 }
 
+#ifdef _OPENMP
+/// sn's solution of b on one thread and on two (the caller compares their bits).
+std::pair<Vec, Vec> solve_on_one_and_two_threads(hooke::SupernodalSolver& sn, const Vec& b) {
+  Vec x1(b.size()), x2(b.size());
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(1);
+  sn.solve(b.data(), x1.data());
+  omp_set_num_threads(2);
+  sn.solve(b.data(), x2.data());
+  omp_set_num_threads(threads);
+  return {x1, x2};
+}
+#endif
+
 TEST(SupernodalSolve, SinglePrecisionFactorIsAPreconditionerThatRefinementMakesExact) {
   // A factor rounded to float solves to about cond x 6e-8 (it must differ from the double solve:
   // the floats are really read), and the correction x <- x + A~^-1 (b - A x) with the residual in
@@ -797,13 +812,7 @@ TEST(SupernodalSolve, SinglePrecisionFactorIsAPreconditionerThatRefinementMakesE
   EXPECT_LT(history[6], 1e-12);
   for (size_t k = 1; k < 4; ++k) EXPECT_LT(history[k], 1e-2 * history[k - 1] + 1e-14);
 #ifdef _OPENMP
-  Vec x1(b.size()), x2(b.size());
-  const int threads = omp_get_max_threads();
-  omp_set_num_threads(1);
-  ss.solve(b.data(), x1.data());
-  omp_set_num_threads(2);
-  ss.solve(b.data(), x2.data());
-  omp_set_num_threads(threads);
+  const auto [x1, x2] = solve_on_one_and_two_threads(ss, b);
   EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0) << "the same bits on one or two threads";
 #endif
 }
@@ -850,13 +859,7 @@ TEST(SupernodalSolve, SameBitsWithOneOrTwoThreads) {
   std::printf("[ shape    ] %d bins, top %.3f of the factor's entries, largest bin %.3f\n",
               shape.bins, shape.top_fraction, shape.bin_fraction[0]);
   const Vec b = random_vector(3 * A.rows(), 95);
-  Vec x1(b.size()), x2(b.size());
-  const int threads = omp_get_max_threads();
-  omp_set_num_threads(1);
-  sn.solve(b.data(), x1.data());
-  omp_set_num_threads(2);
-  sn.solve(b.data(), x2.data());
-  omp_set_num_threads(threads);
+  const auto [x1, x2] = solve_on_one_and_two_threads(sn, b);
   EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_GT(x1.norm(), 0.0);
 #endif
