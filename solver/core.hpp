@@ -84,6 +84,23 @@ inline double& memory_budget_slot() {
 inline double memory_budget() { return memory_budget_slot(); }
 inline void set_memory_budget(double bytes) { memory_budget_slot() = bytes; }
 
+/// The threads a parallel region started now would have (1 without OpenMP).
+inline int max_threads() {
+#ifdef _OPENMP
+  return omp_get_max_threads();
+#else
+  return 1;
+#endif
+}
+/// The calling thread's number in its OpenMP team (0 outside a parallel region).
+inline int thread_number() {
+#ifdef _OPENMP
+  return omp_get_thread_num();
+#else
+  return 0;
+#endif
+}
+
 /// True if a loop over `work` items should run in an OpenMP parallel region: large enough
 /// (work >= threshold) to pay for the threads, and more than one thread available. Loops branch on
 /// this instead of using an OpenMP if() clause, because a region that runs on one thread still

@@ -8,6 +8,8 @@
 
 namespace hooke {
 
+struct SpringSet;
+
 /// Options of a Jacobian assembly that change what is written, not the pattern.
 struct JacobianOptions {
   /// Drop the indefinite transverse term of compressed springs (Choi and Ko 2002 style clamp of
@@ -67,6 +69,24 @@ class Force {
   /// force of the system has_velocity_jacobian()).
   virtual void add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options,
                              SparseMatrix& K, SparseMatrix& D) const = 0;
+  /// The spring groups (a bound SpringSet) by which this force's Jacobians can also be assembled
+  /// a slice of springs at a time (the two calls below), or nullptr (the default: add_jacobians
+  /// only). MassSpringSystem::assemble_jacobians runs the forces that share their groups slice by
+  /// slice together, so that all of them write one particle range's blocks while it is in cache.
+  virtual const SpringSet* jacobian_groups() const { return nullptr; }
+  /// add_jacobians restricted to the springs [begin, end) of jacobian_groups() (a slice of one
+  /// group; they write only their endpoints' blocks). Called only when jacobian_groups() is not
+  /// nullptr.
+  virtual void add_jacobians_of_springs(ConstRef /*x*/, ConstRef /*v*/,
+                                        const JacobianOptions& /*options*/, size_t /*begin*/,
+                                        size_t /*end*/, SparseMatrix& /*K*/,
+                                        SparseMatrix& /*D*/) const {}
+  /// The same into contiguous blocks (9 values each, column-major: block k of the pattern's block
+  /// order at K + 9 (k & mask), and at D likewise; D is nullptr when the system stores no D).
+  virtual void add_jacobian_blocks_of_springs(ConstRef /*x*/, ConstRef /*v*/,
+                                              const JacobianOptions& /*options*/, size_t /*begin*/,
+                                              size_t /*end*/, Index /*mask*/, double* /*K*/,
+                                              double* /*D*/) const {}
   /// Matrix-free: y += cv (df/dv) p + cx (df/dx) p at (x, v) with the same options, without
   /// forming the matrices (3n vectors). Returns false if this force does not provide it (the
   /// default); then callers must assemble the matrices instead.

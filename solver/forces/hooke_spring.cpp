@@ -4,6 +4,8 @@
 #include <cmath>
 #include <limits>
 
+#include "hooke/forces/spring_blocks.hpp"
+
 namespace hooke {
 
 namespace {
@@ -57,14 +59,33 @@ double HookeSpring::potential_energy(ConstRef x) const {
   return E;
 }
 
+namespace {
+/// Spring n's df/dx blocks into K.
+inline void add_spring_dfdx(const SpringSet& s, size_t n, ConstRef x, bool clamp, SparseMatrix& K) {
+  s.add_spring_block(K, n,
+                     hooke_spring_kernel::dfdx(spring_vector(x, s.i[n], s.j[n]), s.coeff[n],
+                                               s.rest_length[n], clamp));
+}
+}  // namespace
+
 void HookeSpring::add_jacobians(ConstRef x, ConstRef /*v*/, const JacobianOptions& options,
                                 SparseMatrix& K, SparseMatrix& /*D*/) const {
-  const SpringSet& s = m_springs;
-  s.for_each([&](size_t n) {
-    const Mat3 B = hooke_spring_kernel::dfdx(spring_vector(x, s.i[n], s.j[n]), s.coeff[n],
-                                             s.rest_length[n], options.clamp_compressed);
-    s.add_spring_block(K, n, B);
-  });
+  m_springs.for_each(
+      [&](size_t n) { add_spring_dfdx(m_springs, n, x, options.clamp_compressed, K); });
+}
+
+void HookeSpring::add_jacobians_of_springs(ConstRef x, ConstRef /*v*/,
+                                           const JacobianOptions& options, size_t begin, size_t end,
+                                           SparseMatrix& K, SparseMatrix& /*D*/) const {
+  for (size_t n = begin; n < end; ++n)
+    add_spring_dfdx(m_springs, n, x, options.clamp_compressed, K);
+}
+
+void HookeSpring::add_jacobian_blocks_of_springs(ConstRef x, ConstRef /*v*/,
+                                                 const JacobianOptions& options, size_t begin,
+                                                 size_t end, Index mask, double* K,
+                                                 double* /*D*/) const {
+  spring_blocks::hooke_spring(m_springs, x, options.clamp_compressed, begin, end, mask, K);
 }
 
 bool HookeSpring::add_jacobian_product(ConstRef x, ConstRef /*v*/, const JacobianOptions& options,

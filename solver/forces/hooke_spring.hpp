@@ -1,5 +1,6 @@
 #pragma once
 #include <algorithm>
+#include <cmath>
 
 #include "hooke/forces/force.hpp"
 #include "hooke/forces/spring_set.hpp"
@@ -48,14 +49,36 @@ inline Mat3 discrete_gradient_dfdx(const Vec3& d0, const Vec3& d1, double k, dou
   if (q2 == 0.0) return -k * t * Mat3::Identity();
   return -k * (t * Mat3::Identity() + ((a - t) / q2) * (q * q.transpose()));
 }
-inline Mat3 dfdx(const Vec3& d, double k, double L, bool clamp_compressed) {
-  const double l = d.norm();
-  if (l == 0.0) return -k * Mat3::Identity();
-  const Vec3 u = d / l;
-  const Mat3 uu = u * u.transpose();
-  double t = 1.0 - L / l;
+/// dfdx's block as B = s d d^T - kt I: s = -k (1 - t) / l^2 and kt = k t, with t = 1 - L / l
+/// (clamped); s = 0 and kt = k at l = 0, where B = -k I. (-k [u u^T + t (I - u u^T)] with
+/// u = d / l.)
+inline void dfdx_scalars(const Vec3& d, double k, double L, bool clamp_compressed, double& s,
+                         double& kt) {
+  const double l2 = d.squaredNorm();
+  if (l2 == 0.0) {
+    s = 0.0;
+    kt = k;
+    return;
+  }
+  const double inv_l = 1.0 / std::sqrt(l2);
+  double t = 1.0 - L * inv_l;
   if (clamp_compressed && t < 0.0) t = 0.0;
-  return -k * (uu + t * (Mat3::Identity() - uu));
+  s = -k * (1.0 - t) * inv_l * inv_l;
+  kt = k * t;
+}
+/// B from dfdx_scalars. d_r d_c is one product for (r, c) and (c, r), so B is exactly symmetric.
+/// Entry by entry: an Eigen expression here is evaluated in packets through the stack, which
+/// stalls on store forwarding.
+inline Mat3 dfdx_block(const Vec3& d, double s, double kt) {
+  Mat3 B;
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) B(r, c) = s * (d[r] * d[c]) - (r == c ? kt : 0.0);
+  return B;
+}
+inline Mat3 dfdx(const Vec3& d, double k, double L, bool clamp_compressed) {
+  double s, kt;
+  dfdx_scalars(d, k, L, clamp_compressed, s, kt);
+  return dfdx_block(d, s, kt);
 }
 }  // namespace hooke_spring_kernel
 
@@ -86,6 +109,13 @@ class HookeSpring final : public Force {
   bool has_velocity_jacobian() const override { return false; }
   void add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options, SparseMatrix& K,
                      SparseMatrix& D) const override;
+  const SpringSet* jacobian_groups() const override { return &m_springs; }
+  void add_jacobians_of_springs(ConstRef x, ConstRef v, const JacobianOptions& options,
+                                size_t begin, size_t end, SparseMatrix& K,
+                                SparseMatrix& D) const override;
+  void add_jacobian_blocks_of_springs(ConstRef x, ConstRef v, const JacobianOptions& options,
+                                      size_t begin, size_t end, Index mask, double* K,
+                                      double* D) const override;
   bool add_jacobian_product(ConstRef x, ConstRef v, const JacobianOptions& options, ConstRef p,
                             double cv, double cx, VecRef y) const override;
   double max_strain(ConstRef x) const override;

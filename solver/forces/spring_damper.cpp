@@ -1,5 +1,7 @@
 #include "hooke/forces/spring_damper.hpp"
 
+#include "hooke/forces/spring_blocks.hpp"
+
 namespace hooke {
 
 void SpringDamper::add_forces(ConstRef x, ConstRef v, VecRef f) const {
@@ -14,17 +16,40 @@ void SpringDamper::add_forces(ConstRef x, ConstRef v, VecRef f) const {
   });
 }
 
+namespace {
+/// Damper n's df/dv blocks into D and, with the position terms, its df/dx blocks into K.
+inline void add_damper_jacobians(const SpringSet& s, size_t n, ConstRef x, ConstRef v,
+                                 bool position_terms, SparseMatrix& K, SparseMatrix& D) {
+  const int a = s.i[n], b = s.j[n];
+  const Vec3 d = x.segment<3>(3 * a) - x.segment<3>(3 * b);
+  s.add_spring_block(D, n, spring_damper_kernel::dfdv(d, s.coeff[n]));
+  if (position_terms) {
+    const Vec3 w = v.segment<3>(3 * a) - v.segment<3>(3 * b);
+    s.add_spring_block(K, n, spring_damper_kernel::dfdx(d, w, s.coeff[n]));
+  }
+}
+}  // namespace
+
 void SpringDamper::add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options,
                                  SparseMatrix& K, SparseMatrix& D) const {
-  const SpringSet& s = m_springs;
-  s.for_each([&](size_t n) {
-    const int a = s.i[n], b = s.j[n];
-    const Vec3 d = x.segment<3>(3 * a) - x.segment<3>(3 * b);
-    const Vec3 w = v.segment<3>(3 * a) - v.segment<3>(3 * b);
-    s.add_spring_block(D, n, spring_damper_kernel::dfdv(d, s.coeff[n]));
-    if (options.damping_position_terms)
-      s.add_spring_block(K, n, spring_damper_kernel::dfdx(d, w, s.coeff[n]));
+  m_springs.for_each([&](size_t n) {
+    add_damper_jacobians(m_springs, n, x, v, options.damping_position_terms, K, D);
   });
+}
+
+void SpringDamper::add_jacobians_of_springs(ConstRef x, ConstRef v, const JacobianOptions& options,
+                                            size_t begin, size_t end, SparseMatrix& K,
+                                            SparseMatrix& D) const {
+  for (size_t n = begin; n < end; ++n)
+    add_damper_jacobians(m_springs, n, x, v, options.damping_position_terms, K, D);
+}
+
+void SpringDamper::add_jacobian_blocks_of_springs(ConstRef x, ConstRef v,
+                                                  const JacobianOptions& options, size_t begin,
+                                                  size_t end, Index mask, double* K,
+                                                  double* D) const {
+  spring_blocks::spring_damper(m_springs, x, v, options.damping_position_terms, begin, end, mask, K,
+                               D);
 }
 
 bool SpringDamper::add_jacobian_product(ConstRef x, ConstRef v, const JacobianOptions& options,

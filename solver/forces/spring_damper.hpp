@@ -19,17 +19,42 @@ inline Vec3 force(const Vec3& d, const Vec3& w, double c) {
   if (l2 == 0.0) return Vec3::Zero();
   return (-c * d.dot(w) / l2) * d;
 }
-inline Mat3 dfdv(const Vec3& d, double c) {
+/// The scalars of both blocks: a = -c / l^2, dw = d . w and e = 2 (d . w) / l^2; all 0 at l = 0,
+/// where both blocks vanish.
+struct BlockScalars {
+  double a = 0.0, dw = 0.0, e = 0.0;
+};
+inline BlockScalars block_scalars(const Vec3& d, const Vec3& w, double c) {
   const double l2 = d.squaredNorm();
-  if (l2 == 0.0) return Mat3::Zero();
-  return (-c / l2) * (d * d.transpose());
+  if (l2 == 0.0) return {};
+  const double q = 1.0 / l2, dw = d.dot(w);
+  return {-c * q, dw, 2.0 * dw * q};
 }
+/// a of block_scalars alone (what dfdv needs).
+inline double dfdv_scale(const Vec3& d, double c) {
+  const double l2 = d.squaredNorm();
+  return l2 == 0.0 ? 0.0 : -c * (1.0 / l2);
+}
+// The blocks entry by entry: an Eigen expression here is evaluated in packets through the stack,
+// which stalls on store forwarding.
+/// dfdv = a d d^T (exactly symmetric: d_r d_c is one product for (r, c) and (c, r)).
+inline Mat3 dfdv_block(const Vec3& d, double a) {
+  Mat3 B;
+  for (int col = 0; col < 3; ++col)
+    for (int r = 0; r < 3; ++r) B(r, col) = a * (d[r] * d[col]);
+  return B;
+}
+/// dfdx = -(c / l) [u (P w)^T + (u . w) P] = a [d w^T - e d d^T + (d . w) I]: no square root.
+inline Mat3 dfdx_block(const Vec3& d, const Vec3& w, const BlockScalars& s) {
+  Mat3 B;
+  for (int col = 0; col < 3; ++col)
+    for (int r = 0; r < 3; ++r)
+      B(r, col) = s.a * (d[r] * w[col] - s.e * (d[r] * d[col]) + (r == col ? s.dw : 0.0));
+  return B;
+}
+inline Mat3 dfdv(const Vec3& d, double c) { return dfdv_block(d, dfdv_scale(d, c)); }
 inline Mat3 dfdx(const Vec3& d, const Vec3& w, double c) {
-  const double l = d.norm();
-  if (l == 0.0) return Mat3::Zero();
-  const Vec3 u = (1.0 / l) * d;
-  const Mat3 P = Mat3::Identity() - u * u.transpose();
-  return (-c / l) * (u * (P * w).transpose() + u.dot(w) * P);
+  return dfdx_block(d, w, block_scalars(d, w, c));
 }
 /// dfdx(d, w, c) p without forming the block: -(c / l) [u (P w . p) + (u . w) P p].
 inline Vec3 dfdx_times(const Vec3& d, const Vec3& w, double c, const Vec3& p) {
@@ -59,6 +84,13 @@ class SpringDamper final : public Force {
   void bind(const BlockPattern& p) override { m_springs.bind(p); }
   void add_jacobians(ConstRef x, ConstRef v, const JacobianOptions& options, SparseMatrix& K,
                      SparseMatrix& D) const override;
+  const SpringSet* jacobian_groups() const override { return &m_springs; }
+  void add_jacobians_of_springs(ConstRef x, ConstRef v, const JacobianOptions& options,
+                                size_t begin, size_t end, SparseMatrix& K,
+                                SparseMatrix& D) const override;
+  void add_jacobian_blocks_of_springs(ConstRef x, ConstRef v, const JacobianOptions& options,
+                                      size_t begin, size_t end, Index mask, double* K,
+                                      double* D) const override;
   bool add_jacobian_product(ConstRef x, ConstRef v, const JacobianOptions& options, ConstRef p,
                             double cv, double cx, VecRef y) const override;
 

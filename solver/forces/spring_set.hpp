@@ -29,12 +29,18 @@ struct SpringSet {
   std::vector<double> coeff;                    ///< stiffness (N/m) or damping (N s/m), per spring
   std::vector<double> rest_length;              ///< rest length L (m), per spring
   std::vector<std::array<BlockSlot, 4>> slots;  ///< filled by bind()
+  /// The same four blocks' indices in the pattern's block order (BlockPattern::block_index), for
+  /// assembly into contiguous blocks (spring_blocks.hpp); filled by bind().
+  std::vector<std::array<int, 4>> blocks;
   std::vector<size_t> group_start;  ///< group g holds springs [group_start[g], group_start[g+1])
   std::array<size_t, 5> phase_start{};  ///< phase p runs groups [phase_start[p], phase_start[p+1]):
                                         ///< interior, even boundary, odd boundary, remainder
   /// bind() keeps the springs in the order they were added (one group, run serially) instead of
   /// grouping them: set by localize(), whose order is the whole set's.
   bool keep_order = false;
+  /// Particles per range: range r holds particles [r range_width, (r + 1) range_width), and
+  /// interior group r (r < phase_start[1]) the springs with both ends in it. Set by bind().
+  long long range_width = 0;
 
   size_t size() const { return i.size(); }
   void add(int a, int b, double c, double L) {
@@ -52,8 +58,12 @@ struct SpringSet {
     for (auto* v : {&i, &j}) v->shrink_to_fit();
     for (auto* v : {&coeff, &rest_length}) v->shrink_to_fit();
     slots.resize(size());
-    for (size_t s = 0; s < size(); ++s)
+    blocks.resize(size());
+    for (size_t s = 0; s < size(); ++s) {
       slots[s] = {p.slot(i[s], i[s]), p.slot(j[s], j[s]), p.slot(i[s], j[s]), p.slot(j[s], i[s])};
+      blocks[s] = {p.block_index(i[s], i[s]), p.block_index(j[s], j[s]), p.block_index(i[s], j[s]),
+                   p.block_index(j[s], i[s])};
+    }
   }
   /// The springs with an owned endpoint in `index` (issue 17), in this set's storage order (the
   /// bound order), renumbered to local ids and kept in that order (keep_order): every owned
@@ -94,6 +104,21 @@ struct SpringSet {
     }
     for (size_t g = phase_start[3]; g < phase_start[4]; ++g) body(g);
   }
+  /// Calls body(n) for every spring of group g, in storage order (bound sets only).
+  template <typename Body>
+  void for_each_in_group(size_t g, Body&& body) const {
+    for (size_t n = group_start[g]; n < group_start[g + 1]; ++n) body(n);
+  }
+  /// Slice `part` of `parts` equal slices of group g (bound sets only): its springs [begin, end).
+  std::pair<size_t, size_t> slice(size_t g, size_t part, size_t parts) const {
+    const size_t b = group_start[g], m = group_start[g + 1] - b;
+    return {b + m * part / parts, b + m * (part + 1) / parts};
+  }
+  /// True if `other` splits the particles into the same ranges and groups (both bound): a system
+  /// can then run several sets group by group together (MassSpringSystem::assemble_jacobians).
+  bool same_groups(const SpringSet& other) const {
+    return range_width == other.range_width && phase_start == other.phase_start;
+  }
   /// Calls body(n) for every spring: in storage order when unbound, else group by group as
   /// for_each_group does.
   template <typename Body>
@@ -102,9 +127,7 @@ struct SpringSet {
       for (size_t n = 0; n < size(); ++n) body(n);
       return;
     }
-    for_each_group([&](size_t g) {
-      for (size_t n = group_start[g]; n < group_start[g + 1]; ++n) body(n);
-    });
+    for_each_group([&](size_t g) { for_each_in_group(g, body); });
   }
   /// Splits particles into ranges of about 8192 ids (at most 256 ranges) and reorders the springs
   /// stably into the groups of the class comment (setup time only).
@@ -112,6 +135,7 @@ struct SpringSet {
     const size_t m = size();
     const long long R = keep_order ? 1 : std::clamp(num_particles / 8192, 1LL, 256LL);
     const long long width = std::max(1LL, (num_particles + R - 1) / R);
+    range_width = width;
     const long long even = R / 2;  // boundaries lo = 0, 2, 4, ... < R - 1
     std::vector<long long> key(m);
     for (size_t n = 0; n < m; ++n) {

@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <limits>
+#include <tuple>
 
+#include "hooke/forces/spring_set.hpp"
 #include "hooke/sph/fluid_model.hpp"
 
 namespace hooke {
@@ -61,6 +63,7 @@ void MassSpringSystem::finalize() {
   for (auto& f : m_forces) f->bind(m_pattern);
   m_velocity_jacobian = std::any_of(m_forces.begin(), m_forces.end(),
                                     [](const auto& f) { return f->has_velocity_jacobian(); });
+  plan_assembly();
   m_finalized = true;
 }
 
@@ -170,27 +173,198 @@ double MassSpringSystem::energy_scale() const {
   return E;
 }
 
-Jacobians MassSpringSystem::make_jacobians() const {
-  HOOKE_ASSERT(m_finalized, "make_jacobians before finalize");
-  if (m_velocity_jacobian) return Jacobians{m_pattern.make_matrix(), m_pattern.make_matrix()};
-  SparseMatrix D(dofs(), dofs());
-  D.makeCompressed();
-  return Jacobians{m_pattern.make_matrix(), std::move(D)};
+void MassSpringSystem::plan_assembly() {
+  for (const auto& f : m_forces) {
+    const SpringSet* groups = f->jacobian_groups();
+    if (groups && groups->num_groups() > 0 && !m_jacobian_groups) m_jacobian_groups = groups;
+    if (groups && groups->num_groups() > 0 && groups->same_groups(*m_jacobian_groups))
+      m_grouped_jacobians.push_back(f.get());
+    else
+      m_whole_jacobians.push_back(f.get());
+  }
+  if (!m_jacobian_groups) return;
+  // Every group is run as slices of about kSlice springs of each force in turn.
+  const size_t groups = m_jacobian_groups->num_groups(), ranges = m_jacobian_groups->phase_start[1];
+  m_group_parts.assign(groups, 1);
+  for (size_t g = 0; g < groups; ++g) {
+    size_t largest = 0;
+    for (const Force* force : m_grouped_jacobians) {
+      const auto& start = force->jacobian_groups()->group_start;
+      largest = std::max(largest, start[g + 1] - start[g]);
+    }
+    m_group_parts[g] = std::max<size_t>(1, (largest + kSlice - 1) / kSlice);
+  }
+  // The windows (see Window) of the interior and boundary groups: after slice p, the particles
+  // below the smallest endpoint of every later slice are complete; before it, every particle up
+  // to its largest endpoint must be in the ring. The ring holds the blocks from the first
+  // incomplete particle to the last one brought in. An interior group starts at its range; a
+  // boundary group at its smallest endpoint.
+  const size_t windowed = m_jacobian_groups->phase_start[3];
+  m_plans.assign(windowed, {});
+  std::vector<Index> widest(windowed, 0);
+  for (size_t g = 0; g < windowed; ++g) {
+    const size_t parts = m_group_parts[g];
+    std::vector<Index> lo(parts, num_particles()), hi(parts, 0);
+    for (size_t p = 0; p < parts; ++p)
+      for (const Force* force : m_grouped_jacobians) {
+        const SpringSet& set = *force->jacobian_groups();
+        const auto [begin, end] = set.slice(g, p, parts);
+        for (size_t n = begin; n < end; ++n) {
+          lo[p] = std::min<Index>(lo[p], std::min(set.i[n], set.j[n]));
+          hi[p] = std::max<Index>(hi[p], std::max(set.i[n], set.j[n]) + 1);
+        }
+      }
+    Index a, b;
+    if (g < ranges) {
+      std::tie(a, b) = particle_range(g);
+    } else {
+      a = *std::min_element(lo.begin(), lo.end());
+      b = std::max(a, *std::max_element(hi.begin(), hi.end()));
+    }
+    GroupPlan& plan = m_plans[g];
+    plan.first = a;
+    std::vector<Index> complete(parts);
+    Index later = b;  // the smallest endpoint of the slices after p
+    for (size_t p = parts; p-- > 0;) {
+      complete[p] = later;
+      later = std::min(later, lo[p]);
+    }
+    Index brought = a, copied = a;
+    for (size_t p = 0; p < parts; ++p) {
+      brought = std::max({brought, hi[p], complete[p]});
+      widest[g] =
+          std::max(widest[g], m_pattern.blocks_begin(brought) - m_pattern.blocks_begin(copied));
+      plan.windows.push_back({brought, complete[p]});
+      copied = complete[p];
+    }
+  }
+  // The ring covers every interior window up to kMaxRingBlocks (beyond, the ring would not stay in
+  // cache: springs far apart along the ids, on an irregular mesh or a distributed piece); a group
+  // with a wider window, and a boundary group whose window is much wider than the interior ones,
+  // adds into the value arrays directly instead.
+  Index window = 1;
+  for (size_t g = 0; g < ranges; ++g) {
+    m_plans[g].ring = widest[g] <= kMaxRingBlocks;
+    if (m_plans[g].ring) window = std::max(window, widest[g]);
+  }
+  for (size_t g = ranges; g < windowed; ++g) {
+    m_plans[g].ring = widest[g] <= std::min(2 * window, kMaxRingBlocks);
+    if (m_plans[g].ring) window = std::max(window, widest[g]);
+  }
+  m_ring_blocks = 1;
+  while (m_ring_blocks < window) m_ring_blocks *= 2;
 }
 
-void MassSpringSystem::clear_jacobians(Jacobians& J, const char* caller) const {
+Jacobians MassSpringSystem::make_jacobians() const {
+  HOOKE_ASSERT(m_finalized, "make_jacobians before finalize");
+  Jacobians J;
+  J.K = m_pattern.make_matrix();
+  if (m_velocity_jacobian) {
+    J.D = m_pattern.make_matrix();
+  } else {
+    J.D.resize(dofs(), dofs());
+    J.D.makeCompressed();
+  }
+  reserve_scratch(J, max_threads());
+  return J;
+}
+
+std::pair<Index, Index> MassSpringSystem::particle_range(size_t r) const {
+  const SpringSet& groups = *m_jacobian_groups;
+  const Index n = num_particles(), w = Index(groups.range_width);
+  const Index a = std::min<Index>(n, Index(r) * w);
+  return {a, r + 1 == groups.phase_start[1] ? n : std::min<Index>(n, a + w)};
+}
+
+void MassSpringSystem::reserve_scratch(Jacobians& J, int threads) const {
+  if (!m_jacobian_groups || int(J.scratch.size()) >= threads) return;
+  J.scratch.resize(size_t(threads));
+  for (auto& s : J.scratch) s.resize(size_t((m_velocity_jacobian ? 18 : 9) * m_ring_blocks));
+}
+
+void MassSpringSystem::check_jacobians(const Jacobians& J, const char* caller) const {
   HOOKE_ASSERT(m_finalized, caller << " before finalize");
   HOOKE_ASSERT(J.K.nonZeros() == 9 * m_pattern.num_blocks() &&
                    J.D.nonZeros() == (m_velocity_jacobian ? J.K.nonZeros() : 0),
                caller << ": Jacobians were not made from this system's pattern");
+}
+
+void MassSpringSystem::clear_jacobians(Jacobians& J, const char* caller) const {
+  check_jacobians(J, caller);
   std::fill(J.K.valuePtr(), J.K.valuePtr() + J.K.nonZeros(), 0.0);
   std::fill(J.D.valuePtr(), J.D.valuePtr() + J.D.nonZeros(), 0.0);
 }
 
 void MassSpringSystem::assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
                                           const JacobianOptions& options) const {
-  clear_jacobians(J, "assemble_jacobians");
-  for (const auto& force : m_forces) force->add_jacobians(x, v, options, J.K, J.D);
+  if (!m_jacobian_groups) {
+    clear_jacobians(J, "assemble_jacobians");
+    for (const auto& force : m_forces) force->add_jacobians(x, v, options, J.K, J.D);
+    return;
+  }
+  check_jacobians(J, "assemble_jacobians");
+  // Group by group, every grouped force in turn (issue 18). Interior group r (the springs with
+  // both ends in particle range r) adds its forces' blocks, slice by slice, into a ring of blocks
+  // of 9 contiguous values that stays in the core's cache: each particle's blocks are moved into
+  // K's and D's value arrays (and zeroed in the ring) once no later slice touches them
+  // (GroupPlan). The value arrays are so written once, in order, and never zeroed. A boundary
+  // group then runs the same way over the particles between its smallest and largest endpoint,
+  // which enter the ring with the values the interior groups wrote; the remainder, and a group
+  // whose window does not fit the ring, adds into the value arrays directly. Groups run in
+  // SpringSet::for_each_group's phases, so every value is summed in the same order (group, slice,
+  // force) on any number of threads.
+  const size_t ranges = m_jacobian_groups->phase_start[1];
+  reserve_scratch(J, max_threads());
+  double* K = J.K.valuePtr();
+  double* D = J.D.nonZeros() > 0 ? J.D.valuePtr() : nullptr;
+  const Index mask = m_ring_blocks - 1;
+  // Value arrays far larger than the caches are written with non-temporal stores: they are read
+  // next from memory anyway, and this halves the traffic of writing them (no read for ownership).
+  const bool streaming = 8.0 * double(J.K.nonZeros() + J.D.nonZeros()) > kStreamingBytes;
+  m_jacobian_groups->for_each_group([&](size_t g) {
+    const size_t parts = m_group_parts[g];
+    auto run_slice = [&](size_t part, auto&& add) {
+      for (const Force* force : m_grouped_jacobians) {
+        const auto [begin, end] = force->jacobian_groups()->slice(g, part, parts);
+        add(*force, begin, end);
+      }
+    };
+    if (g >= m_plans.size() || !m_plans[g].ring) {
+      if (g < ranges) {  // the first group to write its range's values
+        const auto [a, b] = particle_range(g);
+        std::fill(K + m_pattern.values_begin(a), K + m_pattern.values_begin(b), 0.0);
+        if (D) std::fill(D + m_pattern.values_begin(a), D + m_pattern.values_begin(b), 0.0);
+      }
+      for (size_t part = 0; part < parts; ++part)
+        run_slice(part, [&](const Force& f, size_t begin, size_t end) {
+          f.add_jacobians_of_springs(x, v, options, begin, end, J.K, J.D);
+        });
+      return;
+    }
+    // The ring is zero between groups (blocks leave it zeroed, and it starts so): an interior
+    // group's particles enter it so (its springs are the first to add into them), a boundary
+    // group's with the values the interior groups wrote.
+    const bool interior = g < ranges;
+    double* Kr = J.scratch[size_t(thread_number())].data();
+    double* Dr = D ? Kr + 9 * m_ring_blocks : nullptr;
+    Index brought = m_plans[g].first, copied = brought;
+    for (size_t part = 0; part < parts; ++part) {
+      const Window& w = m_plans[g].windows[part];
+      if (!interior) {
+        m_pattern.copy_values_to_blocks(brought, w.brought, K, Kr, mask);
+        if (D) m_pattern.copy_values_to_blocks(brought, w.brought, D, Dr, mask);
+      }
+      brought = w.brought;
+      run_slice(part, [&](const Force& f, size_t begin, size_t end) {
+        f.add_jacobian_blocks_of_springs(x, v, options, begin, end, mask, Kr, Dr);
+      });
+      m_pattern.move_blocks_to_values(copied, w.complete, Kr, mask, K, streaming);
+      if (D) m_pattern.move_blocks_to_values(copied, w.complete, Dr, mask, D, streaming);
+      copied = w.complete;
+    }
+    if (streaming) BlockPattern::store_fence();  // before the phase's barrier
+  });
+  for (const Force* force : m_whole_jacobians) force->add_jacobians(x, v, options, J.K, J.D);
 }
 
 void MassSpringSystem::assemble_discrete_gradient_jacobians(ConstRef x0, ConstRef x1, ConstRef xm,

@@ -23,6 +23,9 @@ struct Jacobians {
   SparseMatrix D;
   /// D's values, or nullptr when D is not stored (no velocity-dependent force).
   const double* velocity_values() const { return D.nonZeros() > 0 ? D.valuePtr() : nullptr; }
+  /// MassSpringSystem::assemble_jacobians's scratch: per thread, a ring of blocks of K and of D,
+  /// all zero between assemblies (sized by make_jacobians; grown on first use by more threads).
+  std::vector<std::vector<double>> scratch;
 };
 
 /// How one process's piece of a distributed system (issue 17) reaches the other processes:
@@ -154,6 +157,15 @@ class MassSpringSystem {
   void apply_constraints(ConstRef x0, double h, VecRef x1, VecRef v1) const;
 
  private:
+  /// Particles [a, b) of range r of m_jacobian_groups (the last range ends at n).
+  std::pair<Index, Index> particle_range(size_t r) const;
+  /// Sorts the forces into grouped and whole ones for assemble_jacobians and plans its slices and
+  /// windows (finalize).
+  void plan_assembly();
+  /// Sizes J.scratch for `threads` threads (allocates only when it has fewer).
+  void reserve_scratch(Jacobians& J, int threads) const;
+  /// Checks that J has this system's pattern (the caller names the message).
+  void check_jacobians(const Jacobians& J, const char* caller) const;
   /// Checks that J has this system's pattern and zeroes its values (caller names the message).
   void clear_jacobians(Jacobians& J, const char* caller) const;
 
@@ -165,6 +177,32 @@ class MassSpringSystem {
   std::vector<std::unique_ptr<Force>> m_forces;
   std::vector<std::unique_ptr<Constraint>> m_constraints;
   BlockPattern m_pattern;
+  /// assemble_jacobians: the forces it runs group by group together (Force::jacobian_groups, all
+  /// with the groups of m_jacobian_groups), then the others, whole.
+  std::vector<const Force*> m_grouped_jacobians, m_whole_jacobians;
+  const SpringSet* m_jacobian_groups = nullptr;
+  /// Springs per slice of a group: assemble_jacobians runs every grouped force's slice p of a
+  /// group in turn, then slice p + 1.
+  static constexpr size_t kSlice = 64;
+  /// The largest ring (blocks per matrix: 4.7 MB of K values and as much of D).
+  static constexpr Index kMaxRingBlocks = Index(1) << 16;
+  /// K and D values above this many bytes are written with non-temporal stores.
+  static constexpr double kStreamingBytes = 64.0 * (1 << 20);
+  /// Slices per group of m_jacobian_groups.
+  std::vector<size_t> m_group_parts;
+  /// Per slice of a group run through the ring: the blocks of the particles below `brought` are in
+  /// the ring before the slice runs, and those below `complete` are finished after it.
+  struct Window {
+    Index brought, complete;
+  };
+  struct GroupPlan {
+    bool ring = true;             ///< through the ring (else straight into the value arrays)
+    Index first = 0;              ///< the first particle of the group's window
+    std::vector<Window> windows;  ///< per slice
+  };
+  std::vector<GroupPlan> m_plans;  ///< per interior and boundary group
+  /// Blocks in the ring of each matrix (a power of two covering every window).
+  Index m_ring_blocks = 1;
   bool m_finalized = false;
   bool m_velocity_jacobian = true;
   unsigned long long m_revision = 0;

@@ -1,6 +1,11 @@
 #include "hooke/sparse/block_pattern.hpp"
 
 #include <algorithm>
+#include <cstring>
+
+#if defined(__SSE2__) && defined(__x86_64__)
+#include <immintrin.h>
+#endif
 
 namespace hooke {
 
@@ -33,20 +38,86 @@ void BlockPattern::finalize() {
   m_finalized = true;
 }
 
-BlockSlot BlockPattern::slot(int i, int j) const {
-  HOOKE_ASSERT(m_finalized, "slot lookup before finalize");
+int BlockPattern::block_index(int i, int j) const {
+  HOOKE_ASSERT(m_finalized, "block lookup before finalize");
   HOOKE_ASSERT(i >= 0 && j >= 0 && i < m_n && j < m_n, "block (" << i << ", " << j << ") outside");
   const int begin = m_block_col_start[j], end = m_block_col_start[j + 1];
   auto it = std::lower_bound(m_block_rows.begin() + begin, m_block_rows.begin() + end, i);
   HOOKE_ASSERT(it != m_block_rows.begin() + end && *it == i,
                "block (" << i << ", " << j << ") was not declared");
-  const int blocks_in_col = end - begin;
-  const int pos_in_col = static_cast<int>(it - (m_block_rows.begin() + begin));
+  return static_cast<int>(it - m_block_rows.begin());
+}
+
+BlockSlot BlockPattern::slot(int i, int j) const {
+  const int k = block_index(i, j);
+  const int begin = m_block_col_start[j], end = m_block_col_start[j + 1];
   // Scalar column 3j starts after all scalar columns of earlier block columns: 9 entries per block.
   BlockSlot s;
-  s.stride = 3 * blocks_in_col;
-  s.offset = 9 * begin + 3 * pos_in_col;
+  s.stride = 3 * (end - begin);
+  s.offset = 9 * begin + 3 * (k - begin);
   return s;
+}
+
+namespace {
+/// Copies the blocks of block columns [a, b) into the value array, writing it in order through
+/// `store(double* at, double value)`.
+template <typename Store>
+void move_blocks(const std::vector<int>& col_start, Index a, Index b, double* blocks, Index mask,
+                 double* values, Store&& store) {
+  // Scalar column 3j + c of block column j holds, for each of its nb blocks k in turn, the
+  // block's column c (3 values): entry (r, c) of block k is values[9 begin + c 3 nb + 3 k + r].
+  for (Index j = a; j < b; ++j) {
+    const Index begin = col_start[size_t(j)], nb = col_start[size_t(j) + 1] - begin;
+    double* out = values + 9 * begin;
+    for (int c = 0; c < 3; ++c)
+      for (Index k = 0; k < nb; ++k, out += 3) {
+        const double* column = blocks + 9 * ((begin + k) & mask) + 3 * c;
+        store(out, column[0]);
+        store(out + 1, column[1]);
+        store(out + 2, column[2]);
+      }
+    for (Index k = 0; k < nb; ++k) std::fill_n(blocks + 9 * ((begin + k) & mask), 9, 0.0);
+  }
+}
+}  // namespace
+
+void BlockPattern::move_blocks_to_values(Index a, Index b, double* blocks, Index mask,
+                                         double* values, bool streaming) const {
+#if defined(__SSE2__) && defined(__x86_64__)
+  if (streaming) {
+    move_blocks(m_block_col_start, a, b, blocks, mask, values, [](double* at, double value) {
+      long long bits;
+      std::memcpy(&bits, &value, sizeof bits);
+      _mm_stream_si64(reinterpret_cast<long long*>(at), bits);
+    });
+    return;
+  }
+#else
+  (void)streaming;
+#endif
+  move_blocks(m_block_col_start, a, b, blocks, mask, values,
+              [](double* at, double value) { *at = value; });
+}
+
+void BlockPattern::copy_values_to_blocks(Index a, Index b, const double* values, double* blocks,
+                                         Index mask) const {
+  for (Index j = a; j < b; ++j) {
+    const Index begin = m_block_col_start[size_t(j)], nb = m_block_col_start[size_t(j) + 1] - begin;
+    const double* in = values + 9 * begin;
+    for (int c = 0; c < 3; ++c)
+      for (Index k = 0; k < nb; ++k, in += 3) {
+        double* column = blocks + 9 * ((begin + k) & mask) + 3 * c;
+        column[0] = in[0];
+        column[1] = in[1];
+        column[2] = in[2];
+      }
+  }
+}
+
+void BlockPattern::store_fence() {
+#if defined(__SSE2__) && defined(__x86_64__)
+  _mm_sfence();
+#endif
 }
 
 SparseMatrix BlockPattern::make_matrix() const {

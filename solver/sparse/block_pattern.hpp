@@ -49,6 +49,29 @@ class BlockPattern {
     for (int k = m_block_col_start[size_t(j)]; k < m_block_col_start[size_t(j) + 1]; ++k)
       f(m_block_rows[size_t(k)]);
   }
+  /// Index of block (i, j) in the block order (block column by block column, rows ascending);
+  /// throws InternalError if the block was not declared. Setup-time only (binary search).
+  int block_index(int i, int j) const;
+  /// Index of the first block of block column j (particle j) in the block order; j <= n.
+  Index blocks_begin(Index j) const { return Index(m_block_col_start[size_t(j)]); }
+  /// Index of the first value of block column j in a matrix's value array: the values of
+  /// particles [a, b) are [values_begin(a), values_begin(b)). j <= n. After finalize() only.
+  Index values_begin(Index j) const { return 9 * blocks_begin(j); }
+  /// Writes the blocks of block columns [a, b), stored as 9 contiguous column-major values each,
+  /// block k at blocks + 9 (k & mask) (a ring of mask + 1 blocks, mask one less than a power of
+  /// two; or all blocks with mask = -1), into their entries of a matrix's value array made by
+  /// make_matrix (overwriting them), in order, and zeroes them in the ring. streaming: with
+  /// non-temporal stores, for a value array far larger than the caches (the caller then ends with
+  /// store_fence()).
+  void move_blocks_to_values(Index a, Index b, double* blocks, Index mask, double* values,
+                             bool streaming) const;
+  /// The inverse of move_blocks_to_values (without zeroing): reads the blocks of block columns
+  /// [a, b) from a value array into the ring.
+  void copy_values_to_blocks(Index a, Index b, const double* values, double* blocks,
+                             Index mask) const;
+  /// Orders the non-temporal stores of move_blocks_to_values before later stores (a no-op
+  /// without SSE2).
+  static void store_fence();
   /// A 3n x 3n matrix with this structure and all values zero (allocates: setup-time only).
   SparseMatrix make_matrix() const;
 

@@ -810,7 +810,14 @@ TEST(SupernodalSolve, SinglePrecisionFactorIsAPreconditionerThatRefinementMakesE
       "[ single   ] relative distance from the double solve: %.1e, refined %.1e %.1e %.1e\n",
       history[0], history[1], history[2], history[6]);
   EXPECT_LT(history[6], 1e-12);
-  for (size_t k = 1; k < 4; ++k) EXPECT_LT(history[k], 1e-2 * history[k - 1] + 1e-14);
+  // Each refinement gains at least two digits until the distance reaches round-off (below 1e-12
+  // relative: the condition number of A, about 5e3, times the unit round-off, where the double
+  // solve itself stands).
+  for (size_t k = 1; k < 4; ++k) {
+    if (history[k - 1] > 1e-12) {
+      EXPECT_LT(history[k], 1e-2 * history[k - 1]) << "refinement " << k;
+    }
+  }
 #ifdef _OPENMP
   const auto [x1, x2] = solve_on_one_and_two_threads(ss, b);
   EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0) << "the same bits on one or two threads";

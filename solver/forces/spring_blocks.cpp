@@ -1,0 +1,65 @@
+#include "hooke/forces/spring_blocks.hpp"
+
+#include <algorithm>
+#include <cstring>
+
+#include "hooke/config.hpp"
+#include "hooke/forces/hooke_spring.hpp"
+#include "hooke/forces/spring_damper.hpp"
+
+// The AVX2 copy needs an x86 target (the ISA, __builtin_cpu_supports) and GCC's `#pragma GCC
+// target`, which clang ignores, as in solver/linear/supernodal_solve.cpp. Without FMA: the copies
+// then give the same bits (every operation is the same IEEE operation, only four at a time).
+#if HOOKE_X86_SIMD && (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__) && \
+    !defined(__clang__)
+#define HOOKE_SPRING_BLOCKS_AVX2 1
+#else
+#define HOOKE_SPRING_BLOCKS_AVX2 0
+#endif
+
+namespace hooke::spring_blocks {
+
+#if HOOKE_SPRING_BLOCKS_AVX2
+namespace avx2 {
+#pragma GCC push_options
+#pragma GCC target("avx2")
+#include "spring_block_kernels.inc"
+#pragma GCC pop_options
+}  // namespace avx2
+#endif
+
+// 32-byte vectors passed between the (inlined, file-local) helpers without AVX: the compilers
+// warn that the ABI differs from AVX code, which matters only across separately compiled files.
+#pragma GCC diagnostic ignored "-Wpsabi"
+namespace base {
+#include "spring_block_kernels.inc"
+}  // namespace base
+
+namespace {
+bool use_avx2() {
+#if HOOKE_SPRING_BLOCKS_AVX2
+  static const bool avx2 = __builtin_cpu_supports("avx2");
+  return avx2;
+#else
+  return false;
+#endif
+}
+}  // namespace
+
+void hooke_spring(const SpringSet& set, ConstRef x, bool clamp_compressed, size_t begin, size_t end,
+                  Index mask, double* K) {
+#if HOOKE_SPRING_BLOCKS_AVX2
+  if (use_avx2()) return avx2::hooke_spring(set, x, clamp_compressed, begin, end, mask, K);
+#endif
+  base::hooke_spring(set, x, clamp_compressed, begin, end, mask, K);
+}
+
+void spring_damper(const SpringSet& set, ConstRef x, ConstRef v, bool position_terms, size_t begin,
+                   size_t end, Index mask, double* K, double* D) {
+#if HOOKE_SPRING_BLOCKS_AVX2
+  if (use_avx2()) return avx2::spring_damper(set, x, v, position_terms, begin, end, mask, K, D);
+#endif
+  base::spring_damper(set, x, v, position_terms, begin, end, mask, K, D);
+}
+
+}  // namespace hooke::spring_blocks
