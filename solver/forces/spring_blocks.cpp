@@ -35,16 +35,14 @@ namespace base {
 #include "spring_block_kernels.inc"
 }  // namespace base
 
+#if HOOKE_SPRING_BLOCKS_AVX2
 namespace {
 bool use_avx2() {
-#if HOOKE_SPRING_BLOCKS_AVX2
   static const bool avx2 = __builtin_cpu_supports("avx2");
   return avx2;
-#else
-  return false;
-#endif
 }
 }  // namespace
+#endif
 
 void hooke_spring(const SpringSet& set, ConstRef x, bool clamp_compressed, size_t begin, size_t end,
                   Index mask, double* K) {
