@@ -59,13 +59,7 @@ class AdaptiveTeam {
   double seconds_all() const { return m_time[1]; }
 
  private:
-  static int available() {
-#ifdef _OPENMP
-    return omp_get_max_threads();
-#else
-    return 1;
-#endif
-  }
+  static int available() { return max_threads(); }
 
   static constexpr double kMargin = 0.95;
   int m_probe_every;

@@ -44,15 +44,6 @@ struct SplitView {
   const I* bin_start;  // bin b's ranges: range[2r .. 2r+1] for r in [bin_start[b], bin_start[b+1])
 };
 
-/// The index of the calling thread in its OpenMP team (0 outside one).
-inline int thread_index() {
-#ifdef _OPENMP
-  return omp_get_thread_num();
-#else
-  return 0;
-#endif
-}
-
 /// The factor repacked by bind() (see "Panels" in supernodal_kernels.inc): per supernode, its
 /// inverted diagonal block at value + inv_start[s] and its off-diagonal block at off_start[s].
 /// S: double, or float for a single-precision copy of the factor.
