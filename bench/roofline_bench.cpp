@@ -226,6 +226,7 @@ void triangular_solves(benchmark::State& state, hooke::SupernodalSolver& sn, dou
   state.counters["factor_entries"] = entries;
   state.counters["packed_entries"] = shape.packed_entries;
   state.counters["supernodes"] = double(shape.supernodes);
+  state.counters["top_fraction"] = shape.top_fraction;  // the serial part of the tree split
 }
 void BM_TriangularSolves3(benchmark::State& state) { triangular_solves(state, *fixture().sn, 8.0); }
 void BM_TriangularSolves3Single(benchmark::State& state) {

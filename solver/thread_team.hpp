@@ -17,42 +17,70 @@ namespace hooke {
 ///
 /// The first repetition on each size is a warm-up and is not counted: it pays one-off costs (the
 /// first touch of buffers, a solver's first call, the thread team's start) that would otherwise
-/// hold a size back for many probes. Then all threads and one thread run in turn until each has a
-/// time.
+/// hold a size back for many probes. Then all threads and one thread run in turn until each has
+/// kFirstSamples counted times, and each size starts from the median of its samples (one sample
+/// decided the whole run before: a single slow repetition of two threads on a quiet machine kept
+/// a 411 x 411 local/global run on one thread for 64 iterations, 40% slower). After that the size
+/// not chosen is probed after 4, 8, 16, ... repetitions, up to every probe_every; the interval
+/// starts again at 4 when the choice changes.
 ///
 /// Use: `const int t = team.threads();` run the region with num_threads(t) (or inside a
 /// ThreadCountScope(t), for a repetition made of several regions) and time it, then
 /// `team.record(t, seconds)`.
 class AdaptiveTeam {
  public:
-  /// probe_every: every so many repetitions one runs on the team size not currently chosen, to
-  /// refresh its time (the cost of watching: at most 1/probe_every of the repetitions on the
-  /// slower size).
+  /// Counted repetitions of each size before the team chooses.
+  static constexpr int kFirstSamples = 3;
+  /// The first interval between probes of the size not chosen.
+  static constexpr long long kFirstInterval = 4;
+  /// probe_every: the longest interval (repetitions) between probes of the size not chosen (the
+  /// cost of watching: at most about 1/probe_every of the repetitions on the slower size).
   explicit AdaptiveTeam(int probe_every = 64) : m_probe_every(std::max(2, probe_every)) {}
 
   /// The thread count for the next repetition: 1 or all available (omp_get_max_threads()).
   int threads() {
     const int all = available();
     if (all <= 1) return 1;
-    // Until both sizes have a counted time: all threads and one in turn, all threads first.
-    if (m_time[0] < 0.0 || m_time[1] < 0.0)
-      return m_seen[1] <= m_seen[0] && m_time[1] < 0.0 ? all : (m_time[0] < 0.0 ? 1 : all);
+    // Until both sizes have kFirstSamples counted times (a warm-up each first): all threads and
+    // one in turn, all threads first.
+    if (m_seen[0] <= kFirstSamples || m_seen[1] <= kFirstSamples)
+      return m_seen[1] <= m_seen[0] ? all : 1;
     // All threads only when they are clearly faster: where the two are about even (a busy second
     // core), one thread gives the same time without the barriers' stalls and their variance.
-    const bool one_is_faster = !(m_time[1] < kMargin * m_time[0]);
-    if (++m_count % m_probe_every == 0) return one_is_faster ? all : 1;
-    return one_is_faster ? 1 : all;
+    const int chosen = one_is_faster() ? 1 : all;
+    if (chosen != m_last_choice) {
+      m_last_choice = chosen;
+      m_interval = kFirstInterval;
+      m_since_probe = 0;
+    }
+    if (++m_since_probe > m_interval) {
+      m_since_probe = 0;
+      m_interval = std::min<long long>(2 * m_interval, m_probe_every);
+      return chosen == 1 ? all : 1;
+    }
+    return chosen;
   }
   /// Reports that a repetition on `threads` threads took `seconds` of wall time.
   void record(int threads, double seconds) {
     const int k = threads > 1 ? 1 : 0;
-    if (m_seen[k]++ == 0) return;  // the warm-up
+    const long long seen = m_seen[k]++;
+    if (seen == 0) return;  // the warm-up
     double& t = m_time[k];
-    const bool chosen = m_time[1 - k] < 0.0 || (k == 1) == (m_time[1] < kMargin * m_time[0]);
+    if (seen <= kFirstSamples) {  // the first samples: their median (their mean until then)
+      double* first = m_first[k];
+      first[seen - 1] = seconds;
+      t = t < 0.0 ? seconds : t + (seconds - t) / double(seen);
+      if (seen == kFirstSamples) {
+        std::sort(first, first + kFirstSamples);
+        t = first[kFirstSamples / 2];
+      }
+      return;
+    }
+    const bool chosen = (k == 0) == one_is_faster();
     // An exponential average: over the last few repetitions for the size in use, which smooths
     // single outliers; a probe of the other size counts half, so that a change of load shows
     // within a few probes.
-    t = t < 0.0 ? seconds : (chosen ? 0.7 * t + 0.3 * seconds : 0.5 * t + 0.5 * seconds);
+    t = chosen ? 0.7 * t + 0.3 * seconds : 0.5 * t + 0.5 * seconds;
   }
   /// The smoothed wall time per repetition on one thread and on all (s); -1 until measured.
   double seconds_one() const { return m_time[0]; }
@@ -60,12 +88,15 @@ class AdaptiveTeam {
 
  private:
   static int available() { return max_threads(); }
+  bool one_is_faster() const { return !(m_time[1] < kMargin * m_time[0]); }
 
   static constexpr double kMargin = 0.95;
   int m_probe_every;
-  long long m_count = 0;
   long long m_seen[2] = {0, 0};
   double m_time[2] = {-1.0, -1.0};
+  double m_first[2][kFirstSamples] = {};
+  int m_last_choice = 0;
+  long long m_interval = kFirstInterval, m_since_probe = 0;
 };
 
 /// Sets the OpenMP thread count of the regions the calling thread starts (omp_set_num_threads)

@@ -45,13 +45,16 @@ struct SplitView {
 };
 
 /// The factor repacked by bind() (see "Panels" in supernodal_kernels.inc): per supernode, its
-/// inverted diagonal block at value + inv_start[s] and its off-diagonal block at off_start[s].
+/// inverted diagonal block at value + inv_start[s] and its off-diagonal block at off_start[s];
+/// the rows below it at rows + f.pi[s] - f.super[s] (the row indices of its off-diagonal block,
+/// 32 bits, a row of the serial top of the tree split stored as ~row, i.e. negative).
 /// S: double, or float for a single-precision copy of the factor.
 template <typename S>
 struct Packed {
   const I* inv_start;
   const I* off_start;
   const S* value;
+  const std::int32_t* rows;
 };
 
 /// One thread's scratch.
@@ -215,6 +218,18 @@ void SupernodalSolver::bind(const SupernodalFactorView& f) {
     packed += c4 * m4;
   }
   split_tree(f, m_top, m_top_row, m_top_supernode, m_range, m_bin_start);
+  // The rows below each supernode, 32 bits each (half the index bytes the sweeps stream), top
+  // rows flagged by ~row so the forward sweep looks up only those in m_top.
+  HOOKE_ASSERT(f.n < (I(1) << 31), "SupernodalSolver: " << f.n << " rows exceed 32-bit indices");
+  m_rows.resize(size_t(f.pi[f.nsuper] - f.super[f.nsuper]));
+  for (I s = 0; s < f.nsuper; ++s) {
+    const I ncol = f.super[s + 1] - f.super[s];
+    std::int32_t* out = m_rows.data() + (f.pi[s] - f.super[s]);
+    for (I p = f.pi[s] + ncol; p < f.pi[s + 1]; ++p) {
+      const auto r = std::int32_t(f.row[p]);
+      *out++ = m_top[size_t(r)] >= 0 ? ~r : r;
+    }
+  }
   m_work_total = 0.0;
   for (I s = 0; s < f.nsuper; ++s)
     m_work_total += double(f.super[s + 1] - f.super[s]) * double(f.pi[s + 1] - f.pi[s]);
@@ -336,9 +351,10 @@ void SupernodalSolver::solve(const double* b, double* x) {
     sn_base::solve_any(m_K, m_f, pk, split, threads, b, x, m_y.data(), work, m_delta.data());
   };
   if (m_precision == Precision::Single)
-    run(Packed<float>{m_inv_start.data(), m_off_start.data(), m_packed_single.data()});
+    run(Packed<float>{m_inv_start.data(), m_off_start.data(), m_packed_single.data(),
+                      m_rows.data()});
   else
-    run(Packed<double>{m_inv_start.data(), m_off_start.data(), m_packed.data()});
+    run(Packed<double>{m_inv_start.data(), m_off_start.data(), m_packed.data(), m_rows.data()});
 }
 
 }  // namespace hooke

@@ -82,6 +82,7 @@ class SupernodalSolver {
   // The factor repacked into 4-column panels: each supernode's inverted diagonal block and its
   // off-diagonal block (see supernodal_kernels.inc), and the dense scratch for one inversion.
   std::vector<std::int64_t> m_inv_start, m_off_start;
+  std::vector<std::int32_t> m_rows;  // rows below each supernode, top rows as ~row
   std::int64_t m_packed_entries = 0;
   std::vector<double> m_packed, m_block;
   std::vector<float> m_packed_single;  // the same, rounded (Precision::Single; m_packed unused)

@@ -1,7 +1,8 @@
 // Claims of solver/thread_team.hpp: AdaptiveTeam measures both team sizes first (after a warm-up
-// repetition on each, not counted), then runs the faster one (all threads only when clearly
-// faster) and probes the other once every probe_every repetitions, and follows a change of load
-// (the second core becoming busy, then free again) within a few probes.
+// repetition on each, not counted, then kFirstSamples each, of which the median counts), then runs
+// the faster one (all threads only when clearly faster) and probes the other at growing intervals
+// up to every probe_every repetitions, and follows a change of load (the second core becoming
+// busy, then free again) within a few probes.
 #include "hooke/thread_team.hpp"
 
 #include <gtest/gtest.h>
@@ -44,18 +45,34 @@ TEST(AdaptiveTeam, RunsTheFasterSizeAndFollowsAChangeOfLoad) {
   team.record(1, 1.0);
   EXPECT_EQ(team.seconds_all(), 0.5);
   EXPECT_EQ(team.seconds_one(), 1.0);
-  // Quiet machine: two threads twice as fast; one thread only as a probe, 1 in 16.
-  EXPECT_EQ(run(team, 160, 1.0, 0.5), 10);
+  // Two more samples of each before choosing; one slow two-thread sample among them (a page
+  // fault, another process's burst) does not decide: the median counts (their mean, 1.0, would
+  // keep the run on one thread).
+  for (const double all : {2.0, 0.5}) {
+    EXPECT_EQ(team.threads(), 2);
+    team.record(2, all);
+    EXPECT_EQ(team.threads(), 1);
+    team.record(1, 1.0);
+  }
+  EXPECT_EQ(team.seconds_all(), 0.5);
+  EXPECT_EQ(team.seconds_one(), 1.0);
+  // Quiet machine: two threads twice as fast; one thread only as a probe, after 4, 8, 16 and then
+  // every 16 repetitions (1 in 17).
+  EXPECT_EQ(run(team, 4, 1.0, 0.5), 0);
+  EXPECT_EQ(run(team, 1, 1.0, 0.5), 1);  // the first probe
+  EXPECT_EQ(run(team, 8, 1.0, 0.5), 0);
+  EXPECT_EQ(run(team, 1, 1.0, 0.5), 1);
+  EXPECT_EQ(run(team, 17 * 10, 1.0, 0.5), 1 + 9);  // probes at 17, then every 17
   // The second core becomes busy: two threads now take 1.3 s; within a few probes the team runs
-  // on one thread, probing two threads 1 in 16.
-  run(team, 16 * 6, 1.0, 1.3);
-  EXPECT_EQ(run(team, 160, 1.0, 1.3), 150);
+  // on one thread, probing two threads after 4, 8, 16, then 1 in 17.
+  run(team, 17 * 6, 1.0, 1.3);
+  EXPECT_EQ(run(team, 170, 1.0, 1.3), 160);
   // The core is free again: back to two threads.
-  run(team, 16 * 6, 1.0, 0.5);
-  EXPECT_EQ(run(team, 160, 1.0, 0.5), 10);
+  run(team, 17 * 6, 1.0, 0.5);
+  EXPECT_EQ(run(team, 170, 1.0, 0.5), 10);
   // About even (two threads 2% faster): one thread, which is as fast without the barriers.
-  run(team, 16 * 6, 1.0, 0.98);
-  EXPECT_EQ(run(team, 160, 1.0, 0.98), 150);
+  run(team, 17 * 6, 1.0, 0.98);
+  EXPECT_EQ(run(team, 170, 1.0, 0.98), 160);
   omp_set_num_threads(1);
   EXPECT_EQ(team.threads(), 1);  // a single thread available: nothing to choose
   omp_set_num_threads(threads);
