@@ -220,8 +220,12 @@ void FastMassSpringStepper::begin_step(const State& s0, double h) {
 
 double FastMassSpringStepper::local_step(ConstRef x, bool gradient) {
   const auto t0 = Clock::now();
-  m_acc.setZero();
-  if (gradient) m_spring_grad.setZero();
+  // The per-particle passes of the step (here, the forming of b below and scatter()) run in
+  // parallel blocks: each entry is the same whichever thread writes it.
+  parallel_ranges(m_acc.size(), [&](long long b, long long e) {
+    std::fill(m_acc.data() + b, m_acc.data() + e, 0.0);
+    if (gradient) std::fill(m_spring_grad.data() + b, m_spring_grad.data() + e, 0.0);
+  });
   double energy = 0.0;
   for (const SpringSet* sp : m_f.springs) {
     const SpringSet& s = *sp;
@@ -253,8 +257,11 @@ double FastMassSpringStepper::local_step(ConstRef x, bool gradient) {
     });
     for (size_t g = 0; g < s.num_groups(); ++g) energy += m_group_energy[g];
   }
-  for (size_t r = 0; r < m_free.size(); ++r)
-    m_B.row(Index(r)) = m_const.row(Index(r)) + m_acc.segment<3>(3 * m_free[r]).transpose();
+  parallel_ranges(static_cast<long long>(m_free.size()), [&](long long b, long long e) {
+    for (long long r = b; r < e; ++r)
+      m_B.row(Index(r)) =
+          m_const.row(Index(r)) + m_acc.segment<3>(3 * m_free[size_t(r)]).transpose();
+  });
   m_local_seconds += seconds_since(t0);
   return energy;
 }
@@ -311,8 +318,10 @@ void FastMassSpringStepper::gather(ConstRef x, Rows3& X) const {
 }
 
 void FastMassSpringStepper::scatter(const Rows3& X, VecRef x) const {
-  for (size_t r = 0; r < m_free.size(); ++r)
-    x.segment<3>(3 * m_free[r]) = X.row(Index(r)).transpose();
+  parallel_ranges(static_cast<long long>(m_free.size()), [&](long long b, long long e) {
+    for (long long r = b; r < e; ++r)
+      x.segment<3>(3 * m_free[size_t(r)]) = X.row(Index(r)).transpose();
+  });
 }
 
 template <typename F>
