@@ -21,8 +21,11 @@ namespace hooke {
 /// kFirstSamples counted times, and each size starts from the median of its samples (one sample
 /// decided the whole run before: a single slow repetition of two threads on a quiet machine kept
 /// a 411 x 411 local/global run on one thread for 64 iterations, 40% slower). After that the size
-/// not chosen is probed after 4, 8, 16, ... repetitions, up to every probe_every; the interval
-/// starts again at 4 when the choice changes.
+/// not chosen is probed after 32 repetitions, then every probe_every (the interval doubles up to
+/// it), and again after 32 when the choice changes. Each probe of the slower size costs about half
+/// a repetition; probing after 4, 8, 16, ... made a busy-core two-thread 411 x 411 local/global
+/// run 1.5-2% slower than one thread over 30 iterations, and the median of three samples no longer
+/// needs such early corrections.
 ///
 /// Use: `const int t = team.threads();` run the region with num_threads(t) (or inside a
 /// ThreadCountScope(t), for a repetition made of several regions) and time it, then
@@ -32,7 +35,7 @@ class AdaptiveTeam {
   /// Counted repetitions of each size before the team chooses.
   static constexpr int kFirstSamples = 3;
   /// The first interval between probes of the size not chosen.
-  static constexpr long long kFirstInterval = 4;
+  static constexpr long long kFirstInterval = 32;
   /// probe_every: the longest interval (repetitions) between probes of the size not chosen (the
   /// cost of watching: at most about 1/probe_every of the repetitions on the slower size).
   explicit AdaptiveTeam(int probe_every = 64) : m_probe_every(std::max(2, probe_every)) {}
@@ -50,7 +53,7 @@ class AdaptiveTeam {
     const int chosen = one_is_faster() ? 1 : all;
     if (chosen != m_last_choice) {
       m_last_choice = chosen;
-      m_interval = kFirstInterval;
+      m_interval = std::min<long long>(kFirstInterval, m_probe_every);
       m_since_probe = 0;
     }
     if (++m_since_probe > m_interval) {

@@ -56,15 +56,13 @@ TEST(AdaptiveTeam, RunsTheFasterSizeAndFollowsAChangeOfLoad) {
   }
   EXPECT_EQ(team.seconds_all(), 0.5);
   EXPECT_EQ(team.seconds_one(), 1.0);
-  // Quiet machine: two threads twice as fast; one thread only as a probe, after 4, 8, 16 and then
-  // every 16 repetitions (1 in 17).
-  EXPECT_EQ(run(team, 4, 1.0, 0.5), 0);
+  // Quiet machine: two threads twice as fast; one thread only as a probe, every 17 repetitions
+  // (the first interval is probe_every here).
+  EXPECT_EQ(run(team, 16, 1.0, 0.5), 0);
   EXPECT_EQ(run(team, 1, 1.0, 0.5), 1);  // the first probe
-  EXPECT_EQ(run(team, 8, 1.0, 0.5), 0);
-  EXPECT_EQ(run(team, 1, 1.0, 0.5), 1);
-  EXPECT_EQ(run(team, 17 * 10, 1.0, 0.5), 1 + 9);  // probes at 17, then every 17
+  EXPECT_EQ(run(team, 17 * 10, 1.0, 0.5), 10);
   // The second core becomes busy: two threads now take 1.3 s; within a few probes the team runs
-  // on one thread, probing two threads after 4, 8, 16, then 1 in 17.
+  // on one thread, probing two threads 1 in 17.
   run(team, 17 * 6, 1.0, 1.3);
   EXPECT_EQ(run(team, 170, 1.0, 1.3), 160);
   // The core is free again: back to two threads.
@@ -79,6 +77,25 @@ TEST(AdaptiveTeam, RunsTheFasterSizeAndFollowsAChangeOfLoad) {
 #else
   AdaptiveTeam team;
   EXPECT_EQ(team.threads(), 1);
+#endif
+}
+
+TEST(AdaptiveTeam, ProbesAtGrowingIntervalsUpToProbeEvery) {
+#ifdef _OPENMP
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(2);
+  AdaptiveTeam team;  // probe_every 64
+  // Warm-ups, then three samples of each: two threads twice as fast.
+  EXPECT_EQ(run(team, 2 + 2 * AdaptiveTeam::kFirstSamples, 1.0, 0.5),
+            1 + AdaptiveTeam::kFirstSamples);
+  // One thread as a probe after 32 repetitions, then every 64.
+  for (const int interval : {32, 64, 64, 64}) {
+    EXPECT_EQ(run(team, interval, 1.0, 0.5), 0) << interval;
+    EXPECT_EQ(run(team, 1, 1.0, 0.5), 1) << interval;
+  }
+  omp_set_num_threads(threads);
+#else
+  GTEST_SKIP() << "built without OpenMP";
 #endif
 }
 
