@@ -115,13 +115,16 @@ inline bool run_parallel(long long work, long long threshold) {
 #endif
 }
 
-/// Calls body(i) for i in [0, n): in a static-schedule OpenMP loop when run_parallel(n, threshold),
-/// else serially. For per-particle loops whose iterations write disjoint entries, so the result
-/// does not depend on the thread count.
+/// Calls body(i) for i in [0, n): in an OpenMP loop when run_parallel(n, threshold), else
+/// serially. For per-particle loops whose iterations write disjoint entries, so the result does
+/// not depend on the thread count. The loop is cut into 64 chunks handed out one at a time: with a
+/// static split, a thread whose core another process holds made every such loop wait for its
+/// half.
 template <typename Body>
 inline void parallel_for(long long n, long long threshold, Body&& body) {
   if (run_parallel(n, threshold)) {
-#pragma omp parallel for schedule(static)
+    const long long chunk = std::max(1LL, (n + 63) / 64);
+#pragma omp parallel for schedule(dynamic, chunk)
     for (long long i = 0; i < n; ++i) body(i);
   } else {
     for (long long i = 0; i < n; ++i) body(i);
