@@ -18,14 +18,17 @@ namespace hooke {
 /// The first repetition on each size is a warm-up and is not counted: it pays one-off costs (the
 /// first touch of buffers, a solver's first call, the thread team's start) that would otherwise
 /// hold a size back for many probes. Then all threads and one thread run in turn until each has
-/// kFirstSamples counted times, and each size starts from the median of its samples (one sample
-/// decided the whole run before: a single slow repetition of two threads on a quiet machine kept
-/// a 411 x 411 local/global run on one thread for 64 iterations, 40% slower). After that the size
-/// not chosen is probed after 32 repetitions, then every probe_every (the interval doubles up to
-/// it), and again after 32 when the choice changes. Each probe of the slower size costs about half
-/// a repetition; probing after 4, 8, 16, ... made a busy-core two-thread 411 x 411 local/global
-/// run 1.5-2% slower than one thread over 30 iterations, and the median of three samples no longer
-/// needs such early corrections.
+/// kFirstSamples counted times, and each size starts from the fastest of its samples. One sample
+/// decided the whole run before, and the median of three was no better: the first two-thread
+/// repetitions after the warm-up are often slow (measured on the 1M-spring local/global
+/// iteration: 22, 22, then 13 ms against 18-19 ms on one thread), which kept two-thread runs on
+/// one thread, 40-70% slower. The fastest sample errs towards a size; a wrongly chosen size shows
+/// within a few repetitions, since every repetition on the chosen size updates its time, while a
+/// size wrongly left shows only at a probe. After that the size not chosen is probed after 32
+/// repetitions, then every probe_every (the interval doubles up to it), and again after 32 when
+/// the choice changes. Each probe of the slower size costs about half a repetition; probing after
+/// 4, 8, 16, ... made a busy-core two-thread 411 x 411 local/global run 1.5-2% slower than one
+/// thread over 30 iterations.
 ///
 /// Use: `const int t = team.threads();` run the region with num_threads(t) (or inside a
 /// ThreadCountScope(t), for a repetition made of several regions) and time it, then
@@ -69,14 +72,8 @@ class AdaptiveTeam {
     const long long seen = m_seen[k]++;
     if (seen == 0) return;  // the warm-up
     double& t = m_time[k];
-    if (seen <= kFirstSamples) {  // the first samples: their median (their mean until then)
-      double* first = m_first[k];
-      first[seen - 1] = seconds;
-      t = t < 0.0 ? seconds : t + (seconds - t) / double(seen);
-      if (seen == kFirstSamples) {
-        std::sort(first, first + kFirstSamples);
-        t = first[kFirstSamples / 2];
-      }
+    if (seen <= kFirstSamples) {  // the first samples: the fastest
+      t = t < 0.0 ? seconds : std::min(t, seconds);
       return;
     }
     const bool chosen = (k == 0) == one_is_faster();
@@ -97,7 +94,6 @@ class AdaptiveTeam {
   int m_probe_every;
   long long m_seen[2] = {0, 0};
   double m_time[2] = {-1.0, -1.0};
-  double m_first[2][kFirstSamples] = {};
   int m_last_choice = 0;
   long long m_interval = kFirstInterval, m_since_probe = 0;
 };
