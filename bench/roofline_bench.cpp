@@ -22,6 +22,7 @@
 #include "hooke/linear/cholmod_solver.hpp"
 #include "hooke/linear/iterative_common.hpp"
 #include "hooke/linear/supernodal_solve.hpp"
+#include "hooke/sparse/symmetric_product.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
 
 namespace {
@@ -39,6 +40,7 @@ struct Fixture {
   hooke::Jacobians J = scene.system->make_jacobians();
   std::unique_ptr<hooke::ReducedMatrix> reduced;
   hooke::linear_detail::CsrMirror csr;
+  hooke::SymmetricProduct sym;  // what CG runs
   std::unique_ptr<hooke::FastMassSpringStepper> fms;
   std::unique_ptr<hooke::CholmodSolver> chol;
   std::unique_ptr<hooke::SupernodalSolver> sn, sn_single;
@@ -49,6 +51,7 @@ struct Fixture {
     reduced->assemble(J, kH, kH * kH);  // A = M - h D - h^2 K on the free particles
     csr.build(reduced->matrix());
     csr.refresh(reduced->matrix());
+    sym.analyze(reduced->matrix());
     hooke::FastMassSpringOptions o;
     o.iterations = 1;
     fms = std::make_unique<hooke::FastMassSpringStepper>(*undamped.system, o);
@@ -142,8 +145,9 @@ void BM_JacobianAssembly(benchmark::State& state) {
   }
 }
 
-/// The implicit-step operator y = A x with A = M - h D - h^2 K (3n x 3n, CSR mirror, what CG
-/// runs): 12 bytes per stored entry (value and column), the row starts, x read and y written;
+/// The implicit-step operator y = A x with A = M - h D - h^2 K (3n x 3n) by a row-major copy
+/// (CsrMirror, what Jacobi and Gauss-Seidel run, and CG did before SymmetricProduct): 12 bytes per
+/// stored entry (value and column), the row starts, x read and y written;
 /// 2 flops per entry.
 void BM_OperatorProduct(benchmark::State& state) {
   const int t = threads(state);
@@ -157,6 +161,24 @@ void BM_OperatorProduct(benchmark::State& state) {
   }
   const double nnz = double(fx.csr.value.size());
   report(state, 12.0 * nnz + 4.0 * double(n) + 2 * 8.0 * double(n), 2.0 * nnz, t);
+}
+
+/// The same product as CG runs it (SymmetricProduct): A's own compressed-column arrays read as
+/// rows, one row index per 3x3 block: 8 bytes per entry, 4 per block, the block column starts, x
+/// read and y written; 2 flops per entry.
+void BM_SymmetricProduct(benchmark::State& state) {
+  const int t = threads(state);
+  Fixture& fx = fixture();
+  const hooke::SparseMatrix& A = fx.reduced->matrix();
+  const hooke::Index n = A.rows();
+  const hooke::Vec x = hooke::Vec::Ones(n);
+  hooke::Vec y(n);
+  for (auto _ : state) {
+    fx.sym.multiply(A, x, y);
+    benchmark::DoNotOptimize(y.data());
+  }
+  const double nnz = double(A.nonZeros()), blocks = double(fx.sym.num_blocks());
+  report(state, 8.0 * nnz + 4.0 * blocks + 4.0 * double(n) / 3 + 2 * 8.0 * double(n), 2.0 * nnz, t);
 }
 
 /// The same operator matrix-free (ImplicitOperator: each spring's and damper's Jacobian blocks
@@ -180,9 +202,9 @@ void BM_MatrixFreeOperator(benchmark::State& state) {
   report(state, 8 * 8.0 * dofs + 2 * 24.0 * springs, 100.0 * springs, t);
 }
 
-/// One Jacobi-PCG iteration on A: the operator product plus z = D^-1 r and the vector updates
-/// (x, r, p updates and two dot products): the product's bytes plus 9 vectors of 3n doubles moved;
-/// its flops plus 12 per row.
+/// One Jacobi-PCG iteration on A: the operator product (SymmetricProduct, as CG runs it) plus z =
+/// D^-1 r and the vector updates (x, r, p updates and two dot products): the product's bytes plus 9
+/// vectors of 3n doubles moved; its flops plus 12 per row.
 void BM_PcgIteration(benchmark::State& state) {
   const int t = threads(state);
   Fixture& fx = fixture();
@@ -190,8 +212,9 @@ void BM_PcgIteration(benchmark::State& state) {
   hooke::Vec x = hooke::Vec::Zero(n), r = hooke::Vec::Ones(n), z(n), p = hooke::Vec::Ones(n), Ap(n);
   hooke::Vec inv_diag = fx.reduced->matrix().diagonal().cwiseInverse();
   double rz = r.dot(r);
+  const hooke::SparseMatrix& A = fx.reduced->matrix();
   for (auto _ : state) {
-    fx.csr.multiply(p, Ap);
+    fx.sym.multiply(A, p, Ap);
     const double alpha = rz / p.dot(Ap);
     x.noalias() += alpha * p;
     r.noalias() -= alpha * Ap;
@@ -201,9 +224,9 @@ void BM_PcgIteration(benchmark::State& state) {
     rz = rz_new;
     benchmark::DoNotOptimize(x.data());
   }
-  const double nnz = double(fx.csr.value.size());
-  report(state, 12.0 * nnz + 4.0 * double(n) + 11 * 8.0 * double(n), 2.0 * nnz + 12.0 * double(n),
-         t);
+  const double nnz = double(A.nonZeros()), blocks = double(fx.sym.num_blocks());
+  report(state, 8.0 * nnz + 4.0 * blocks + 4.0 * double(n) / 3 + 11 * 8.0 * double(n),
+         2.0 * nnz + 12.0 * double(n), t);
 }
 
 /// One forward and back substitution with 3 right-hand sides (x, y, z) on the fast-mass-spring
@@ -277,6 +300,7 @@ const int registered = [] {
   both(benchmark::RegisterBenchmark("Roofline/ForceEvaluation", BM_ForceEvaluation));
   both(benchmark::RegisterBenchmark("Roofline/JacobianAssembly", BM_JacobianAssembly));
   both(benchmark::RegisterBenchmark("Roofline/OperatorProduct", BM_OperatorProduct));
+  both(benchmark::RegisterBenchmark("Roofline/SymmetricProduct", BM_SymmetricProduct));
   both(benchmark::RegisterBenchmark("Roofline/MatrixFreeOperator", BM_MatrixFreeOperator));
   both(benchmark::RegisterBenchmark("Roofline/PcgIteration", BM_PcgIteration));
   both(benchmark::RegisterBenchmark("Roofline/TriangularSolves3", BM_TriangularSolves3));

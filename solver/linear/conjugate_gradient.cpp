@@ -24,7 +24,7 @@ LinearSummary ConjugateGradientSolver::analyze(const SparseMatrix& A) {
   m_z.setZero(n);
   m_p.setZero(n);
   m_Ap.setZero(n);
-  m_csr.build(A);
+  m_product.analyze(A);
   s.analyze_seconds = seconds_since(t0);
   return s;
 }
@@ -32,7 +32,6 @@ LinearSummary ConjugateGradientSolver::analyze(const SparseMatrix& A) {
 LinearSummary ConjugateGradientSolver::factor(const SparseMatrix& A) {
   const auto t0 = Clock::now();
   m_A = &A;
-  m_csr.refresh(A);
   LinearSummary s = m_pre->setup(A);
   if (s.status != Status::Converged) s.message = std::string(name()) + ": " + s.message;
   s.factor_seconds = seconds_since(t0);
@@ -76,7 +75,7 @@ LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x,
   LinearSummary s;
   const double bnorm = linear_detail::begin_solve(name(), m_A, b, x, options, t0, s);
   if (bnorm == 0.0) return s;
-  m_csr.multiply(x, m_r);
+  m_product.multiply(*m_A, x, m_r);
   m_r = b - m_r;
   double res = m_r.norm() / bnorm;
   int it = 0;
@@ -93,7 +92,7 @@ LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x,
         s.message = os.str();
         break;
       }
-      m_csr.multiply(m_p, m_Ap);
+      m_product.multiply(*m_A, m_p, m_Ap);
       const double pAp = m_p.dot(m_Ap);
       if (!(pAp > 0.0)) {
         s.status = Status::BrokeDown;

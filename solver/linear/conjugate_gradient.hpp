@@ -5,6 +5,7 @@
 
 #include "hooke/linear/iterative_common.hpp"
 #include "hooke/linear/preconditioner.hpp"
+#include "hooke/sparse/symmetric_product.hpp"
 #include "hooke/thread_team.hpp"
 
 namespace hooke {
@@ -17,6 +18,8 @@ namespace hooke {
 /// garbage; and its scratch is owned and reused, so solves do not allocate. Warm starts from x when
 /// options.warm_start. A solve that breaks down or misses its tolerance with a stale preconditioner
 /// (one reused from an earlier step, see ReusedFactorization) refreshes it and goes on once.
+/// The product A p reads A's columns as its rows (SymmetricProduct): A must be symmetric in values,
+/// not only positive definite, as CG itself assumes.
 class ConjugateGradientSolver final : public LinearSolver {
  public:
   explicit ConjugateGradientSolver(std::unique_ptr<Preconditioner> preconditioner);
@@ -41,7 +44,7 @@ class ConjugateGradientSolver final : public LinearSolver {
   std::string m_name;
   const SparseMatrix* m_A = nullptr;
   Vec m_r, m_z, m_p, m_Ap;
-  linear_detail::CsrMirror m_csr;  // A by rows: the product A p, parallel and deterministic
+  SymmetricProduct m_product;  // A p from A's own arrays, by 3x3 blocks when A has them
   // One or all threads per iteration, by their recent times (a busy core): the product and every
   // preconditioner give the same bits on any thread count, so the choice changes timing only.
   AdaptiveTeam m_team;
