@@ -15,20 +15,22 @@ namespace hooke {
 /// regions whose result does not depend on the thread count (the callers' determinism tests check
 /// that), so the choice changes timing only.
 ///
-/// The first repetition on each size is a warm-up and is not counted: it pays one-off costs (the
-/// first touch of buffers, a solver's first call, the thread team's start) that would otherwise
-/// hold a size back for many probes. Then all threads and one thread run in turn until each has
-/// kFirstSamples counted times, and each size starts from the fastest of its samples. One sample
-/// decided the whole run before, and the median of three was no better: the first two-thread
-/// repetitions after the warm-up are often slow (measured on the 1M-spring local/global
-/// iteration: 22, 22, then 13 ms against 18-19 ms on one thread), which kept two-thread runs on
-/// one thread, 40-70% slower. The fastest sample errs towards a size; a wrongly chosen size shows
-/// within a few repetitions, since every repetition on the chosen size updates its time, while a
-/// size wrongly left shows only at a probe. After that the size not chosen is probed after 32
-/// repetitions, then every probe_every (the interval doubles up to it), and again after 32 when
-/// the choice changes. Each probe of the slower size costs about half a repetition; probing after
-/// 4, 8, 16, ... made a busy-core two-thread 411 x 411 local/global run 1.5-2% slower than one
-/// thread over 30 iterations.
+/// The first repetition on one thread and the first kWarmupsAll on all threads are warm-ups and
+/// are not counted: the first pays one-off costs (the first touch of buffers, a solver's first
+/// call, the thread team's start) that would otherwise hold a size back for many probes, and the
+/// first repetitions on all threads are often slow whatever the load, as if the idle core had to
+/// be woken (measured on the 411 x 411 local/global iteration, quiet machine: 72 ms, then 18.4,
+/// 19.3, 15.6, then 8.4-9.2 ms; in other runs 8.9 ms from the second on; 13.6-14.5 ms on one
+/// thread). Nor is any repetition on all threads that follows one on a single thread counted
+/// (with the sizes alternating, every two-thread repetition took 17.3-17.5 ms). So the team first
+/// runs all threads until kFirstSamples repetitions are counted, then one thread as long, and each
+/// size starts from the fastest of its samples (the first counted ones can still be slow). Then it
+/// runs the faster size; a wrongly chosen size shows within a few repetitions, since every
+/// repetition on the chosen size updates its time, while a size wrongly left shows only at a probe.
+/// The size not chosen is probed after 32 repetitions, then every probe_every (the interval doubles
+/// up to it), and again after 32 when the choice changes: one repetition on one thread, or two on
+/// all threads of which the second counts. Probing after 4, 8, 16, ... made a busy-core two-thread
+/// 411 x 411 local/global run 1.5-2% slower than one thread over 30 iterations.
 ///
 /// Use: `const int t = team.threads();` run the region with num_threads(t) (or inside a
 /// ThreadCountScope(t), for a repetition made of several regions) and time it, then
@@ -37,42 +39,42 @@ class AdaptiveTeam {
  public:
   /// Counted repetitions of each size before the team chooses.
   static constexpr int kFirstSamples = 3;
+  /// Repetitions on all threads not counted at the start (one on one thread).
+  static constexpr int kWarmupsAll = 3;
   /// The first interval between probes of the size not chosen.
   static constexpr long long kFirstInterval = 32;
   /// probe_every: the longest interval (repetitions) between probes of the size not chosen (the
   /// cost of watching: at most about 1/probe_every of the repetitions on the slower size).
-  explicit AdaptiveTeam(int probe_every = 64) : m_probe_every(std::max(2, probe_every)) {}
+  explicit AdaptiveTeam(int probe_every = 64) : m_probe_every(std::max(2, probe_every)) {
+#ifdef _OPENMP
+    // libgomp allocates a thread's own copy of its settings the first time the thread changes one
+    // (omp_set_num_threads): here, at set-up, by setting the count it has, rather than at the
+    // team's first change of size inside a step loop, which must not allocate.
+    omp_set_num_threads(omp_get_max_threads());
+#endif
+  }
 
   /// The thread count for the next repetition: 1 or all available (omp_get_max_threads()).
   int threads() {
     const int all = available();
-    if (all <= 1) return 1;
-    // Until both sizes have kFirstSamples counted times (a warm-up each first): all threads and
-    // one in turn, all threads first.
-    if (m_seen[0] <= kFirstSamples || m_seen[1] <= kFirstSamples)
-      return m_seen[1] <= m_seen[0] ? all : 1;
-    // All threads only when they are clearly faster: where the two are about even (a busy second
-    // core), one thread gives the same time without the barriers' stalls and their variance.
-    const int chosen = one_is_faster() ? 1 : all;
-    if (chosen != m_last_choice) {
-      m_last_choice = chosen;
-      m_interval = std::min<long long>(kFirstInterval, m_probe_every);
-      m_since_probe = 0;
+    if (all <= 1) {
+      m_uncounted = false;
+      return 1;
     }
-    if (++m_since_probe > m_interval) {
-      m_since_probe = 0;
-      m_interval = std::min<long long>(2 * m_interval, m_probe_every);
-      return chosen == 1 ? all : 1;
-    }
-    return chosen;
+    const int t = next(all);
+    // A repetition on all threads right after one on a single thread is not counted (above).
+    m_uncounted = t > 1 && m_last_threads == 1;
+    m_last_threads = t;
+    return t;
   }
   /// Reports that a repetition on `threads` threads took `seconds` of wall time.
   void record(int threads, double seconds) {
     const int k = threads > 1 ? 1 : 0;
     const long long seen = m_seen[k]++;
-    if (seen == 0) return;  // the warm-up
+    const long long warmups = k == 1 ? kWarmupsAll : 1;
+    if (seen < warmups || m_uncounted) return;  // a warm-up
     double& t = m_time[k];
-    if (seen <= kFirstSamples) {  // the first samples: the fastest
+    if (seen < warmups + kFirstSamples) {  // the first samples: the fastest
       t = t < 0.0 ? seconds : std::min(t, seconds);
       return;
     }
@@ -89,12 +91,38 @@ class AdaptiveTeam {
  private:
   static int available() { return max_threads(); }
   bool one_is_faster() const { return !(m_time[1] < kMargin * m_time[0]); }
+  int next(int all) {
+    // First kFirstSamples counted repetitions on all threads (after kWarmupsAll), then as many on
+    // one thread (after one).
+    if (m_seen[1] < kWarmupsAll + kFirstSamples) return all;
+    if (m_seen[0] < 1 + kFirstSamples) return 1;
+    if (m_probe_pending) {  // the counted repetition of a probe of all threads
+      m_probe_pending = false;
+      return all;
+    }
+    // All threads only when they are clearly faster: where the two are about even (a busy second
+    // core), one thread gives the same time without the barriers' stalls and their variance.
+    const int chosen = one_is_faster() ? 1 : all;
+    if (chosen != m_last_choice) {
+      m_last_choice = chosen;
+      m_interval = std::min<long long>(kFirstInterval, m_probe_every);
+      m_since_probe = 0;
+    }
+    if (++m_since_probe > m_interval) {
+      m_since_probe = 0;
+      m_interval = std::min<long long>(2 * m_interval, m_probe_every);
+      if (chosen == 1) m_probe_pending = true;  // a second repetition on all threads follows
+      return chosen == 1 ? all : 1;
+    }
+    return chosen;
+  }
 
   static constexpr double kMargin = 0.95;
   int m_probe_every;
   long long m_seen[2] = {0, 0};
   double m_time[2] = {-1.0, -1.0};
-  int m_last_choice = 0;
+  int m_last_choice = 0, m_last_threads = 0;
+  bool m_uncounted = false, m_probe_pending = false;
   long long m_interval = kFirstInterval, m_since_probe = 0;
 };
 

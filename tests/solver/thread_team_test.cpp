@@ -1,8 +1,9 @@
-// Claims of solver/thread_team.hpp: AdaptiveTeam measures both team sizes first (after a warm-up
-// repetition on each, not counted, then kFirstSamples each, of which the fastest counts), then runs
-// the faster one (all threads only when clearly faster) and probes the other at growing intervals
-// up to every probe_every repetitions, and follows a change of load (the second core becoming
-// busy, then free again) within a few probes.
+// Claims of solver/thread_team.hpp: AdaptiveTeam measures both team sizes first, all threads then
+// one (warm-up repetitions on each, not counted, then kFirstSamples each, of which the fastest
+// counts), then runs the faster one (all threads only when clearly faster), probes the other at
+// growing intervals up to every probe_every repetitions (two repetitions on all threads, the first
+// not counted), never counts a repetition on all threads that follows one on a single thread, and
+// follows a change of load (the second core becoming busy, then free again) within a few probes.
 #include "hooke/thread_team.hpp"
 
 #include <gtest/gtest.h>
@@ -31,46 +32,51 @@ TEST(AdaptiveTeam, RunsTheFasterSizeAndFollowsAChangeOfLoad) {
   const int threads = omp_get_max_threads();
   omp_set_num_threads(2);
   AdaptiveTeam team(16);
-  // The first repetition on each size is a warm-up, whatever it took (here a one-off cost that
-  // would otherwise hold two threads back for many probes).
-  EXPECT_EQ(team.threads(), 2);  // all threads first
-  team.record(2, 30.0);
-  EXPECT_EQ(team.threads(), 1);  // then one
-  team.record(1, 1.2);
+  // The first kWarmupsAll repetitions on all threads are warm-ups, whatever they took (here a
+  // one-off cost, then the slow start measured on these machines, which would otherwise hold two
+  // threads back for many probes).
+  static_assert(AdaptiveTeam::kWarmupsAll == 3);
+  for (const double warmup : {30.0, 18.0, 19.0}) {
+    EXPECT_EQ(team.threads(), 2);  // all threads first
+    team.record(2, warmup);
+  }
   EXPECT_LT(team.seconds_all(), 0.0);
-  EXPECT_LT(team.seconds_one(), 0.0);
-  EXPECT_EQ(team.threads(), 2);  // then both again, counted
-  team.record(2, 2.0);
-  EXPECT_EQ(team.threads(), 1);
-  team.record(1, 1.0);
-  EXPECT_EQ(team.seconds_all(), 2.0);
-  EXPECT_EQ(team.seconds_one(), 1.0);
-  // Two more samples of each before choosing. The first two-thread repetitions are often slow
-  // (measured: 22, 22, then 13 ms against 18-19 ms on one thread): the fastest sample counts
-  // (the median, 2.0, or the mean would keep the run on one thread).
-  for (const double all : {2.0, 0.5}) {
+  // Three counted samples on all threads in a row. The first ones are often slow: the fastest
+  // counts (the median, 2.0, or the mean would keep the run on one thread).
+  for (const double all : {2.0, 0.5, 2.0}) {
     EXPECT_EQ(team.threads(), 2);
     team.record(2, all);
-    EXPECT_EQ(team.threads(), 1);
-    team.record(1, 1.0);
   }
   EXPECT_EQ(team.seconds_all(), 0.5);
+  // Then one thread: a warm-up and three samples.
+  EXPECT_EQ(team.threads(), 1);
+  team.record(1, 1.2);
+  EXPECT_LT(team.seconds_one(), 0.0);
+  for (const double one : {1.1, 1.0, 1.05}) {
+    EXPECT_EQ(team.threads(), 1);
+    team.record(1, one);
+  }
   EXPECT_EQ(team.seconds_one(), 1.0);
+  // Two threads are chosen; their first repetition after one thread's is not counted.
+  EXPECT_EQ(team.threads(), 2);
+  team.record(2, 9.0);
+  EXPECT_EQ(team.seconds_all(), 0.5);
   // Quiet machine: two threads twice as fast; one thread only as a probe, every 17 repetitions
   // (the first interval is probe_every here).
-  EXPECT_EQ(run(team, 16, 1.0, 0.5), 0);
+  EXPECT_EQ(run(team, 15, 1.0, 0.5), 0);
   EXPECT_EQ(run(team, 1, 1.0, 0.5), 1);  // the first probe
   EXPECT_EQ(run(team, 17 * 10, 1.0, 0.5), 10);
-  // The second core becomes busy: two threads now take 1.3 s; within a few probes the team runs
-  // on one thread, probing two threads 1 in 17.
-  run(team, 17 * 6, 1.0, 1.3);
-  EXPECT_EQ(run(team, 170, 1.0, 1.3), 160);
-  // The core is free again: back to two threads.
-  run(team, 17 * 6, 1.0, 0.5);
+  // The second core becomes busy: two threads now take 1.3 s; within a few repetitions the team
+  // runs on one thread, probing two threads twice in every 18 repetitions (any 180 in a row hold
+  // ten such probes).
+  run(team, 18 * 6, 1.0, 1.3);
+  EXPECT_EQ(run(team, 180, 1.0, 1.3), 160);
+  // The core is free again: back to two threads, one thread 1 in 17.
+  run(team, 18 * 6, 1.0, 0.5);
   EXPECT_EQ(run(team, 170, 1.0, 0.5), 10);
   // About even (two threads 2% faster): one thread, which is as fast without the barriers.
-  run(team, 17 * 6, 1.0, 0.98);
-  EXPECT_EQ(run(team, 170, 1.0, 0.98), 160);
+  run(team, 18 * 6, 1.0, 0.98);
+  EXPECT_EQ(run(team, 180, 1.0, 0.98), 160);
   omp_set_num_threads(1);
   EXPECT_EQ(team.threads(), 1);  // a single thread available: nothing to choose
   omp_set_num_threads(threads);
@@ -86,14 +92,13 @@ TEST(AdaptiveTeam, LeavesAWronglyChosenTeamWithinAFewRepetitions) {
   omp_set_num_threads(2);
   AdaptiveTeam team;
   // One lucky two-thread sample (0.5 s) among slow ones: two threads chosen...
-  run(team, 2, 1.0, 1.3);  // warm-ups
-  for (const double all : {1.3, 0.5, 1.3}) {
-    team.record(team.threads(), all);
-    team.record(team.threads(), 1.0);
-  }
+  for (int k = 0; k < AdaptiveTeam::kWarmupsAll; ++k) team.record(team.threads(), 1.3);
+  for (const double all : {1.3, 0.5, 1.3}) team.record(team.threads(), all);
   EXPECT_EQ(team.seconds_all(), 0.5);
-  // ...and left after three repetitions that take 1.3 s (its time 0.74, 0.91, 1.03 > 0.95).
-  EXPECT_EQ(run(team, 3, 1.0, 1.3), 0);
+  EXPECT_EQ(run(team, 1 + AdaptiveTeam::kFirstSamples, 1.0, 1.3), 1 + AdaptiveTeam::kFirstSamples);
+  // ...and left after three counted repetitions that take 1.3 s (its time 0.74, 0.91, 1.03 >
+  // 0.95), after the first one, which follows one thread's and is not counted.
+  EXPECT_EQ(run(team, 4, 1.0, 1.3), 0);
   EXPECT_EQ(run(team, 1, 1.0, 1.3), 1);
   omp_set_num_threads(threads);
 #else
@@ -107,13 +112,43 @@ TEST(AdaptiveTeam, ProbesAtGrowingIntervalsUpToProbeEvery) {
   omp_set_num_threads(2);
   AdaptiveTeam team;  // probe_every 64
   // Warm-ups, then three samples of each: two threads twice as fast.
-  EXPECT_EQ(run(team, 2 + 2 * AdaptiveTeam::kFirstSamples, 1.0, 0.5),
+  EXPECT_EQ(run(team, AdaptiveTeam::kWarmupsAll + 1 + 2 * AdaptiveTeam::kFirstSamples, 1.0, 0.5),
             1 + AdaptiveTeam::kFirstSamples);
   // One thread as a probe after 32 repetitions, then every 64.
   for (const int interval : {32, 64, 64, 64}) {
     EXPECT_EQ(run(team, interval, 1.0, 0.5), 0) << interval;
     EXPECT_EQ(run(team, 1, 1.0, 0.5), 1) << interval;
   }
+  omp_set_num_threads(threads);
+#else
+  GTEST_SKIP() << "built without OpenMP";
+#endif
+}
+
+TEST(AdaptiveTeam, ProbesAllThreadsTwiceAndCountsTheSecond) {
+#ifdef _OPENMP
+  const int threads = omp_get_max_threads();
+  omp_set_num_threads(2);
+  AdaptiveTeam team;  // probe_every 64
+  // Warm-ups, then three samples of each: one thread faster (a busy second core).
+  EXPECT_EQ(run(team, AdaptiveTeam::kWarmupsAll + 1 + 2 * AdaptiveTeam::kFirstSamples, 1.0, 2.0),
+            1 + AdaptiveTeam::kFirstSamples);
+  EXPECT_EQ(team.seconds_all(), 2.0);
+  // After 32 repetitions on one thread, two on all threads: the first, slow as two threads are
+  // after one (the idle core woken), is not counted; the second counts half.
+  EXPECT_EQ(run(team, 32, 1.0, 2.0), 32);
+  EXPECT_EQ(team.threads(), 2);
+  team.record(2, 50.0);
+  EXPECT_EQ(team.seconds_all(), 2.0);
+  EXPECT_EQ(team.threads(), 2);
+  team.record(2, 0.5);
+  EXPECT_EQ(team.seconds_all(), 1.25);
+  // Still not clearly faster: one thread again, the next probe 64 repetitions later.
+  EXPECT_EQ(run(team, 64, 1.0, 0.5), 64);
+  EXPECT_EQ(run(team, 2, 1.0, 0.5), 0);
+  // Counted 0.5: the time is now 0.875 < 0.95, and two threads run.
+  EXPECT_EQ(team.seconds_all(), 0.875);
+  EXPECT_EQ(run(team, 10, 1.0, 0.5), 0);
   omp_set_num_threads(threads);
 #else
   GTEST_SKIP() << "built without OpenMP";
