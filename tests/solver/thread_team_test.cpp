@@ -27,6 +27,24 @@ int run(AdaptiveTeam& team, int repetitions, double one, double all) {
   return on_one;
 }
 
+#ifdef _OPENMP
+/// The team's first repetitions (warm-ups and kFirstSamples on each size); returns how many ran
+/// on one thread.
+int run_first_samples(AdaptiveTeam& team, double one, double all) {
+  return run(team, AdaptiveTeam::kWarmupsAll + 1 + 2 * AdaptiveTeam::kFirstSamples, one, all);
+}
+
+/// Two OpenMP threads for its lifetime, then the count before.
+class TwoThreads {
+ public:
+  TwoThreads() { omp_set_num_threads(2); }
+  ~TwoThreads() { omp_set_num_threads(m_before); }
+
+ private:
+  int m_before = omp_get_max_threads();
+};
+#endif
+
 TEST(AdaptiveTeam, RunsTheFasterSizeAndFollowsAChangeOfLoad) {
 #ifdef _OPENMP
   const int threads = omp_get_max_threads();
@@ -88,8 +106,7 @@ TEST(AdaptiveTeam, RunsTheFasterSizeAndFollowsAChangeOfLoad) {
 
 TEST(AdaptiveTeam, LeavesAWronglyChosenTeamWithinAFewRepetitions) {
 #ifdef _OPENMP
-  const int threads = omp_get_max_threads();
-  omp_set_num_threads(2);
+  const TwoThreads two;
   AdaptiveTeam team;
   // One lucky two-thread sample (0.5 s) among slow ones: two threads chosen...
   for (int k = 0; k < AdaptiveTeam::kWarmupsAll; ++k) team.record(team.threads(), 1.3);
@@ -100,7 +117,6 @@ TEST(AdaptiveTeam, LeavesAWronglyChosenTeamWithinAFewRepetitions) {
   // 0.95), after the first one, which follows one thread's and is not counted.
   EXPECT_EQ(run(team, 4, 1.0, 1.3), 0);
   EXPECT_EQ(run(team, 1, 1.0, 1.3), 1);
-  omp_set_num_threads(threads);
 #else
   GTEST_SKIP() << "built without OpenMP";
 #endif
@@ -108,18 +124,15 @@ TEST(AdaptiveTeam, LeavesAWronglyChosenTeamWithinAFewRepetitions) {
 
 TEST(AdaptiveTeam, ProbesAtGrowingIntervalsUpToProbeEvery) {
 #ifdef _OPENMP
-  const int threads = omp_get_max_threads();
-  omp_set_num_threads(2);
+  const TwoThreads two;
   AdaptiveTeam team;  // probe_every 64
   // Warm-ups, then three samples of each: two threads twice as fast.
-  EXPECT_EQ(run(team, AdaptiveTeam::kWarmupsAll + 1 + 2 * AdaptiveTeam::kFirstSamples, 1.0, 0.5),
-            1 + AdaptiveTeam::kFirstSamples);
+  EXPECT_EQ(run_first_samples(team, 1.0, 0.5), 1 + AdaptiveTeam::kFirstSamples);
   // One thread as a probe after 32 repetitions, then every 64.
   for (const int interval : {32, 64, 64, 64}) {
     EXPECT_EQ(run(team, interval, 1.0, 0.5), 0) << interval;
     EXPECT_EQ(run(team, 1, 1.0, 0.5), 1) << interval;
   }
-  omp_set_num_threads(threads);
 #else
   GTEST_SKIP() << "built without OpenMP";
 #endif
@@ -127,12 +140,10 @@ TEST(AdaptiveTeam, ProbesAtGrowingIntervalsUpToProbeEvery) {
 
 TEST(AdaptiveTeam, ProbesAllThreadsTwiceAndCountsTheSecond) {
 #ifdef _OPENMP
-  const int threads = omp_get_max_threads();
-  omp_set_num_threads(2);
+  const TwoThreads two;
   AdaptiveTeam team;  // probe_every 64
   // Warm-ups, then three samples of each: one thread faster (a busy second core).
-  EXPECT_EQ(run(team, AdaptiveTeam::kWarmupsAll + 1 + 2 * AdaptiveTeam::kFirstSamples, 1.0, 2.0),
-            1 + AdaptiveTeam::kFirstSamples);
+  EXPECT_EQ(run_first_samples(team, 1.0, 2.0), 1 + AdaptiveTeam::kFirstSamples);
   EXPECT_EQ(team.seconds_all(), 2.0);
   // After 32 repetitions on one thread, two on all threads: the first, slow as two threads are
   // after one (the idle core woken), is not counted; the second counts half.
@@ -149,7 +160,6 @@ TEST(AdaptiveTeam, ProbesAllThreadsTwiceAndCountsTheSecond) {
   // Counted 0.5: the time is now 0.875 < 0.95, and two threads run.
   EXPECT_EQ(team.seconds_all(), 0.875);
   EXPECT_EQ(run(team, 10, 1.0, 0.5), 0);
-  omp_set_num_threads(threads);
 #else
   GTEST_SKIP() << "built without OpenMP";
 #endif
