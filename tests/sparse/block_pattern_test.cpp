@@ -14,6 +14,7 @@
 namespace {
 
 using hooke::BlockPattern;
+using hooke::Index;
 using hooke::Mat3;
 
 /// A value unique to entry (r, c) of block (i, j), never zero.
@@ -126,4 +127,49 @@ TEST(BlockPattern, EveryDiagonalBlockExists) {
   q.finalize();
   EXPECT_EQ(q.num_blocks(), n + 2);
   for (int i = 0; i < n; ++i) EXPECT_NO_THROW(q.slot(i, i));
+}
+
+TEST(BlockPattern, MovingBlocksWritesTheSameValuesWithAndWithoutStreaming) {
+  // A chain coupled three ahead, with particle 30 coupled to 70 others (its block column, 71
+  // blocks, is larger than the streaming move's staging buffer), moved in ranges that start at
+  // every alignment of the value array.
+  const int n = 200;
+  BlockPattern p(n);
+  for (int i = 0; i < n; ++i)
+    for (int d = 1; d <= 3 && i + d < n; ++d) p.add_pair(i, i + d);
+  for (int i = 100; i < 170; ++i) p.add_pair(30, i);
+  p.finalize();
+  const size_t values = size_t(p.values_begin(n));
+  std::vector<double> blocks(values);
+  for (size_t k = 0; k < values; ++k) blocks[k] = 0.25 + double(k);
+  for (int a = 0; a < 8; ++a)
+    for (const int offset : {0, 1}) {
+      const int b = n - a;
+      std::vector<double> plain(values + 1, -1.0), streamed(values + 1, -1.0);
+      std::vector<double> ring_plain = blocks, ring_streamed = blocks;
+      p.move_blocks_to_values(a, b, ring_plain.data(), -1, plain.data() + offset, false);
+      p.move_blocks_to_values(a, b, ring_streamed.data(), -1, streamed.data() + offset, true);
+      BlockPattern::store_fence();
+      EXPECT_EQ(plain, streamed) << "from particle " << a << ", offset " << offset;
+      EXPECT_EQ(ring_plain, ring_streamed) << "from particle " << a;
+      // The moved blocks are zero in the ring, the others untouched; each value is its block's.
+      for (size_t k = 0; k < values; ++k) {
+        const bool moved = Index(k) >= p.values_begin(a) && Index(k) < p.values_begin(b);
+        ASSERT_EQ(ring_streamed[k], moved ? 0.0 : blocks[k]) << k;
+      }
+    }
+  // Where the values went: entry (r, c) of block k of block column j (9 values per block, column
+  // c of all the column's blocks after one another).
+  std::vector<double> out(values, -1.0), ring = blocks;
+  p.move_blocks_to_values(0, n, ring.data(), -1, out.data(), true);
+  BlockPattern::store_fence();
+  for (int j = 0; j < n; ++j) {
+    const Index b0 = p.blocks_begin(j), nb = p.blocks_begin(j + 1) - b0;
+    for (Index k = 0; k < nb; ++k)
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r)
+          ASSERT_EQ(out[size_t(9 * b0 + 3 * nb * c + 3 * k + r)],
+                    blocks[size_t(9 * (b0 + k) + 3 * c + r)])
+              << "block column " << j << ", block " << k;
+  }
 }
