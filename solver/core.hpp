@@ -131,6 +131,21 @@ inline void parallel_for(long long n, long long threshold, Body&& body) {
   }
 }
 
+/// Calls body(begin, end) over [0, n) cut into 64 pieces handed out one at a time to the threads
+/// when run_parallel(work, threshold), else once for all of [0, n). For loops whose cost is not n
+/// (the rows of a sparse product: work is its stored entries) and whose pieces write disjoint
+/// entries, each computed the same way by whichever thread: the result does not depend on the
+/// thread count, and a thread whose core another process shares takes fewer pieces.
+template <typename Body>
+inline void parallel_pieces(long long n, long long work, long long threshold, Body&& body) {
+  if (run_parallel(work, threshold)) {
+#pragma omp parallel for schedule(dynamic, 1)
+    for (long long p = 0; p < 64; ++p) body(n * p / 64, n * (p + 1) / 64);
+  } else {
+    body(0LL, n);
+  }
+}
+
 /// Calls body(begin, end) over [0, n) cut into blocks of kRangeBlock entries: blocks handed out
 /// one at a time to the threads when run_parallel(n, kRangeThreshold), else one call for all of
 /// [0, n). For element-wise vector work (copies, axpys, scalings of state vectors): each entry is

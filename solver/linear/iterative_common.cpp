@@ -74,22 +74,15 @@ void CsrMirror::multiply(ConstRef x, VecRef y) const {
   const double* v = value.data();
   const double* xp = x.data();
   double* yp = y.data();
-  auto rows = [&](long long r0, long long r1) {
+  // Each row is one thread's sum in a fixed order: any thread count and any hand-out give the
+  // same bits.
+  parallel_pieces(n, static_cast<long long>(value.size()), 200000, [&](long long r0, long long r1) {
     for (long long r = r0; r < r1; ++r) {
       double a = 0.0;
       for (int k = rs[r]; k < rs[r + 1]; ++k) a += v[k] * xp[c[k]];
       yp[r] = a;
     }
-  };
-  if (run_parallel(static_cast<long long>(value.size()), 200000)) {
-    // 64 blocks of rows handed out one at a time: a thread whose core another process shares
-    // takes fewer of them. Each row is one thread's sum in a fixed order: any thread count and
-    // any hand-out give the same bits.
-#pragma omp parallel for schedule(dynamic, 1)
-    for (long long b = 0; b < 64; ++b) rows(n * b / 64, n * (b + 1) / 64);
-  } else {
-    rows(0, n);
-  }
+  });
 }
 
 double begin_solve(const char* name, const SparseMatrix* A, ConstRef b, VecRef x,

@@ -85,22 +85,14 @@ void SymmetricProduct::multiply(const SparseMatrix& A, ConstRef x, VecRef y) con
   const bool blocks = blocked();
   HOOKE_ASSERT(!blocks || Index(m_block_start.size()) == A.cols() / 3 + 1,
                "SymmetricProduct: A is not the analysed matrix");
-  // Pieces of block rows (blocked) or of rows (scalar).
+  // Pieces of block rows (blocked) or of rows (scalar); each row is one sum in a fixed order.
   const Index units = blocks ? A.cols() / 3 : A.cols();
-  auto piece = [&](Index u0, Index u1) {
+  parallel_pieces(units, A.nonZeros(), 200000, [&](long long u0, long long u1) {
     if (blocks)
       block_rows(A.valuePtr(), m_block_start.data(), m_block_row.data(), xp, yp, u0, u1);
     else
       scalar_rows(A, xp, yp, u0, u1);
-  };
-  if (run_parallel(static_cast<long long>(A.nonZeros()), 200000)) {
-    // 64 pieces handed out one at a time: a thread whose core another process shares takes fewer
-    // of them. Each row is one thread's sum in a fixed order: any hand-out gives the same bits.
-#pragma omp parallel for schedule(dynamic, 1)
-    for (long long p = 0; p < 64; ++p) piece(units * p / 64, units * (p + 1) / 64);
-  } else {
-    piece(0, units);
-  }
+  });
 }
 
 }  // namespace hooke
