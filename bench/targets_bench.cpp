@@ -18,7 +18,8 @@
 // .../threads:T/busy:1 with T = 1 and 2 while a competing process spins on the last core
 // (bench/busy_core.hpp), one-thread and two-thread cases in one invocation: the two-thread run
 // should never be slower. threads:0 is the default thread count, on a quiet machine.
-// Prints OPENBLAS_CORETYPE, OPENBLAS_NUM_THREADS, OMP_NUM_THREADS and GOMP_SPINCOUNT.
+// Prints OPENBLAS_CORETYPE, OPENBLAS_NUM_THREADS, OPENBLAS_THREAD_TIMEOUT, OMP_NUM_THREADS and
+// GOMP_SPINCOUNT.
 //   build/bench/hooke_bench_targets --benchmark_counters_tabular=true
 #include <benchmark/benchmark.h>
 #include <omp.h>
@@ -141,8 +142,8 @@ void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int
 }
 
 const int registered = [] {
-  for (const char* v :
-       {"OPENBLAS_CORETYPE", "OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "GOMP_SPINCOUNT"}) {
+  for (const char* v : {"OPENBLAS_CORETYPE", "OPENBLAS_NUM_THREADS", "OPENBLAS_THREAD_TIMEOUT",
+                        "OMP_NUM_THREADS", "GOMP_SPINCOUNT"}) {
     const char* value = std::getenv(v);
     benchmark::AddCustomContext(v, value ? value : "(unset)");
   }

@@ -99,7 +99,7 @@ void print_scene_info(const Scene& scene, std::ostream& out) {
   out << std::setprecision(6);
   out << "scene:      " << scene.file << "\n";
   // The threads a run gets and libgomp's wait policy (hooke/thread_policy.hpp: the program sets
-  // GOMP_SPINCOUNT unless the user set it or OMP_WAIT_POLICY).
+  // GOMP_SPINCOUNT unless the user set it or OMP_WAIT_POLICY, and OPENBLAS_THREAD_TIMEOUT).
 #ifdef _OPENMP
   out << "threads:    " << omp_get_max_threads() << " (OpenMP";
   for (const char* v : {"GOMP_SPINCOUNT", "OMP_WAIT_POLICY"})
@@ -108,6 +108,9 @@ void print_scene_info(const Scene& scene, std::ostream& out) {
 #else
   out << "threads:    1 (built without OpenMP)\n";
 #endif
+  // How long OpenBLAS's idle threads spin after a BLAS call (thread_policy.hpp).
+  if (const char* value = std::getenv("OPENBLAS_THREAD_TIMEOUT"))
+    out << "openblas:   OPENBLAS_THREAD_TIMEOUT=" << value << "\n";
   if (scene.is_ode()) {
     out << "kind:       first-order ODE test problem, dimension " << scene.ode->dimension() << "\n";
     out << "method:     " << scene.integrator.method << ", dt = " << scene.time.dt

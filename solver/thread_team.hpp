@@ -67,6 +67,16 @@ class AdaptiveTeam {
     m_last_threads = t;
     return t;
   }
+  /// The size the team runs at present, without counting a repetition: all available threads
+  /// until it has its first samples of both sizes, then the faster. For the parallel loops around
+  /// the repeated region (a step's set-up and residual), which then do not wait at every loop for
+  /// a thread whose core is busy once the team has left it (run them inside a
+  /// ThreadCountScope(team.current())).
+  int current() const {
+    const int all = available();
+    if (all <= 1 || m_seen[0] < 1 + kFirstSamples) return all;
+    return one_is_faster() ? 1 : all;
+  }
   /// Reports that a repetition on `threads` threads took `seconds` of wall time.
   void record(int threads, double seconds) {
     const int k = threads > 1 ? 1 : 0;

@@ -31,11 +31,13 @@ import csv  # noqa: E402
 import os  # noqa: E402
 import tempfile  # noqa: E402
 
-# hooke's OpenMP wait policy (solver/thread_policy.hpp), which libgomp reads when it is loaded:
-# set here, before the compiled module loads it, unless the user chose one (or libgomp is already
-# loaded by another module, when this has no effect).
+# hooke's wait policies for libgomp's and OpenBLAS's idle threads (solver/thread_policy.hpp),
+# which the libraries read when they are loaded: set here, before the compiled module loads them,
+# unless the user chose them (or another module already loaded the library, when this has no
+# effect).
 if "GOMP_SPINCOUNT" not in os.environ and "OMP_WAIT_POLICY" not in os.environ:
     os.environ["GOMP_SPINCOUNT"] = "10000"
+os.environ.setdefault("OPENBLAS_THREAD_TIMEOUT", "20")
 
 from . import _hooke  # noqa: E402
 from ._hooke import (Scene, Simulation, System, linear_solvers, load_scene,  # noqa: E402,F401

@@ -204,17 +204,24 @@ elseif(CASE STREQUAL "diverge_ode")
   endif()
 
 elseif(CASE STREQUAL "info")
-  # libgomp's wait policy: hooke sets GOMP_SPINCOUNT (solver/thread_policy.hpp) unless the user
-  # chose a policy, and says which it runs with.
+  # libgomp's and OpenBLAS's wait policies: hooke sets GOMP_SPINCOUNT and OPENBLAS_THREAD_TIMEOUT
+  # (solver/thread_policy.hpp) unless the user chose them, and says which it runs with.
   unset(ENV{OMP_WAIT_POLICY})
   set(ENV{GOMP_SPINCOUNT} 123)
+  set(ENV{OPENBLAS_THREAD_TIMEOUT} 7)
   hooke_exec(info hanging_cloth)
   expect_rc(0)
   expect_contains("${out}" "GOMP_SPINCOUNT=123)" "stdout (the user's spin count)")
+  expect_contains("${out}" "OPENBLAS_THREAD_TIMEOUT=7\n" "stdout (the user's OpenBLAS timeout)")
   unset(ENV{GOMP_SPINCOUNT})
   hooke_exec(info hanging_cloth)
   expect_rc(0)
   expect_contains("${out}" "GOMP_SPINCOUNT=10000)" "stdout (hooke's spin count)")
+  expect_contains("${out}" "OPENBLAS_THREAD_TIMEOUT=7\n" "stdout (the user's OpenBLAS timeout)")
+  unset(ENV{OPENBLAS_THREAD_TIMEOUT})
+  hooke_exec(info hanging_cloth)
+  expect_rc(0)
+  expect_contains("${out}" "OPENBLAS_THREAD_TIMEOUT=20\n" "stdout (hooke's OpenBLAS timeout)")
   expect_contains("${out}" "particles:  1024 (2 pinned)" "stdout")
   expect_contains("${out}" "omega_max:" "stdout")
   expect_contains("${out}" "rk4" "stdout")

@@ -3,7 +3,8 @@
 // counts), then runs the faster one (all threads only when clearly faster), probes the other at
 // growing intervals up to every probe_every repetitions (two repetitions on all threads, the first
 // not counted), never counts a repetition on all threads that follows one on a single thread, and
-// follows a change of load (the second core becoming busy, then free again) within a few probes.
+// follows a change of load (the second core becoming busy, then free again) within a few probes;
+// current() is all threads until both sizes are measured, then the faster.
 #include "hooke/thread_team.hpp"
 
 #include <gtest/gtest.h>
@@ -160,6 +161,33 @@ TEST(AdaptiveTeam, ProbesAllThreadsTwiceAndCountsTheSecond) {
   // Counted 0.5: the time is now 0.875 < 0.95, and two threads run.
   EXPECT_EQ(team.seconds_all(), 0.875);
   EXPECT_EQ(run(team, 10, 1.0, 0.5), 0);
+#else
+  GTEST_SKIP() << "built without OpenMP";
+#endif
+}
+
+TEST(AdaptiveTeam, CurrentIsAllThreadsUntilBothSizesAreMeasuredThenTheChoice) {
+#ifdef _OPENMP
+  const TwoThreads two;
+  AdaptiveTeam busy, quiet;
+  // All threads while the samples are taken (what a step's own loops ran on before), whatever
+  // the samples say; no repetition is counted by asking.
+  for (int k = 0; k < AdaptiveTeam::kWarmupsAll + 1 + 2 * AdaptiveTeam::kFirstSamples; ++k) {
+    EXPECT_EQ(busy.current(), 2) << k;
+    const int t = busy.threads();
+    busy.record(t, t == 1 ? 1.0 : 2.0);
+  }
+  // Then the size the iterations run.
+  EXPECT_EQ(busy.current(), 1);
+  EXPECT_EQ(busy.current(), 1);
+  EXPECT_EQ(run(busy, 10, 1.0, 2.0), 10);
+  EXPECT_EQ(busy.current(), 1);
+  EXPECT_EQ(run_first_samples(quiet, 1.0, 0.5), 1 + AdaptiveTeam::kFirstSamples);
+  EXPECT_EQ(quiet.current(), 2);
+  EXPECT_EQ(run(quiet, 10, 1.0, 0.5), 0);
+  // A probe of one thread does not change it.
+  EXPECT_EQ(run(quiet, 30, 1.0, 0.5), 1);
+  EXPECT_EQ(quiet.current(), 2);
 #else
   GTEST_SKIP() << "built without OpenMP";
 #endif
