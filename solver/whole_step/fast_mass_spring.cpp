@@ -229,32 +229,51 @@ double FastMassSpringStepper::local_step(ConstRef x, bool gradient) {
   double energy = 0.0;
   for (const SpringSet* sp : m_f.springs) {
     const SpringSet& s = *sp;
-    // Each spring's best direction d = L (x_i - x_j) / |x_i - x_j| enters b as +k d at i and -k d
-    // at j. Spring groups run in parallel (SpringSet's phases: no two threads write one
-    // particle), energies are summed per group and then in group order: deterministic.
-    auto body = [&](size_t k) {
-      const int i = s.i[k], j = s.j[k];
-      const Vec3 e = x.segment<3>(3 * i) - x.segment<3>(3 * j);
-      const double l = e.norm(), L = s.rest_length[k], c = s.coeff[k];
-      // At l = 0 every direction is optimal (the energy is c L^2 / 2 for all of them): take x.
-      const Vec3 d = l > 0.0 ? Vec3((L / l) * e) : Vec3(L, 0.0, 0.0);
-      m_acc.segment<3>(3 * i) += c * d;
-      m_acc.segment<3>(3 * j) -= c * d;
-      if (gradient) {  // grad_i of c/2 (l - L)^2 is c (e - d), formed without cancellation
-        m_spring_grad.segment<3>(3 * i) += c * (e - d);
-        m_spring_grad.segment<3>(3 * j) -= c * (e - d);
+    // Springs [begin, end) in order; returns their energy. Each spring's best direction d =
+    // L (x_i - x_j) / |x_i - x_j| enters b as +c d at i and -c d at j. The i side is summed in
+    // registers over each run of springs that share i (the mesh builders list a particle's springs
+    // together) and added once per run: added spring by spring, each addition waited for the
+    // previous one's store (411 x 411 target, one thread: 4.7-5.1 -> 4.4-4.6 ms per local step).
+    auto springs = [&](size_t begin, size_t end) {
+      double e = 0.0;
+      int run = -1;
+      Vec3 acc = Vec3::Zero(), grad = Vec3::Zero();
+      auto close_run = [&] {
+        if (run < 0) return;
+        m_acc.segment<3>(3 * run) += acc;
+        if (gradient) m_spring_grad.segment<3>(3 * run) += grad;
+      };
+      for (size_t k = begin; k < end; ++k) {
+        const int i = s.i[k], j = s.j[k];
+        if (i != run) {
+          close_run();
+          run = i;
+          acc.setZero();
+          grad.setZero();
+        }
+        const Vec3 u = x.segment<3>(3 * i) - x.segment<3>(3 * j);
+        const double l = u.norm(), L = s.rest_length[k], c = s.coeff[k];
+        // At l = 0 every direction is optimal (the energy is c L^2 / 2 for all of them): take x.
+        const Vec3 d = l > 0.0 ? Vec3((L / l) * u) : Vec3(L, 0.0, 0.0);
+        acc += c * d;
+        m_acc.segment<3>(3 * j) -= c * d;
+        if (gradient) {  // grad_i of c/2 (l - L)^2 is c (u - d), formed without cancellation
+          grad += c * (u - d);
+          m_spring_grad.segment<3>(3 * j) -= c * (u - d);
+        }
+        e += 0.5 * c * (l - L) * (l - L);
       }
-      return 0.5 * c * (l - L) * (l - L);
+      close_run();
+      return e;
     };
+    // Spring groups run in parallel (SpringSet's phases: no two threads write one particle),
+    // energies are summed per group and then in group order: deterministic.
     if (s.num_groups() == 0) {
-      for (size_t k = 0; k < s.size(); ++k) energy += body(k);
+      energy += springs(0, s.size());
       continue;
     }
-    s.for_each_group([&](size_t g) {
-      double e = 0.0;
-      for (size_t k = s.group_start[g]; k < s.group_start[g + 1]; ++k) e += body(k);
-      m_group_energy[g] = e;
-    });
+    s.for_each_group(
+        [&](size_t g) { m_group_energy[g] = springs(s.group_start[g], s.group_start[g + 1]); });
     for (size_t g = 0; g < s.num_groups(); ++g) energy += m_group_energy[g];
   }
   parallel_ranges(static_cast<long long>(m_free.size()), [&](long long b, long long e) {
