@@ -198,9 +198,10 @@ class FastMassSpringStepper final : public Stepper {
 
   const MassSpringSystem& m_sys;
   FastMassSpringOptions m_opt;
-  SpringPotentialForces m_f;  // springs, gravity, drag and wind of the system
-  std::vector<Index> m_free;  // free particle ids, by row of the global system
-  std::vector<Index> m_row;   // row of each particle, -1 if pinned
+  SpringPotentialForces m_f;   // springs, gravity, drag and wind of the system
+  std::vector<Index> m_free;   // free particle ids, by row of the global system
+  std::vector<Index> m_row;    // row of each particle, -1 if pinned
+  std::vector<Index> m_fixed;  // pinned particle ids
 
   SparseMatrix m_A;           // global matrix, free x free, both triangles
   std::vector<Index> m_diag;  // value index of each row's diagonal entry
