@@ -34,6 +34,12 @@ struct CholmodSolver::Impl {
   bool factored = false;
   std::array<std::unique_ptr<SupernodalSolver>, 4> sn;  // per K, made on first use
   Vec column;                                           // simplicial fallback's one column
+  std::vector<double> to_rows;  // solve_interleaved_to_rows' solution before it is placed
+  // set_solution_rows: the caller's rows, and (after analyze, on the next solve) the same
+  // composed with the factor's permutation, perm_rows[k] = rows[perm[k]].
+  std::vector<Index> rows;
+  std::vector<std::int64_t> perm_rows;
+  bool perm_rows_ready = false;
 
   SupernodalFactorView view() const {
     static_assert(sizeof(SuiteSparse_long) == sizeof(std::int64_t), "64-bit CHOLMOD indices");
@@ -101,6 +107,7 @@ LinearSummary CholmodSolver::analyze(const SparseMatrix& A) {
   if (m->L) cholmod_l_free_factor(&m->L, &m->c);
   m->factored = false;
   m->analyzed = false;
+  m->perm_rows_ready = false;
   if (m->n == 0) {
     // Nothing to order or factor (e.g. every particle pinned): CHOLMOD rejects a 0 x 0 matrix
     // (CHOLMOD_INVALID), so keep no factor and let factor() and the solves do nothing.
@@ -223,7 +230,8 @@ LinearSummary CholmodSolver::solve_columns(const Eigen::Ref<const Eigen::MatrixX
   return s;
 }
 
-LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K) {
+LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K,
+                                               const std::int64_t* x_perm) {
   const auto t0 = Clock::now();
   LinearSummary s;
   HOOKE_ASSERT(m->factored, "cholmod: solve without a successful factor");
@@ -237,8 +245,9 @@ LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K
                                                      : SupernodalSolver::Precision::Double);
       sn->bind(m->view());
     }
-    sn->solve(b, x);
+    sn->solve(b, x, x_perm);
   } else {
+    HOOKE_ASSERT(!x_perm, "cholmod: rows for a simplicial factor's solve");
     m->column.resize(m->n);
     for (int c = 0; c < K; ++c) {
       for (Index r = 0; r < m->n; ++r) m->column[r] = b[K * r + c];
@@ -249,6 +258,34 @@ LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K
   }
   s.solve_seconds = seconds_since(t0);
   return s;
+}
+
+void CholmodSolver::set_solution_rows(std::vector<Index> rows) {
+  m->rows = std::move(rows);
+  m->perm_rows_ready = false;
+}
+
+LinearSummary CholmodSolver::solve_interleaved_to_rows(const double* b, double* x, int K) {
+  HOOKE_ASSERT(m->factored, "cholmod: solve without a successful factor");
+  HOOKE_ASSERT(Index(m->rows.size()) == m->n, "cholmod: solve_interleaved_to_rows with "
+                                                  << m->rows.size() << " rows for n = " << m->n);
+  if (m->n == 0 || !m->L->is_super) {  // through the columns: solve, then place the rows
+    const auto t0 = Clock::now();
+    m->to_rows.resize(K * m->n);
+    LinearSummary s = solve_interleaved(b, m->to_rows.data(), K);
+    if (s.status != Status::Converged) return s;
+    for (Index r = 0; r < m->n; ++r)
+      for (int c = 0; c < K; ++c) x[K * m->rows[size_t(r)] + c] = m->to_rows[K * r + c];
+    s.solve_seconds = seconds_since(t0);
+    return s;
+  }
+  if (!m->perm_rows_ready) {  // once per analysis
+    const std::int64_t* perm = m->view().perm;
+    m->perm_rows.resize(size_t(m->n));
+    for (Index k = 0; k < m->n; ++k) m->perm_rows[size_t(k)] = m->rows[size_t(perm[k])];
+    m->perm_rows_ready = true;
+  }
+  return solve_interleaved(b, x, K, m->perm_rows.data());
 }
 
 SupernodalFactorView CholmodSolver::supernodal_view() const {

@@ -1,6 +1,7 @@
 #pragma once
 #include <memory>
 #include <string>
+#include <vector>
 
 #include "hooke/linear/linear_solver.hpp"
 #include "hooke/linear/supernodal_solve.hpp"
@@ -71,7 +72,17 @@ class CholmodSolver final : public LinearSolver {
   /// SupernodalSolver (faster than cholmod_l_solve2 for few right-hand sides: see its comment); a
   /// simplicial one goes through cholmod_l_solve2 column by column. x may alias b. Does not
   /// allocate after the first call with a given K.
-  LinearSummary solve_interleaved(const double* b, double* x, int K);
+  LinearSummary solve_interleaved(const double* b, double* x, int K) {
+    return solve_interleaved(b, x, K, nullptr);
+  }
+  /// Where solve_interleaved_to_rows writes row r of the solution: x + K rows[r] (one row per
+  /// unknown, n in all, distinct). Kept across analyze() and factor().
+  void set_solution_rows(std::vector<Index> rows);
+  /// solve_interleaved with row r of the solution written at x + K rows[r] (set_solution_rows):
+  /// a caller whose unknowns are some rows of a larger vector (the free particles of a state)
+  /// needs no pass of its own to place them. x must not alias b. The first call after analyze()
+  /// composes the rows with the factor's permutation (allocates); later calls do not allocate.
+  LinearSummary solve_interleaved_to_rows(const double* b, double* x, int K);
   /// The factor's supernodal arrays (after factor(); all null if the factor is simplicial). Valid
   /// until the next analyze() or factor().
   SupernodalFactorView supernodal_view() const;
@@ -85,6 +96,9 @@ class CholmodSolver final : public LinearSolver {
   long long factorizations() const override;
 
  private:
+  /// solve_interleaved, row k of the factor's order going to x + K x_perm[k] (null: perm[k]).
+  LinearSummary solve_interleaved(const double* b, double* x, int K, const std::int64_t* x_perm);
+
   struct Impl;
   std::unique_ptr<Impl> m;
 };

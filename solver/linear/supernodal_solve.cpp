@@ -318,7 +318,8 @@ SupernodalSolver::Shape SupernodalSolver::shape() const {
   return out;
 }
 
-void SupernodalSolver::solve(const double* b, double* x) {
+void SupernodalSolver::solve(const double* b, double* x, const std::int64_t* x_perm) {
+  if (!x_perm) x_perm = m_f.perm;
   HOOKE_ASSERT(m_f.value, "SupernodalSolver: solve before bind");
   SplitView split{m_top.data(),
                   I(m_top_row.size()),
@@ -344,11 +345,13 @@ void SupernodalSolver::solve(const double* b, double* x) {
   auto run = [&](const auto& pk) {
 #if HOOKE_SUPERNODAL_AVX2
     if (m_avx2) {
-      sn_avx2::solve_any(m_K, m_f, pk, split, threads, b, x, m_y.data(), work, m_delta.data());
+      sn_avx2::solve_any(m_K, m_f, pk, split, threads, b, x, x_perm, m_y.data(), work,
+                         m_delta.data());
       return;
     }
 #endif
-    sn_base::solve_any(m_K, m_f, pk, split, threads, b, x, m_y.data(), work, m_delta.data());
+    sn_base::solve_any(m_K, m_f, pk, split, threads, b, x, x_perm, m_y.data(), work,
+                       m_delta.data());
   };
   if (m_precision == Precision::Single)
     run(Packed<float>{m_inv_start.data(), m_off_start.data(), m_packed_single.data(),

@@ -47,8 +47,12 @@ class SupernodalSolver {
   /// Solves with factor f from now on: inverts its diagonal blocks (call again after every
   /// refactorization); grows the workspace if f needs more (the only allocation).
   void bind(const SupernodalFactorView& f);
-  /// x = A^-1 b; b and x are K n values, interleaved; x may alias b.
-  void solve(const double* b, double* x);
+  /// x = A^-1 b; b and x are K n values, interleaved; x may alias b. With x_perm, the solution's
+  /// row that the factor orders k-th (the row perm[k] of A) goes to x + K x_perm[k] instead of x +
+  /// K perm[k]: a caller whose unknowns are some rows of a larger vector passes its rows composed
+  /// with the factor's permutation and needs no pass of its own to scatter them (x must not alias
+  /// b then, and must hold every row x_perm names).
+  void solve(const double* b, double* x, const std::int64_t* x_perm = nullptr);
   int rhs() const { return m_K; }
   /// The most bins of subtrees the tree is split into (split_tree in the .cpp).
   static constexpr int kMaxBins = 8;

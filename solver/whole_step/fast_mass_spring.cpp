@@ -127,6 +127,7 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
   if (m_chol && nf > 0) {
     const LinearSummary a = m_chol->analyze(m_A);
     if (a.status != Status::Converged) throw SetupError("fast-mass-spring: " + a.message);
+    m_chol->set_solution_rows(m_free);  // global_solve_into
   }
 
   const Index dofs = 3 * n;
@@ -411,6 +412,14 @@ Status FastMassSpringStepper::global_solve(const Rows3& B, Rows3& X, std::string
   return s.status;
 }
 
+Status FastMassSpringStepper::global_solve_into(const Rows3& B, VecRef x, std::string& message) {
+  const auto t0 = Clock::now();
+  const LinearSummary s = m_chol->solve_interleaved_to_rows(B.data(), x.data(), 3);
+  m_global_seconds += seconds_since(t0);
+  if (s.status != Status::Converged) message = "fast-mass-spring: " + s.message;
+  return s.status;
+}
+
 StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
   // The step's own parallel loops (set-up, the L-BFGS start, the residual) on the team's present
   // size: with one core busy, a loop on two threads waits for the descheduled one. Measured on
@@ -495,16 +504,19 @@ bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
       g_prev = g;
     }
     if (k == N) break;
-    // Global step: xhat = A^{-1} b(d(x_k)), or one Jacobi sweep towards it from x_k.
+    // Global step: xhat = A^{-1} b(d(x_k)), or one Jacobi sweep towards it from x_k. Plain
+    // iterations with the double factor solve straight into x's free rows (no scatter pass).
+    const bool into_x = m_chol && !chebyshev && m_opt.factor_precision == FactorPrecision::Double;
     if (!m_chol) {
       jacobi_sweep(m_B, m_x, m_X);
-    } else if (global_step(m_B, m_x, m_X, out.message) != Status::Converged) {
+    } else if ((into_x ? global_solve_into(m_B, m_x, out.message)
+                       : global_step(m_B, m_x, m_X, out.message)) != Status::Converged) {
       out.status = Status::Fatal;
       return false;
     }
     ++it;
     if (!chebyshev) {
-      scatter(m_X, m_x);
+      if (!into_x) scatter(m_X, m_x);
     } else {
       m_xhat = m_x;
       scatter(m_X, m_xhat);

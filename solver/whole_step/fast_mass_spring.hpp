@@ -178,6 +178,8 @@ class FastMassSpringStepper final : public Stepper {
   void gather(ConstRef x, Rows3& X) const;
   void scatter(const Rows3& X, VecRef x) const;
   Status global_solve(const Rows3& B, Rows3& X, std::string& message);
+  /// The same solve with its rows written straight to the free particles' entries of x (3n).
+  Status global_solve_into(const Rows3& B, VecRef x, std::string& message);
   /// The local/global iteration's global step from iterate x (3n): X = A^-1 B, or with a
   /// single-precision factor X = x + A~^-1 (B - A x) (FastMassSpringOptions::factor_precision).
   Status global_step(const Rows3& B, ConstRef x, Rows3& X, std::string& message);

@@ -20,6 +20,7 @@
 #include <cstdio>
 #include <limits>
 #include <memory>
+#include <numeric>
 #include <random>
 #include <string>
 #include <unsupported/Eigen/KroneckerProduct>
@@ -934,6 +935,48 @@ TEST(SupernodalSolve, SimplicialFactorTakesCholmodsPath) {
   ASSERT_EQ(setup(chol, A).status, Status::Converged);
   EXPECT_EQ(chol.supernodal_view().value, nullptr);
   EXPECT_EQ(check_interleaved(chol, A, 3, 90, false), 2);
+}
+
+// solve_interleaved_to_rows writes row r of the solution at rows[r] of a longer vector (a state's
+// free particles among all of them): the same bits as solve_interleaved and a placement by hand,
+// every other row left as it was, for a supernodal and a simplicial factor, with K = 1 and 3, and
+// after a new analysis of the matrix with its unknowns renumbered (another fill-reducing
+// permutation, which the rows must be composed with anew).
+TEST(SupernodalSolve, SolvingIntoRowsOfALongerVectorPlacesTheSameBits) {
+  const SparseMatrix& A0 = cloth_problem().A();
+  const Index n = A0.rows(), m = n + n / 3;
+  Eigen::PermutationMatrix<Eigen::Dynamic, Eigen::Dynamic, int> reverse(static_cast<int>(n));
+  for (Index r = 0; r < n; ++r) reverse.indices()[r] = int(n - 1 - r);
+  SparseMatrix A1 = reverse * A0 * reverse.transpose();
+  A1.makeCompressed();
+  std::vector<Index> rows(static_cast<size_t>(m));
+  std::iota(rows.begin(), rows.end(), Index(0));
+  std::mt19937 rng(5);
+  std::shuffle(rows.begin(), rows.end(), rng);
+  rows.resize(size_t(n));  // n distinct rows of m, in no order
+  for (const bool supernodal : {true, false}) {
+    hooke::CholmodOptions o;
+    o.supernodal = supernodal;
+    hooke::CholmodSolver chol(o);
+    chol.set_solution_rows(rows);
+    for (int analysis = 0; analysis < 2; ++analysis) {
+      const SparseMatrix& A = analysis == 0 ? A0 : A1;
+      ASSERT_EQ(setup(chol, A).status, Status::Converged);
+      EXPECT_EQ(chol.supernodal_view().value != nullptr, supernodal);
+      for (const int K : {1, 3}) {
+        SCOPED_TRACE(std::string(supernodal ? "supernodal" : "simplicial") +
+                     ", K = " + std::to_string(K) + ", analysis " + std::to_string(analysis));
+        const Vec b = random_vector(K * n, unsigned(40 + K + analysis));
+        Vec x(K * n), placed = Vec::Constant(K * m, -7.0), want = placed;
+        ASSERT_EQ(chol.solve_interleaved(b.data(), x.data(), K).status, Status::Converged);
+        for (Index r = 0; r < n; ++r)
+          for (int c = 0; c < K; ++c) want[K * rows[size_t(r)] + c] = x[K * r + c];
+        ASSERT_EQ(chol.solve_interleaved_to_rows(b.data(), placed.data(), K).status,
+                  Status::Converged);
+        EXPECT_TRUE(placed == want);
+      }
+    }
+  }
 }
 #endif
 
