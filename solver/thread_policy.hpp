@@ -21,11 +21,11 @@ inline constexpr const char* kGompSpinCount = "10000";
 /// multithreaded BLAS call, that is after every CHOLMOD factorization: the OpenMP thread that
 /// shares a core with it then runs at a fraction of its speed. Measured on the 411 x 411
 /// local/global iteration on two threads (bench/targets_bench.cpp, quiet machine): AdaptiveTeam's
-/// first two-thread repetitions, right after the warm-up step's factorization, took 17.5 ms
-/// against 13.3 ms on one thread whenever they overlapped that spin, so the team chose one thread
-/// for the rest of the run (2 of 8 runs, 13.0 and 13.4 ms per iteration; 8.2-9.2 ms otherwise);
-/// with 2^20, 8 of 8 runs 8.2-9.2 ms. The 256 x 256 backward-Euler step that refactors every step
-/// took the same time with either (1622-1644 against 1622-1692 ms).
+/// first two-thread repetitions, right after the warm-up step's factorization, took 17.0-18.2 ms
+/// against 13.0-14.0 ms on one thread whenever they overlapped that spin, so the team chose one
+/// thread for the rest of the run (2 of 8 runs, 13.0 and 13.4 ms per iteration; 8.3-8.8 ms
+/// otherwise); with 2^20, 8 of 8 runs 8.2-9.2 ms. The 256 x 256 backward-Euler step that refactors
+/// every step took the same time with either (1622-1644 against 1622-1692 ms).
 inline constexpr const char* kOpenBlasThreadTimeout = "20";
 
 /// Call first thing in main(), before any OpenMP region or BLAS call. Sets GOMP_SPINCOUNT =
