@@ -30,7 +30,7 @@ inline constexpr const char* kOpenBlasThreadTimeout = "20";
 
 /// Call first thing in main(), before any OpenMP region or BLAS call. Sets GOMP_SPINCOUNT =
 /// kGompSpinCount unless OMP_WAIT_POLICY or GOMP_SPINCOUNT is set, and OPENBLAS_THREAD_TIMEOUT =
-/// kOpenBlasThreadTimeout unless it is set, and when it set either executes the program again with
+/// kOpenBlasThreadTimeout unless it is set; when it set either, executes the program again with
 /// the same arguments: libgomp and OpenBLAS read their environment once, when they are loaded,
 /// before main, so only a new image of the program sees the values. Returns without doing anything
 /// when the user set them (the user's choice wins; the executed image finds them set) or on a
