@@ -20,8 +20,9 @@ inline constexpr const char* kGompSpinCount = "10000";
 /// (0.1 s), keeps its worker thread spinning on sched_yield for a tenth of a second after every
 /// multithreaded BLAS call, that is after every CHOLMOD factorization: the OpenMP thread that
 /// shares a core with it then runs at a fraction of its speed. Measured on the 411 x 411
-/// local/global iteration on two threads (bench/targets_bench.cpp, quiet machine): AdaptiveTeam's
-/// first two-thread repetitions, right after the warm-up step's factorization, took 17.0-18.2 ms
+/// local/global iteration on two threads (bench/targets_bench.cpp, quiet machine; the repetitions'
+/// times printed by a temporary trace in AdaptiveTeam::record): AdaptiveTeam's first two-thread
+/// repetitions, right after the warm-up step's factorization, took 17.0-18.2 ms
 /// against 13.0-14.0 ms on one thread whenever they overlapped that spin, so the team chose one
 /// thread for the rest of the run (2 of 8 runs, 13.0 and 13.4 ms per iteration; 8.3-8.8 ms
 /// otherwise); with 2^20, 8 of 8 runs 8.2-9.2 ms. The 256 x 256 backward-Euler step that refactors
