@@ -81,12 +81,22 @@ class Force {
                                         const JacobianOptions& /*options*/, size_t /*begin*/,
                                         size_t /*end*/, SparseMatrix& /*K*/,
                                         SparseMatrix& /*D*/) const {}
-  /// The same into contiguous blocks (9 values each, column-major: block k of the pattern's block
-  /// order at K + 9 (k & mask), and at D likewise; D is nullptr when the system stores no D).
-  virtual void add_jacobian_blocks_of_springs(ConstRef /*x*/, ConstRef /*v*/,
-                                              const JacobianOptions& /*options*/, size_t /*begin*/,
-                                              size_t /*end*/, Index /*mask*/, double* /*K*/,
-                                              double* /*D*/) const {}
+  /// Each spring's own blocks, for springs [begin, end) of jacobian_groups() (part of a slice, at
+  /// most kSpringBlockChunk springs): spring n, which adds [[B, -B], [-B, B]] at its endpoints'
+  /// blocks, puts its df/dx block B at BK + 9 (n - begin) and its df/dv block at BD likewise (9
+  /// values, column-major), added to what is there when add_k (add_d) and stored otherwise.
+  /// Returns what it writes, kWroteK | kWroteD, which depends on the options alone (the same for
+  /// any range, also an empty one). MassSpringSystem::assemble_jacobians sums the blocks of the
+  /// forces with the same springs (a spring set and its dampers) before it adds them into the
+  /// matrices' blocks, once. Required when jacobian_groups() is not nullptr.
+  virtual int per_spring_blocks(ConstRef /*x*/, ConstRef /*v*/, const JacobianOptions& /*options*/,
+                                size_t /*begin*/, size_t /*end*/, bool /*add_k*/, bool /*add_d*/,
+                                double* /*BK*/, double* /*BD*/) const {
+    HOOKE_ASSERT(false, name() << " has jacobian_groups() but no per_spring_blocks()");
+    return 0;
+  }
+  static constexpr int kWroteK = 1, kWroteD = 2;
+  static constexpr size_t kSpringBlockChunk = 64;
   /// Matrix-free: y += cv (df/dv) p + cx (df/dx) p at (x, v) with the same options, without
   /// forming the matrices (3n vectors). Returns false if this force does not provide it (the
   /// default); then callers must assemble the matrices instead.

@@ -81,11 +81,11 @@ void HookeSpring::add_jacobians_of_springs(ConstRef x, ConstRef /*v*/,
     add_spring_dfdx(m_springs, n, x, options.clamp_compressed, K);
 }
 
-void HookeSpring::add_jacobian_blocks_of_springs(ConstRef x, ConstRef /*v*/,
-                                                 const JacobianOptions& options, size_t begin,
-                                                 size_t end, Index mask, double* K,
-                                                 double* /*D*/) const {
-  spring_blocks::hooke_spring(m_springs, x, options.clamp_compressed, begin, end, mask, K);
+int HookeSpring::per_spring_blocks(ConstRef x, ConstRef /*v*/, const JacobianOptions& options,
+                                   size_t begin, size_t end, bool add_k, bool /*add_d*/, double* BK,
+                                   double* /*BD*/) const {
+  spring_blocks::hooke_spring(m_springs, x, options.clamp_compressed, begin, end, add_k, BK);
+  return kWroteK;
 }
 
 bool HookeSpring::add_jacobian_product(ConstRef x, ConstRef /*v*/, const JacobianOptions& options,

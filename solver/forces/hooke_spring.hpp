@@ -113,9 +113,8 @@ class HookeSpring final : public Force {
   void add_jacobians_of_springs(ConstRef x, ConstRef v, const JacobianOptions& options,
                                 size_t begin, size_t end, SparseMatrix& K,
                                 SparseMatrix& D) const override;
-  void add_jacobian_blocks_of_springs(ConstRef x, ConstRef v, const JacobianOptions& options,
-                                      size_t begin, size_t end, Index mask, double* K,
-                                      double* D) const override;
+  int per_spring_blocks(ConstRef x, ConstRef v, const JacobianOptions& options, size_t begin,
+                        size_t end, bool add_k, bool add_d, double* BK, double* BD) const override;
   bool add_jacobian_product(ConstRef x, ConstRef v, const JacobianOptions& options, ConstRef p,
                             double cv, double cx, VecRef y) const override;
   double max_strain(ConstRef x) const override;

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "hooke/config.hpp"
+#include "hooke/forces/force.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/forces/spring_damper.hpp"
 
@@ -45,19 +46,28 @@ bool use_avx2() {
 #endif
 
 void hooke_spring(const SpringSet& set, ConstRef x, bool clamp_compressed, size_t begin, size_t end,
-                  Index mask, double* K) {
+                  bool add, double* BK) {
 #if HOOKE_SPRING_BLOCKS_AVX2
-  if (use_avx2()) return avx2::hooke_spring(set, x, clamp_compressed, begin, end, mask, K);
+  if (use_avx2()) return avx2::hooke_spring(set, x, clamp_compressed, begin, end, add, BK);
 #endif
-  base::hooke_spring(set, x, clamp_compressed, begin, end, mask, K);
+  base::hooke_spring(set, x, clamp_compressed, begin, end, add, BK);
 }
 
 void spring_damper(const SpringSet& set, ConstRef x, ConstRef v, bool position_terms, size_t begin,
-                   size_t end, Index mask, double* K, double* D) {
+                   size_t end, bool add_k, bool add_d, double* BK, double* BD) {
 #if HOOKE_SPRING_BLOCKS_AVX2
-  if (use_avx2()) return avx2::spring_damper(set, x, v, position_terms, begin, end, mask, K, D);
+  if (use_avx2())
+    return avx2::spring_damper(set, x, v, position_terms, begin, end, add_k, add_d, BK, BD);
 #endif
-  base::spring_damper(set, x, v, position_terms, begin, end, mask, K, D);
+  base::spring_damper(set, x, v, position_terms, begin, end, add_k, add_d, BK, BD);
+}
+
+void add_springs(const SpringSet& set, size_t begin, size_t end, const double* B,
+                 const unsigned char* first, int shift, Index mask, double* out) {
+#if HOOKE_SPRING_BLOCKS_AVX2
+  if (use_avx2()) return avx2::add_springs(set, begin, end, B, first, shift, mask, out);
+#endif
+  base::add_springs(set, begin, end, B, first, shift, mask, out);
 }
 
 }  // namespace hooke::spring_blocks

@@ -44,12 +44,12 @@ void SpringDamper::add_jacobians_of_springs(ConstRef x, ConstRef v, const Jacobi
     add_damper_jacobians(m_springs, n, x, v, options.damping_position_terms, K, D);
 }
 
-void SpringDamper::add_jacobian_blocks_of_springs(ConstRef x, ConstRef v,
-                                                  const JacobianOptions& options, size_t begin,
-                                                  size_t end, Index mask, double* K,
-                                                  double* D) const {
-  spring_blocks::spring_damper(m_springs, x, v, options.damping_position_terms, begin, end, mask, K,
-                               D);
+int SpringDamper::per_spring_blocks(ConstRef x, ConstRef v, const JacobianOptions& options,
+                                    size_t begin, size_t end, bool add_k, bool add_d, double* BK,
+                                    double* BD) const {
+  const bool position_terms = options.damping_position_terms;
+  spring_blocks::spring_damper(m_springs, x, v, position_terms, begin, end, add_k, add_d, BK, BD);
+  return position_terms ? kWroteK | kWroteD : kWroteD;
 }
 
 bool SpringDamper::add_jacobian_product(ConstRef x, ConstRef v, const JacobianOptions& options,

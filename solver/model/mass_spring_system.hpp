@@ -1,4 +1,5 @@
 #pragma once
+#include <array>
 #include <memory>
 #include <vector>
 
@@ -181,9 +182,27 @@ class MassSpringSystem {
   /// with the groups of m_jacobian_groups), then the others, whole.
   std::vector<const Force*> m_grouped_jacobians, m_whole_jacobians;
   const SpringSet* m_jacobian_groups = nullptr;
+  /// m_grouped_jacobians bundled by their springs: forces with the same springs (the same ids in
+  /// the same order, as a spring set and its dampers) share a bundle, whose per-spring blocks
+  /// assemble_jacobians sums before adding them into the ring once.
+  std::vector<std::vector<const Force*>> m_spring_bundles;
+  /// Which writes into the ring of an interior group are a block's first (stored, not added: the
+  /// ring is never zeroed), for one value of JacobianOptions::damping_position_terms (what the
+  /// bundles write depends on it: Force::per_spring_blocks).
+  struct FirstWrites {
+    /// Per bundle, per spring of an interior group run through the ring: bit e (K) and bit 4 + e
+    /// (D) set when the spring's block e (SpringSet::blocks) is the block's first write in the
+    /// group. Zero for the springs of the other groups, which only add.
+    std::vector<std::vector<unsigned char>> flags;
+    /// Per interior group run through the ring, per matrix (K, D): the blocks of its range's block
+    /// columns that none of its springs writes, ascending (zeroed in the ring as they enter it).
+    std::vector<std::array<std::vector<Index>, 2>> unwritten;
+  };
+  std::array<FirstWrites, 2> m_first_writes;
+  void plan_first_writes(bool damping_position_terms);
   /// Springs per slice of a group: assemble_jacobians runs every grouped force's slice p of a
   /// group in turn, then slice p + 1.
-  static constexpr size_t kSlice = 64;
+  static constexpr size_t kSlice = 1024;
   /// The largest ring (blocks per matrix: 4.7 MB of K values and as much of D).
   static constexpr Index kMaxRingBlocks = Index(1) << 16;
   /// K and D values above this many bytes are written with non-temporal stores.

@@ -89,27 +89,26 @@ void write_column(const double* blocks, Index begin, Index nb, Index mask, doubl
 /// Copies the blocks of block columns [a, b) into the value array, writing it in order through
 /// `store(double* at, double value)`.
 template <typename Store>
-void move_blocks(const std::vector<int>& col_start, Index a, Index b, double* blocks, Index mask,
-                 double* values, Store&& store) {
+void write_blocks(const std::vector<int>& col_start, Index a, Index b, const double* blocks,
+                  Index mask, double* values, Store&& store) {
   for (Index j = a; j < b; ++j) {
     const Index begin = col_start[size_t(j)], nb = col_start[size_t(j) + 1] - begin;
     write_column(blocks, begin, nb, mask, values + 9 * begin, store);
-    for (Index k = 0; k < nb; ++k) std::fill_n(blocks + 9 * ((begin + k) & mask), 9, 0.0);
   }
 }
 
 #if HOOKE_BLOCK_PATTERN_AVX2
 #pragma GCC push_options
 #pragma GCC target("avx2")
-/// move_blocks with non-temporal stores of 32 bytes. The values of block columns [a, b) are one
+/// write_blocks with non-temporal stores of 32 bytes. The values of block columns [a, b) are one
 /// contiguous run of the value array, written in order: they are formed in a staging buffer that
 /// stays in the first-level cache (each block's column c copied as one 4-double load and store,
 /// the fourth value overwritten by the next column's) and written out 32 aligned bytes at a time,
 /// with 8-byte stores only for an unaligned head and the tail. One 8-byte non-temporal store per
 /// value bounded the move before (the store unit, not the memory: a stand-alone test writing 288 MB
 /// took 12.5-13 ms so, 9.6-10.3 ms this way; 32-byte streams alone 7 ms).
-void move_blocks_streaming(const std::vector<int>& col_start, Index a, Index b, double* blocks,
-                           Index mask, double* values) {
+void write_blocks_streaming(const std::vector<int>& col_start, Index a, Index b,
+                            const double* blocks, Index mask, double* values) {
   constexpr Index kStage = 512;
   alignas(32) double stage[kStage + 8];
   double* out = values + 9 * Index(col_start[size_t(a)]);  // where stage[0] goes
@@ -151,7 +150,6 @@ void move_blocks_streaming(const std::vector<int>& col_start, Index a, Index b, 
       write_column(blocks, begin, nb, mask, out, stream1);
       out += 9 * nb;
     }
-    for (Index k = 0; k < nb; ++k) std::fill_n(blocks + 9 * ((begin + k) & mask), 9, 0.0);
   }
   flush(true);
 }
@@ -165,14 +163,14 @@ bool use_avx2() {
 
 }  // namespace
 
-void BlockPattern::move_blocks_to_values(Index a, Index b, double* blocks, Index mask,
-                                         double* values, bool streaming) const {
+void BlockPattern::write_blocks_to_values(Index a, Index b, const double* blocks, Index mask,
+                                          double* values, bool streaming) const {
 #if defined(__SSE2__) && defined(__x86_64__)
   if (streaming) {
 #if HOOKE_BLOCK_PATTERN_AVX2
-    if (use_avx2()) return move_blocks_streaming(m_block_col_start, a, b, blocks, mask, values);
+    if (use_avx2()) return write_blocks_streaming(m_block_col_start, a, b, blocks, mask, values);
 #endif
-    move_blocks(m_block_col_start, a, b, blocks, mask, values, [](double* at, double value) {
+    write_blocks(m_block_col_start, a, b, blocks, mask, values, [](double* at, double value) {
       long long bits;
       std::memcpy(&bits, &value, sizeof bits);
       _mm_stream_si64(reinterpret_cast<long long*>(at), bits);
@@ -182,8 +180,8 @@ void BlockPattern::move_blocks_to_values(Index a, Index b, double* blocks, Index
 #else
   (void)streaming;
 #endif
-  move_blocks(m_block_col_start, a, b, blocks, mask, values,
-              [](double* at, double value) { *at = value; });
+  write_blocks(m_block_col_start, a, b, blocks, mask, values,
+               [](double* at, double value) { *at = value; });
 }
 
 void BlockPattern::copy_values_to_blocks(Index a, Index b, const double* values, double* blocks,

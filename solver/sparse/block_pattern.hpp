@@ -60,16 +60,15 @@ class BlockPattern {
   /// Writes the blocks of block columns [a, b), stored as 9 contiguous column-major values each,
   /// block k at blocks + 9 (k & mask) (a ring of mask + 1 blocks, mask one less than a power of
   /// two; or all blocks with mask = -1), into their entries of a matrix's value array made by
-  /// make_matrix (overwriting them), in order, and zeroes them in the ring. streaming: with
-  /// non-temporal stores, for a value array far larger than the caches (the caller then ends with
-  /// store_fence()).
-  void move_blocks_to_values(Index a, Index b, double* blocks, Index mask, double* values,
-                             bool streaming) const;
-  /// The inverse of move_blocks_to_values (without zeroing): reads the blocks of block columns
-  /// [a, b) from a value array into the ring.
+  /// make_matrix (overwriting them), in order. streaming: with non-temporal stores, for a value
+  /// array far larger than the caches (the caller then ends with store_fence()).
+  void write_blocks_to_values(Index a, Index b, const double* blocks, Index mask, double* values,
+                              bool streaming) const;
+  /// The inverse of write_blocks_to_values: reads the blocks of block columns [a, b) from a value
+  /// array into the ring.
   void copy_values_to_blocks(Index a, Index b, const double* values, double* blocks,
                              Index mask) const;
-  /// Orders the non-temporal stores of move_blocks_to_values before later stores (a no-op
+  /// Orders the non-temporal stores of write_blocks_to_values before later stores (a no-op
   /// without SSE2).
   static void store_fence();
   /// A 3n x 3n matrix with this structure and all values zero (allocates: setup-time only).

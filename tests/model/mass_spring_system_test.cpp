@@ -183,11 +183,17 @@ TEST(MassSpringSystem, AssembledJacobiansMatchCentralDifferences) {
 // ends of ranges 1 and 2 (a boundary window as wide as both ranges) and one between the ends of
 // range 0 (its interior window as wide as the range), K and D must equal every force's own
 // add_jacobians summed force by force into a zeroed pattern, up to the rounding of the other
-// summation order; for both option sets, and without dampers (no D).
+// summation order; for both option sets, with dampers on some springs (a set of their own), with
+// a damper on every spring (the dampers share the springs: their blocks are summed per spring
+// first), and without dampers (no D). The ring is never zeroed (each block's first write is a
+// store): assembling twice must give the same values.
 TEST(MassSpringSystem, GroupedAssemblyEqualsForceByForceSums) {
   const int side = 170, n = side * side;
-  for (const bool damped : {true, false}) {
-    SCOPED_TRACE(damped ? "springs, dampers, drag" : "springs only");
+  for (const int dampers : {1, 2, 0}) {
+    const bool damped = dampers > 0;
+    SCOPED_TRACE(dampers == 0   ? "springs only"
+                 : dampers == 1 ? "springs, dampers on some, drag"
+                                : "springs, a damper on each, drag");
     std::mt19937 rng(11);
     std::uniform_real_distribution<double> u(-0.3, 0.3), factor(0.6, 1.5);
     const Vec m = random_vec(n, 0.5, 2.0, rng);
@@ -198,11 +204,11 @@ TEST(MassSpringSystem, GroupedAssemblyEqualsForceByForceSums) {
     const Vec v = random_vec(3 * n, -1.0, 1.0, rng);
     hooke::MassSpringSystem sys(m, std::vector<char>(size_t(n), 0));
     auto springs = std::make_unique<hooke::HookeSpring>();
-    auto dampers = std::make_unique<hooke::SpringDamper>();
+    auto damper_set = std::make_unique<hooke::SpringDamper>();
     auto add = [&](int a, int b, bool with_damper) {
       const double l = (x.segment<3>(3 * a) - x.segment<3>(3 * b)).norm();
       springs->add(a, b, 1e3 * factor(rng), factor(rng) * l);
-      if (with_damper) dampers->add(a, b, factor(rng));
+      if (dampers == 2 || (dampers == 1 && with_damper)) damper_set->add(a, b, factor(rng));
     };
     for (int r = 0; r < side; ++r)
       for (int c = 0; c < side; ++c) {
@@ -217,7 +223,7 @@ TEST(MassSpringSystem, GroupedAssemblyEqualsForceByForceSums) {
     add(3, n / 3 - 10, true);     // the ends of range 0: a window wider than the largest ring
     sys.add_force(std::move(springs));
     if (damped) {
-      sys.add_force(std::move(dampers));
+      sys.add_force(std::move(damper_set));
       sys.add_force(std::make_unique<hooke::AirDrag>(n, 0.3, Vec3(1.0, 0.0, -0.5)));
     }
     sys.add_force(std::make_unique<hooke::Gravity>(m, Vec3(0.0, -9.81, 0.0)));
@@ -242,10 +248,13 @@ TEST(MassSpringSystem, GroupedAssemblyEqualsForceByForceSums) {
             << (M == &J.K ? "K" : "D")
             << (exact ? ", exact options" : ", clamped, no position terms");
       }
-      // Assembling again overwrites (the ring is left zero, the values are not accumulated).
-      const Vec first(Eigen::Map<const Vec>(J.K.valuePtr(), J.K.nonZeros()));
+      // Assembling again gives the same values: the ring still holds the last blocks that
+      // passed through each of its slots, which the next assembly must overwrite or zero.
+      const Vec first_K(Eigen::Map<const Vec>(J.K.valuePtr(), J.K.nonZeros())),
+          first_D(Eigen::Map<const Vec>(J.D.valuePtr(), J.D.nonZeros()));
       sys.assemble_jacobians(x, v, J, options);
-      EXPECT_TRUE(first == Eigen::Map<const Vec>(J.K.valuePtr(), J.K.nonZeros()));
+      EXPECT_TRUE(first_K == Eigen::Map<const Vec>(J.K.valuePtr(), J.K.nonZeros()));
+      EXPECT_TRUE(first_D == Eigen::Map<const Vec>(J.D.valuePtr(), J.D.nonZeros()));
     }
   }
 }
