@@ -206,67 +206,102 @@ void MassSpringSystem::plan_assembly() {
     }
     m_group_parts[g] = std::max<size_t>(1, (largest + kSlice - 1) / kSlice);
   }
-  // The windows (see Window) of the interior and boundary groups: after slice p, the particles
-  // below the smallest endpoint of every later slice are complete; before it, every particle up
-  // to its largest endpoint must be in the ring. The ring holds the blocks from the first
-  // incomplete particle to the last one brought in. An interior group starts at its range; a
-  // boundary group at its smallest endpoint.
-  const size_t windowed = m_jacobian_groups->phase_start[3];
-  m_plans.assign(windowed, {});
-  std::vector<Index> widest(windowed, 0);
-  for (size_t g = 0; g < windowed; ++g) {
-    const size_t parts = m_group_parts[g];
-    std::vector<Index> lo(parts, num_particles()), hi(parts, 0);
-    for (size_t p = 0; p < parts; ++p)
-      for (const Force* force : m_grouped_jacobians) {
-        const SpringSet& set = *force->jacobian_groups();
-        const auto [begin, end] = set.slice(g, p, parts);
-        for (size_t n = begin; n < end; ++n) {
-          lo[p] = std::min<Index>(lo[p], std::min(set.i[n], set.j[n]));
-          hi[p] = std::max<Index>(hi[p], std::max(set.i[n], set.j[n]) + 1);
-        }
-      }
-    Index a, b;
-    if (g < ranges) {
-      std::tie(a, b) = particle_range(g);
-    } else {
-      a = *std::min_element(lo.begin(), lo.end());
-      b = std::max(a, *std::max_element(hi.begin(), hi.end()));
+  // The units by phase (Unit, m_phases): interior groups 2k and 2k + 1 with the boundary group
+  // between them, then the odd boundary groups; with few ranges, every interior group alone, then
+  // the even and the odd boundary groups.
+  const size_t even = m_jacobian_groups->phase_start[2] - ranges;
+  auto add_group = [&](Unit& u, size_t g) {
+    for (size_t p = 0; p < m_group_parts[g]; ++p) u.slices.push_back({g, p});
+  };
+  auto boundaries = [&](size_t from, size_t to) {
+    std::vector<Unit> phase(to - from);
+    for (size_t g = from; g < to; ++g) {
+      phase[g - from].interior = false;
+      add_group(phase[g - from], g);
     }
-    GroupPlan& plan = m_plans[g];
-    plan.first = a;
-    std::vector<Index> complete(parts);
-    Index later = b;  // the smallest endpoint of the slices after p
-    for (size_t p = parts; p-- > 0;) {
-      complete[p] = later;
-      later = std::min(later, lo[p]);
+    return phase;
+  };
+  m_phases.clear();
+  if (ranges >= kMergedRanges) {
+    std::vector<Unit> pairs((ranges + 1) / 2);
+    for (size_t k = 0; k < pairs.size(); ++k) {
+      add_group(pairs[k], 2 * k);
+      if (k < even) add_group(pairs[k], ranges + k);
+      if (2 * k + 1 < ranges) add_group(pairs[k], 2 * k + 1);
+      pairs[k].a = particle_range(2 * k).first;
+      pairs[k].b = particle_range(std::min(2 * k + 1, ranges - 1)).second;
     }
-    Index brought = a, copied = a;
-    for (size_t p = 0; p < parts; ++p) {
-      brought = std::max({brought, hi[p], complete[p]});
-      widest[g] =
-          std::max(widest[g], m_pattern.blocks_begin(brought) - m_pattern.blocks_begin(copied));
-      plan.windows.push_back({brought, complete[p]});
-      copied = complete[p];
+    m_phases.push_back(std::move(pairs));
+  } else {
+    std::vector<Unit> singles(ranges);
+    for (size_t g = 0; g < ranges; ++g) {
+      add_group(singles[g], g);
+      std::tie(singles[g].a, singles[g].b) = particle_range(g);
     }
+    m_phases.push_back(std::move(singles));
+    m_phases.push_back(boundaries(ranges, ranges + even));
   }
+  m_phases.push_back(boundaries(ranges + even, m_jacobian_groups->phase_start[3]));
   // The ring covers every interior window up to kMaxRingBlocks (beyond, the ring would not stay in
-  // cache: springs far apart along the ids, on an irregular mesh or a distributed piece); a group
+  // cache: springs far apart along the ids, on an irregular mesh or a distributed piece); a unit
   // with a wider window, and a boundary group whose window is much wider than the interior ones,
   // adds into the value arrays directly instead.
   Index window = 1;
-  for (size_t g = 0; g < ranges; ++g) {
-    m_plans[g].ring = widest[g] <= kMaxRingBlocks;
-    if (m_plans[g].ring) window = std::max(window, widest[g]);
+  for (Unit& u : m_phases[0]) {
+    const Index widest = plan_windows(u);
+    u.ring = widest <= kMaxRingBlocks;
+    if (u.ring) window = std::max(window, widest);
   }
-  for (size_t g = ranges; g < windowed; ++g) {
-    m_plans[g].ring = widest[g] <= std::min(2 * window, kMaxRingBlocks);
-    if (m_plans[g].ring) window = std::max(window, widest[g]);
-  }
+  for (size_t p = 1; p < m_phases.size(); ++p)
+    for (Unit& u : m_phases[p]) {
+      const Index widest = plan_windows(u);
+      u.ring = widest <= std::min(2 * window, kMaxRingBlocks);
+      if (u.ring) window = std::max(window, widest);
+    }
   m_ring_blocks = 1;
   while (m_ring_blocks < window) m_ring_blocks *= 2;
   plan_first_writes(false);
   plan_first_writes(true);
+}
+
+Index MassSpringSystem::plan_windows(Unit& u) const {
+  // After slice s, the particles below the smallest endpoint of every later slice are complete;
+  // before it, every particle up to its largest endpoint must be in the ring. The ring holds the
+  // blocks from the first incomplete particle to the last one brought in. An interior unit starts
+  // at its range; a boundary group at its smallest endpoint.
+  const size_t slices = u.slices.size();
+  std::vector<Index> lo(slices, num_particles()), hi(slices, 0);
+  for (size_t s = 0; s < slices; ++s)
+    for (const Force* force : m_grouped_jacobians) {
+      const SpringSet& set = *force->jacobian_groups();
+      const auto [g, part] = u.slices[s];
+      const auto [begin, end] = set.slice(g, part, m_group_parts[g]);
+      for (size_t n = begin; n < end; ++n) {
+        lo[s] = std::min<Index>(lo[s], std::min(set.i[n], set.j[n]));
+        hi[s] = std::max<Index>(hi[s], std::max(set.i[n], set.j[n]) + 1);
+      }
+    }
+  Index a = u.a, b = u.b;
+  if (!u.interior) {
+    a = *std::min_element(lo.begin(), lo.end());
+    b = std::max(a, *std::max_element(hi.begin(), hi.end()));
+  }
+  u.first = a;
+  std::vector<Index> complete(slices);
+  Index later = b;  // the smallest endpoint of the slices after s
+  for (size_t s = slices; s-- > 0;) {
+    complete[s] = later;
+    later = std::min(later, lo[s]);
+  }
+  Index brought = a, copied = a, widest = 0;
+  u.windows.clear();
+  for (size_t s = 0; s < slices; ++s) {
+    brought = std::max({brought, hi[s], complete[s]});
+    widest = std::max(widest, m_pattern.blocks_begin(brought) - m_pattern.blocks_begin(copied));
+    u.windows.push_back({brought, complete[s]});
+    copied = complete[s];
+  }
+  return widest;
 }
 
 void MassSpringSystem::plan_first_writes(bool damping_position_terms) {
@@ -282,34 +317,33 @@ void MassSpringSystem::plan_first_writes(bool damping_position_terms) {
           force->per_spring_blocks(none, none, options, 0, 0, false, false, nullptr, nullptr);
     plan.flags[b].assign(m_spring_bundles[b].front()->jacobian_groups()->size(), 0);
   }
-  // The group that last wrote each block, per matrix, in the order assemble_jacobians writes.
-  const size_t ranges = m_jacobian_groups->phase_start[1];
+  // The unit that last wrote each block, per matrix, in the order assemble_jacobians writes.
+  const std::vector<Unit>& units = m_phases[0];
   std::array<std::vector<long long>, 2> last(
       {std::vector<long long>(size_t(m_pattern.num_blocks()), -1),
        std::vector<long long>(size_t(m_pattern.num_blocks()), -1)});
-  plan.unwritten.assign(ranges, {});
-  for (size_t g = 0; g < ranges; ++g) {
-    if (!m_plans[g].ring) continue;
-    const size_t parts = m_group_parts[g];
-    for (size_t part = 0; part < parts; ++part)
+  plan.unwritten.assign(units.size(), {});
+  for (size_t u = 0; u < units.size(); ++u) {
+    if (!units[u].ring) continue;
+    for (const auto& [g, part] : units[u].slices)
       for (size_t b = 0; b < m_spring_bundles.size(); ++b) {
         const SpringSet& set = *m_spring_bundles[b].front()->jacobian_groups();
-        const auto [begin, end] = set.slice(g, part, parts);
+        const auto [begin, end] = set.slice(g, part, m_group_parts[g]);
         for (size_t n = begin; n < end; ++n)
           for (unsigned e = 0; e < 4; ++e)
             for (int m = 0; m < 2; ++m) {
               const size_t k = size_t(set.blocks[n][e]);
               if ((writes[b] & (m == 0 ? Force::kWroteK : Force::kWroteD)) &&
-                  last[size_t(m)][k] != (long long)g) {
+                  last[size_t(m)][k] != (long long)u) {
                 plan.flags[b][n] |= (unsigned char)(1u << (4 * m + int(e)));
-                last[size_t(m)][k] = (long long)g;
+                last[size_t(m)][k] = (long long)u;
               }
             }
       }
-    const auto [a, b] = particle_range(g);
     for (int m = 0; m < 2; ++m)
-      for (Index k = m_pattern.blocks_begin(a); k < m_pattern.blocks_begin(b); ++k)
-        if (last[size_t(m)][size_t(k)] != (long long)g) plan.unwritten[g][size_t(m)].push_back(k);
+      for (Index k = m_pattern.blocks_begin(units[u].a); k < m_pattern.blocks_begin(units[u].b);
+           ++k)
+        if (last[size_t(m)][size_t(k)] != (long long)u) plan.unwritten[u][size_t(m)].push_back(k);
   }
 }
 
@@ -361,19 +395,18 @@ void MassSpringSystem::assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
     return;
   }
   check_jacobians(J, "assemble_jacobians");
-  // Group by group, every grouped force in turn (issue 18). Interior group r (the springs with
-  // both ends in particle range r) adds its forces' blocks, slice by slice, into a ring of blocks
-  // of 9 contiguous values that stays in the core's cache (the forces of one bundle, which share
-  // their springs, sum each spring's blocks first and add them once: m_spring_bundles, 8 instead
-  // of 12 block additions per spring for springs with dampers): each particle's blocks are written
-  // into K's and D's value arrays once no later slice touches them (GroupPlan). The value arrays
-  // are so written once, in order, and never zeroed. A boundary group then runs the same way over
-  // the particles between its smallest and largest endpoint, which enter the ring with the values
-  // the interior groups wrote; the remainder, and a group whose window does not fit the ring, adds
-  // into the value arrays directly. Groups run in SpringSet::for_each_group's phases, so every
-  // value is summed in the same order (group, slice, bundle, spring, force) on any number of
+  // Unit by unit (issue 18; Unit, m_phases). An interior unit (interior groups 2k and 2k + 1 and
+  // the boundary group between them, or one interior group) adds its springs' blocks, slice by
+  // slice, into a ring of blocks of 9 contiguous values that stays in the core's cache (the forces
+  // of one bundle, which share their springs, sum each spring's blocks first and add them once:
+  // m_spring_bundles, 8 instead of 12 block additions per spring for springs with dampers); each
+  // particle's blocks are written into K's and D's value arrays once no later slice touches them.
+  // The value arrays are so written once, in order, and never zeroed. A boundary unit then runs
+  // the same way over the particles between its smallest and largest endpoint, which enter the
+  // ring with the values the interior units wrote; the remainder, and a unit whose window does not
+  // fit the ring, adds into the value arrays directly. The units of a phase run in parallel and
+  // every value is summed in the same order (unit, slice, bundle, spring, force) on any number of
   // threads.
-  const size_t ranges = m_jacobian_groups->phase_start[1];
   reserve_scratch(J, max_threads());
   double* K = J.K.valuePtr();
   double* D = J.D.nonZeros() > 0 ? J.D.valuePtr() : nullptr;
@@ -382,43 +415,39 @@ void MassSpringSystem::assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
   // next from memory anyway, and this halves the traffic of writing them (no read for ownership).
   const bool streaming = 8.0 * double(J.K.nonZeros() + J.D.nonZeros()) > kStreamingBytes;
   const FirstWrites& first = m_first_writes[options.damping_position_terms ? 1 : 0];
-  m_jacobian_groups->for_each_group([&](size_t g) {
-    const size_t parts = m_group_parts[g];
-    auto run_slice = [&](size_t part, auto&& add) {
-      for (const Force* force : m_grouped_jacobians) {
-        const auto [begin, end] = force->jacobian_groups()->slice(g, part, parts);
-        add(*force, begin, end);
+  auto direct = [&](size_t g, size_t part) {
+    for (const Force* force : m_grouped_jacobians) {
+      const auto [begin, end] = force->jacobian_groups()->slice(g, part, m_group_parts[g]);
+      force->add_jacobians_of_springs(x, v, options, begin, end, J.K, J.D);
+    }
+  };
+  auto run = [&](const Unit& unit, size_t u) {
+    if (!unit.ring) {
+      if (unit.interior) {  // the first to write its range's values
+        std::fill(K + m_pattern.values_begin(unit.a), K + m_pattern.values_begin(unit.b), 0.0);
+        if (D)
+          std::fill(D + m_pattern.values_begin(unit.a), D + m_pattern.values_begin(unit.b), 0.0);
       }
-    };
-    if (g >= m_plans.size() || !m_plans[g].ring) {
-      if (g < ranges) {  // the first group to write its range's values
-        const auto [a, b] = particle_range(g);
-        std::fill(K + m_pattern.values_begin(a), K + m_pattern.values_begin(b), 0.0);
-        if (D) std::fill(D + m_pattern.values_begin(a), D + m_pattern.values_begin(b), 0.0);
-      }
-      for (size_t part = 0; part < parts; ++part)
-        run_slice(part, [&](const Force& f, size_t begin, size_t end) {
-          f.add_jacobians_of_springs(x, v, options, begin, end, J.K, J.D);
-        });
+      for (const auto& [g, part] : unit.slices) direct(g, part);
       return;
     }
-    // The ring is never zeroed: an interior group's springs store their first write into each
+    // The ring is never zeroed: an interior unit's springs store their first write into each
     // block (FirstWrites) and the blocks they do not write are zeroed as they enter the ring; a
-    // boundary group's blocks enter it with the values the interior groups wrote, and its springs
+    // boundary unit's blocks enter it with the values the interior units wrote, and its springs
     // add.
-    const bool interior = g < ranges;
     double* Kr = J.scratch[size_t(thread_number())].data();
     double* Dr = D ? Kr + 9 * m_ring_blocks : nullptr;
     // Per-spring blocks of a chunk of springs (Force::per_spring_blocks), on this thread's stack.
     double BK[9 * Force::kSpringBlockChunk], BD[9 * Force::kSpringBlockChunk];
-    std::array<size_t, 2> zeroed{0, 0};  // of first.unwritten[g]
-    Index brought = m_plans[g].first, copied = brought;
-    for (size_t part = 0; part < parts; ++part) {
-      const Window& w = m_plans[g].windows[part];
-      if (interior) {
+    std::array<size_t, 2> zeroed{0, 0};  // of first.unwritten[u]
+    Index brought = unit.first, copied = brought;
+    for (size_t s = 0; s < unit.slices.size(); ++s) {
+      const auto [g, part] = unit.slices[s];
+      const Window& w = unit.windows[s];
+      if (unit.interior) {
         const Index end = m_pattern.blocks_begin(w.brought);
         for (int m = 0; m < (D ? 2 : 1); ++m) {
-          const std::vector<Index>& blocks = first.unwritten[g][size_t(m)];
+          const std::vector<Index>& blocks = first.unwritten[u][size_t(m)];
           double* ring = m == 0 ? Kr : Dr;
           for (size_t& z = zeroed[size_t(m)]; z < blocks.size() && blocks[z] < end; ++z)
             std::fill_n(ring + 9 * (blocks[z] & mask), 9, 0.0);
@@ -431,7 +460,7 @@ void MassSpringSystem::assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
       for (size_t b = 0; b < m_spring_bundles.size(); ++b) {
         const auto& bundle = m_spring_bundles[b];
         const SpringSet& set = *bundle.front()->jacobian_groups();
-        const auto [begin, end] = set.slice(g, part, parts);
+        const auto [begin, end] = set.slice(g, part, m_group_parts[g]);
         for (size_t c = begin; c < end; c += Force::kSpringBlockChunk) {
           const size_t c_end = std::min(end, c + Force::kSpringBlockChunk);
           int wrote = 0;
@@ -452,7 +481,22 @@ void MassSpringSystem::assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
       copied = w.complete;
     }
     if (streaming) BlockPattern::store_fence();  // before the phase's barrier
-  });
+  };
+  if (!run_parallel(static_cast<long long>(m_phases[0].size()), 2)) {
+    for (const auto& phase : m_phases)
+      for (size_t u = 0; u < phase.size(); ++u) run(phase[u], u);
+  } else {
+#pragma omp parallel
+    for (const auto& phase : m_phases) {
+#pragma omp for schedule(dynamic, 1)
+      for (long long u = 0; u < static_cast<long long>(phase.size()); ++u)
+        run(phase[size_t(u)], size_t(u));
+    }
+  }
+  // The remainder, serially.
+  const size_t remainder = m_jacobian_groups->phase_start[3];
+  for (size_t g = remainder; g < m_jacobian_groups->num_groups(); ++g)
+    for (size_t part = 0; part < m_group_parts[g]; ++part) direct(g, part);
   for (const Force* force : m_whole_jacobians) force->add_jacobians(x, v, options, J.K, J.D);
 }
 

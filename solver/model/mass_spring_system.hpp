@@ -186,20 +186,6 @@ class MassSpringSystem {
   /// the same order, as a spring set and its dampers) share a bundle, whose per-spring blocks
   /// assemble_jacobians sums before adding them into the ring once.
   std::vector<std::vector<const Force*>> m_spring_bundles;
-  /// Which writes into the ring of an interior group are a block's first (stored, not added: the
-  /// ring is never zeroed), for one value of JacobianOptions::damping_position_terms (what the
-  /// bundles write depends on it: Force::per_spring_blocks).
-  struct FirstWrites {
-    /// Per bundle, per spring of an interior group run through the ring: bit e (K) and bit 4 + e
-    /// (D) set when the spring's block e (SpringSet::blocks) is the block's first write in the
-    /// group. Zero for the springs of the other groups, which only add.
-    std::vector<std::vector<unsigned char>> flags;
-    /// Per interior group run through the ring, per matrix (K, D): the blocks of its range's block
-    /// columns that none of its springs writes, ascending (zeroed in the ring as they enter it).
-    std::vector<std::array<std::vector<Index>, 2>> unwritten;
-  };
-  std::array<FirstWrites, 2> m_first_writes;
-  void plan_first_writes(bool damping_position_terms);
   /// Springs per slice of a group: assemble_jacobians runs every grouped force's slice p of a
   /// group in turn, then slice p + 1.
   static constexpr size_t kSlice = 1024;
@@ -207,19 +193,51 @@ class MassSpringSystem {
   static constexpr Index kMaxRingBlocks = Index(1) << 16;
   /// K and D values above this many bytes are written with non-temporal stores.
   static constexpr double kStreamingBytes = 64.0 * (1 << 20);
+  /// With at least this many particle ranges, assemble_jacobians runs interior groups 2k and 2k + 1
+  /// and the boundary group between them as one unit (so the boundary's blocks need not be read
+  /// back and written again), which still leaves kMergedRanges / 2 units for as many threads.
+  static constexpr size_t kMergedRanges = 16;
   /// Slices per group of m_jacobian_groups.
   std::vector<size_t> m_group_parts;
-  /// Per slice of a group run through the ring: the blocks of the particles below `brought` are in
+  /// Per slice of a unit run through the ring: the blocks of the particles below `brought` are in
   /// the ring before the slice runs, and those below `complete` are finished after it.
   struct Window {
     Index brought, complete;
   };
-  struct GroupPlan {
+  /// What assemble_jacobians runs on one thread in one go: slices of groups, in order.
+  struct Unit {
+    std::vector<std::pair<size_t, size_t>> slices;  ///< (group, part)
+    /// An interior unit writes the values of its particles [a, b) first (its groups are interior
+    /// ones, with the boundary group between them); the others' blocks enter the ring with the
+    /// values the interior units wrote.
+    bool interior = true;
+    Index a = 0, b = 0;
     bool ring = true;             ///< through the ring (else straight into the value arrays)
-    Index first = 0;              ///< the first particle of the group's window
+    Index first = 0;              ///< the first particle of the unit's window
     std::vector<Window> windows;  ///< per slice
   };
-  std::vector<GroupPlan> m_plans;  ///< per interior and boundary group
+  /// The units by phase: the interior units first, then the boundary groups (even, then odd ones
+  /// when the interior units are single groups; the odd ones when they hold pairs). The units of a
+  /// phase touch disjoint particles and run in parallel; the remainder group runs last, serially,
+  /// straight into the value arrays.
+  std::vector<std::vector<Unit>> m_phases;
+  /// The windows of a unit whose slices are set; returns the widest (blocks).
+  Index plan_windows(Unit& unit) const;
+  /// Which writes into the ring of an interior unit are a block's first (stored, not added: the
+  /// ring is never zeroed), for one value of JacobianOptions::damping_position_terms (what the
+  /// bundles write depends on it: Force::per_spring_blocks).
+  struct FirstWrites {
+    /// Per bundle, per spring of an interior unit run through the ring: bit e (K) and bit 4 + e (D)
+    /// set when the spring's block e (SpringSet::blocks) is the block's first write in the unit.
+    /// Zero for the springs of the other units, which only add.
+    std::vector<std::vector<unsigned char>> flags;
+    /// Per interior unit (m_phases[0]) run through the ring, per matrix (K, D): the blocks of its
+    /// block columns that none of its springs writes, ascending (zeroed in the ring as they enter
+    /// it).
+    std::vector<std::array<std::vector<Index>, 2>> unwritten;
+  };
+  std::array<FirstWrites, 2> m_first_writes;
+  void plan_first_writes(bool damping_position_terms);
   /// Blocks in the ring of each matrix (a power of two covering every window).
   Index m_ring_blocks = 1;
   bool m_finalized = false;

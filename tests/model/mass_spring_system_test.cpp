@@ -178,85 +178,99 @@ TEST(MassSpringSystem, AssembledJacobiansMatchCentralDifferences) {
 // ring of contiguous blocks that is then written into K and D, boundary groups through it too or,
 // when their window is too wide, straight into K and D, like the serial remainder and the forces
 // without groups (air drag), and like an interior group whose window is wider than the largest
-// ring. On a 170 x 170 cloth (28,900 particles: three ranges of 9,634) with springs and a damper
-// set of its own, long-range springs between ranges 0 and 2 (the remainder), one between the far
-// ends of ranges 1 and 2 (a boundary window as wide as both ranges) and one between the ends of
-// range 0 (its interior window as wide as the range), K and D must equal every force's own
+// ring. On a side x side cloth whose particles fall into `ranges` ranges, with springs and a damper
+// set, long-range springs between range 0 and the last (the remainder), one between the far ends
+// of ranges 1 and 2 (a boundary window as wide as both ranges) and one between the ends of range
+// 0 (its interior window as wide as the range), K and D must equal every force's own
 // add_jacobians summed force by force into a zeroed pattern, up to the rounding of the other
-// summation order; for both option sets, with dampers on some springs (a set of their own), with
-// a damper on every spring (the dampers share the springs: their blocks are summed per spring
-// first), and without dampers (no D). The ring is never zeroed (each block's first write is a
-// store): assembling twice must give the same values.
-TEST(MassSpringSystem, GroupedAssemblyEqualsForceByForceSums) {
-  const int side = 170, n = side * side;
-  for (const int dampers : {1, 2, 0}) {
-    const bool damped = dampers > 0;
-    SCOPED_TRACE(dampers == 0   ? "springs only"
-                 : dampers == 1 ? "springs, dampers on some, drag"
-                                : "springs, a damper on each, drag");
-    std::mt19937 rng(11);
-    std::uniform_real_distribution<double> u(-0.3, 0.3), factor(0.6, 1.5);
-    const Vec m = random_vec(n, 0.5, 2.0, rng);
-    Vec x(3 * n);
-    for (int r = 0; r < side; ++r)
-      for (int c = 0; c < side; ++c)
-        x.segment<3>(3 * (r * side + c)) = Vec3(c + u(rng), u(rng), r + u(rng)) / side;
-    const Vec v = random_vec(3 * n, -1.0, 1.0, rng);
-    hooke::MassSpringSystem sys(m, std::vector<char>(size_t(n), 0));
-    auto springs = std::make_unique<hooke::HookeSpring>();
-    auto damper_set = std::make_unique<hooke::SpringDamper>();
-    auto add = [&](int a, int b, bool with_damper) {
-      const double l = (x.segment<3>(3 * a) - x.segment<3>(3 * b)).norm();
-      springs->add(a, b, 1e3 * factor(rng), factor(rng) * l);
-      if (dampers == 2 || (dampers == 1 && with_damper)) damper_set->add(a, b, factor(rng));
-    };
-    for (int r = 0; r < side; ++r)
-      for (int c = 0; c < side; ++c) {
-        const int p = r * side + c;
-        if (c + 1 < side) add(p, p + 1, true);
-        if (r + 1 < side) add(p, p + side, true);
-        if (r + 1 < side && c + 1 < side) add(p, p + side + 1, false);
-        if (r + 2 < side) add(p, p + 2 * side, false);
-      }
-    for (int k = 0; k < 40; ++k) add(37 * k, n - 1 - 53 * k, k % 2 == 0);  // ranges 0 and 2
-    add(n / 3 + 5, n - 7, true);  // the far ends of ranges 1 and 2
-    add(3, n / 3 - 10, true);     // the ends of range 0: a window wider than the largest ring
-    sys.add_force(std::move(springs));
-    if (damped) {
-      sys.add_force(std::move(damper_set));
-      sys.add_force(std::make_unique<hooke::AirDrag>(n, 0.3, Vec3(1.0, 0.0, -0.5)));
+// summation order; for both option sets, with dampers 1: on some springs (a set of their own), 2:
+// on every spring (the dampers share the springs: their blocks are summed per spring first), or 0:
+// none (no D). The ring is never zeroed (each block's first write is a store): assembling twice
+// must give the same values.
+namespace {
+void check_grouped_assembly(int side, size_t ranges, int dampers) {
+  const int n = side * side;
+  const bool damped = dampers > 0;
+  SCOPED_TRACE(dampers == 0   ? "springs only"
+               : dampers == 1 ? "springs, dampers on some, drag"
+                              : "springs, a damper on each, drag");
+  std::mt19937 rng(11);
+  std::uniform_real_distribution<double> u(-0.3, 0.3), factor(0.6, 1.5);
+  const Vec m = random_vec(n, 0.5, 2.0, rng);
+  Vec x(3 * n);
+  for (int r = 0; r < side; ++r)
+    for (int c = 0; c < side; ++c)
+      x.segment<3>(3 * (r * side + c)) = Vec3(c + u(rng), u(rng), r + u(rng)) / side;
+  const Vec v = random_vec(3 * n, -1.0, 1.0, rng);
+  hooke::MassSpringSystem sys(m, std::vector<char>(size_t(n), 0));
+  auto springs = std::make_unique<hooke::HookeSpring>();
+  auto damper_set = std::make_unique<hooke::SpringDamper>();
+  auto add = [&](int a, int b, bool with_damper) {
+    const double l = (x.segment<3>(3 * a) - x.segment<3>(3 * b)).norm();
+    springs->add(a, b, 1e3 * factor(rng), factor(rng) * l);
+    if (dampers == 2 || (dampers == 1 && with_damper)) damper_set->add(a, b, factor(rng));
+  };
+  for (int r = 0; r < side; ++r)
+    for (int c = 0; c < side; ++c) {
+      const int p = r * side + c;
+      if (c + 1 < side) add(p, p + 1, true);
+      if (r + 1 < side) add(p, p + side, true);
+      if (r + 1 < side && c + 1 < side) add(p, p + side + 1, false);
+      if (r + 2 < side) add(p, p + 2 * side, false);
     }
-    sys.add_force(std::make_unique<hooke::Gravity>(m, Vec3(0.0, -9.81, 0.0)));
-    sys.finalize();
-    ASSERT_EQ(static_cast<const hooke::HookeSpring&>(*sys.forces()[0]).springs().num_groups(), 6u);
-    for (const bool exact : {true, false}) {
-      hooke::JacobianOptions options;
-      options.clamp_compressed = !exact;
-      options.damping_position_terms = exact;
-      hooke::Jacobians J = sys.make_jacobians(), ref = sys.make_jacobians();
-      sys.assemble_jacobians(x, v, J, options);
-      for (const auto& force : sys.forces()) force->add_jacobians(x, v, options, ref.K, ref.D);
-      ASSERT_EQ(J.D.nonZeros(), damped ? J.K.nonZeros() : 0);
-      for (const auto* M : {&J.K, &J.D}) {
-        const auto& R = M == &J.K ? ref.K : ref.D;
-        if (M->nonZeros() == 0) continue;
-        const Eigen::Map<const Vec> got(M->valuePtr(), M->nonZeros()),
-            want(R.valuePtr(), R.nonZeros());
-        const double scale = want.cwiseAbs().maxCoeff();
-        ASSERT_GT(scale, 0.0);
-        EXPECT_LT((got - want).cwiseAbs().maxCoeff(), 1e-14 * scale)
-            << (M == &J.K ? "K" : "D")
-            << (exact ? ", exact options" : ", clamped, no position terms");
-      }
-      // Assembling again gives the same values: the ring still holds the last blocks that
-      // passed through each of its slots, which the next assembly must overwrite or zero.
-      const Vec first_K(Eigen::Map<const Vec>(J.K.valuePtr(), J.K.nonZeros())),
-          first_D(Eigen::Map<const Vec>(J.D.valuePtr(), J.D.nonZeros()));
-      sys.assemble_jacobians(x, v, J, options);
-      EXPECT_TRUE(first_K == Eigen::Map<const Vec>(J.K.valuePtr(), J.K.nonZeros()));
-      EXPECT_TRUE(first_D == Eigen::Map<const Vec>(J.D.valuePtr(), J.D.nonZeros()));
-    }
+  const int w = (n + int(ranges) - 1) / int(ranges);                     // particles per range
+  for (int k = 0; k < 40; ++k) add(37 * k, n - 1 - 53 * k, k % 2 == 0);  // ranges 0 and last
+  add(w + 5, 3 * w - 7, true);  // the far ends of ranges 1 and 2
+  add(3, w - 10, true);         // the ends of range 0: a window wider than the largest ring
+  sys.add_force(std::move(springs));
+  if (damped) {
+    sys.add_force(std::move(damper_set));
+    sys.add_force(std::make_unique<hooke::AirDrag>(n, 0.3, Vec3(1.0, 0.0, -0.5)));
   }
+  sys.add_force(std::make_unique<hooke::Gravity>(m, Vec3(0.0, -9.81, 0.0)));
+  sys.finalize();
+  ASSERT_EQ(static_cast<const hooke::HookeSpring&>(*sys.forces()[0]).springs().num_groups(),
+            2 * ranges);
+  for (const bool exact : {true, false}) {
+    hooke::JacobianOptions options;
+    options.clamp_compressed = !exact;
+    options.damping_position_terms = exact;
+    hooke::Jacobians J = sys.make_jacobians(), ref = sys.make_jacobians();
+    sys.assemble_jacobians(x, v, J, options);
+    for (const auto& force : sys.forces()) force->add_jacobians(x, v, options, ref.K, ref.D);
+    ASSERT_EQ(J.D.nonZeros(), damped ? J.K.nonZeros() : 0);
+    for (const auto* M : {&J.K, &J.D}) {
+      const auto& R = M == &J.K ? ref.K : ref.D;
+      if (M->nonZeros() == 0) continue;
+      const Eigen::Map<const Vec> got(M->valuePtr(), M->nonZeros()),
+          want(R.valuePtr(), R.nonZeros());
+      const double scale = want.cwiseAbs().maxCoeff();
+      ASSERT_GT(scale, 0.0);
+      EXPECT_LT((got - want).cwiseAbs().maxCoeff(), 1e-14 * scale)
+          << (M == &J.K ? "K" : "D")
+          << (exact ? ", exact options" : ", clamped, no position terms");
+    }
+    // Assembling again gives the same values: the ring still holds the last blocks that passed
+    // through each of its slots, which the next assembly must overwrite or zero.
+    const Vec first_K(Eigen::Map<const Vec>(J.K.valuePtr(), J.K.nonZeros())),
+        first_D(Eigen::Map<const Vec>(J.D.valuePtr(), J.D.nonZeros()));
+    sys.assemble_jacobians(x, v, J, options);
+    EXPECT_TRUE(first_K == Eigen::Map<const Vec>(J.K.valuePtr(), J.K.nonZeros()));
+    EXPECT_TRUE(first_D == Eigen::Map<const Vec>(J.D.valuePtr(), J.D.nonZeros()));
+  }
+}
+}  // namespace
+
+// 170 x 170: 28,900 particles, three ranges of 9,634.
+TEST(MassSpringSystem, GroupedAssemblyEqualsForceByForceSums) {
+  for (const int dampers : {1, 2, 0}) check_grouped_assembly(170, 3, dampers);
+}
+
+// With 16 or more particle ranges assemble_jacobians runs interior groups 2k and 2k + 1 and the
+// boundary group between them as one unit (MassSpringSystem::kMergedRanges): the same check on a
+// 371 x 371 cloth (137,641 particles, 16 ranges).
+TEST(MassSpringSystem, GroupedAssemblyInPairsOfRangesEqualsForceByForceSums) {
+  for (const int dampers : {1, 2}) check_grouped_assembly(371, 16, dampers);
 }
 
 // "Model only what a scene needs": springs and gravity have no df/dv, so their system stores no D
