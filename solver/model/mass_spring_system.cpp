@@ -319,9 +319,8 @@ void MassSpringSystem::plan_first_writes(bool damping_position_terms) {
   }
   // The unit that last wrote each block, per matrix, in the order assemble_jacobians writes.
   const std::vector<Unit>& units = m_phases[0];
-  std::array<std::vector<long long>, 2> last(
-      {std::vector<long long>(size_t(m_pattern.num_blocks()), -1),
-       std::vector<long long>(size_t(m_pattern.num_blocks()), -1)});
+  std::array<std::vector<int>, 2> last({std::vector<int>(size_t(m_pattern.num_blocks()), -1),
+                                        std::vector<int>(size_t(m_pattern.num_blocks()), -1)});
   plan.unwritten.assign(units.size(), {});
   for (size_t u = 0; u < units.size(); ++u) {
     if (!units[u].ring) continue;
@@ -334,16 +333,16 @@ void MassSpringSystem::plan_first_writes(bool damping_position_terms) {
             for (int m = 0; m < 2; ++m) {
               const size_t k = size_t(set.blocks[n][e]);
               if ((writes[b] & (m == 0 ? Force::kWroteK : Force::kWroteD)) &&
-                  last[size_t(m)][k] != (long long)u) {
+                  last[size_t(m)][k] != int(u)) {
                 plan.flags[b][n] |= (unsigned char)(1u << (4 * m + int(e)));
-                last[size_t(m)][k] = (long long)u;
+                last[size_t(m)][k] = int(u);
               }
             }
       }
     for (int m = 0; m < 2; ++m)
       for (Index k = m_pattern.blocks_begin(units[u].a); k < m_pattern.blocks_begin(units[u].b);
            ++k)
-        if (last[size_t(m)][size_t(k)] != (long long)u) plan.unwritten[u][size_t(m)].push_back(k);
+        if (last[size_t(m)][size_t(k)] != int(u)) plan.unwritten[u][size_t(m)].push_back(k);
   }
 }
 

@@ -186,8 +186,8 @@ class MassSpringSystem {
   /// the same order, as a spring set and its dampers) share a bundle, whose per-spring blocks
   /// assemble_jacobians sums before adding them into the ring once.
   std::vector<std::vector<const Force*>> m_spring_bundles;
-  /// Springs per slice of a group: assemble_jacobians runs every grouped force's slice p of a
-  /// group in turn, then slice p + 1.
+  /// Springs per slice of a group: assemble_jacobians runs every bundle's slice p of a group in
+  /// turn, then slice p + 1.
   static constexpr size_t kSlice = 1024;
   /// The largest ring (blocks per matrix: 4.7 MB of K values and as much of D).
   static constexpr Index kMaxRingBlocks = Index(1) << 16;
