@@ -407,79 +407,11 @@ void MassSpringSystem::assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
   // every value is summed in the same order (unit, slice, bundle, spring, force) on any number of
   // threads.
   reserve_scratch(J, max_threads());
-  double* K = J.K.valuePtr();
-  double* D = J.D.nonZeros() > 0 ? J.D.valuePtr() : nullptr;
-  const Index mask = m_ring_blocks - 1;
   // Value arrays far larger than the caches are written with non-temporal stores: they are read
   // next from memory anyway, and this halves the traffic of writing them (no read for ownership).
   const bool streaming = 8.0 * double(J.K.nonZeros() + J.D.nonZeros()) > kStreamingBytes;
-  const FirstWrites& first = m_first_writes[options.damping_position_terms ? 1 : 0];
-  auto direct = [&](size_t g, size_t part) {
-    for (const Force* force : m_grouped_jacobians) {
-      const auto [begin, end] = force->jacobian_groups()->slice(g, part, m_group_parts[g]);
-      force->add_jacobians_of_springs(x, v, options, begin, end, J.K, J.D);
-    }
-  };
   auto run = [&](const Unit& unit, size_t u) {
-    if (!unit.ring) {
-      if (unit.interior) {  // the first to write its range's values
-        std::fill(K + m_pattern.values_begin(unit.a), K + m_pattern.values_begin(unit.b), 0.0);
-        if (D)
-          std::fill(D + m_pattern.values_begin(unit.a), D + m_pattern.values_begin(unit.b), 0.0);
-      }
-      for (const auto& [g, part] : unit.slices) direct(g, part);
-      return;
-    }
-    // The ring is never zeroed: an interior unit's springs store their first write into each
-    // block (FirstWrites) and the blocks they do not write are zeroed as they enter the ring; a
-    // boundary unit's blocks enter it with the values the interior units wrote, and its springs
-    // add.
-    double* Kr = J.scratch[size_t(thread_number())].data();
-    double* Dr = D ? Kr + 9 * m_ring_blocks : nullptr;
-    // Per-spring blocks of a chunk of springs (Force::per_spring_blocks), on this thread's stack.
-    double BK[9 * Force::kSpringBlockChunk], BD[9 * Force::kSpringBlockChunk];
-    std::array<size_t, 2> zeroed{0, 0};  // of first.unwritten[u]
-    Index brought = unit.first, copied = brought;
-    for (size_t s = 0; s < unit.slices.size(); ++s) {
-      const auto [g, part] = unit.slices[s];
-      const Window& w = unit.windows[s];
-      if (unit.interior) {
-        const Index end = m_pattern.blocks_begin(w.brought);
-        for (int m = 0; m < (D ? 2 : 1); ++m) {
-          const std::vector<Index>& blocks = first.unwritten[u][size_t(m)];
-          double* ring = m == 0 ? Kr : Dr;
-          for (size_t& z = zeroed[size_t(m)]; z < blocks.size() && blocks[z] < end; ++z)
-            std::fill_n(ring + 9 * (blocks[z] & mask), 9, 0.0);
-        }
-      } else {
-        m_pattern.copy_values_to_blocks(brought, w.brought, K, Kr, mask);
-        if (D) m_pattern.copy_values_to_blocks(brought, w.brought, D, Dr, mask);
-      }
-      brought = w.brought;
-      for (size_t b = 0; b < m_spring_bundles.size(); ++b) {
-        const auto& bundle = m_spring_bundles[b];
-        const SpringSet& set = *bundle.front()->jacobian_groups();
-        const auto [begin, end] = set.slice(g, part, m_group_parts[g]);
-        for (size_t c = begin; c < end; c += Force::kSpringBlockChunk) {
-          const size_t c_end = std::min(end, c + Force::kSpringBlockChunk);
-          int wrote = 0;
-          for (const Force* force : bundle)
-            wrote |= force->per_spring_blocks(x, v, options, c, c_end, wrote & Force::kWroteK,
-                                              wrote & Force::kWroteD, BK, BD);
-          const unsigned char* flags = first.flags[b].data() + c;
-          if (wrote & Force::kWroteK)
-            spring_blocks::add_springs(set, c, c_end, BK, flags, 0, mask, Kr);
-          if (wrote & Force::kWroteD) {
-            HOOKE_ASSERT(Dr, "a force without has_velocity_jacobian() wrote df/dv blocks");
-            spring_blocks::add_springs(set, c, c_end, BD, flags, 4, mask, Dr);
-          }
-        }
-      }
-      m_pattern.write_blocks_to_values(copied, w.complete, Kr, mask, K, streaming);
-      if (D) m_pattern.write_blocks_to_values(copied, w.complete, Dr, mask, D, streaming);
-      copied = w.complete;
-    }
-    if (streaming) BlockPattern::store_fence();  // before the phase's barrier
+    assemble_unit(unit, u, x, v, options, J, streaming);
   };
   if (!run_parallel(static_cast<long long>(m_phases[0].size()), 2)) {
     for (const auto& phase : m_phases)
@@ -495,8 +427,84 @@ void MassSpringSystem::assemble_jacobians(ConstRef x, ConstRef v, Jacobians& J,
   // The remainder, serially.
   const size_t remainder = m_jacobian_groups->phase_start[3];
   for (size_t g = remainder; g < m_jacobian_groups->num_groups(); ++g)
-    for (size_t part = 0; part < m_group_parts[g]; ++part) direct(g, part);
+    for (size_t part = 0; part < m_group_parts[g]; ++part)
+      add_slice_directly(g, part, x, v, options, J);
   for (const Force* force : m_whole_jacobians) force->add_jacobians(x, v, options, J.K, J.D);
+}
+
+void MassSpringSystem::add_slice_directly(size_t g, size_t part, ConstRef x, ConstRef v,
+                                          const JacobianOptions& options, Jacobians& J) const {
+  for (const Force* force : m_grouped_jacobians) {
+    const auto [begin, end] = force->jacobian_groups()->slice(g, part, m_group_parts[g]);
+    force->add_jacobians_of_springs(x, v, options, begin, end, J.K, J.D);
+  }
+}
+
+void MassSpringSystem::assemble_unit(const Unit& unit, size_t u, ConstRef x, ConstRef v,
+                                     const JacobianOptions& options, Jacobians& J,
+                                     bool streaming) const {
+  double* K = J.K.valuePtr();
+  double* D = J.D.nonZeros() > 0 ? J.D.valuePtr() : nullptr;
+  const Index mask = m_ring_blocks - 1;
+  const FirstWrites& first = m_first_writes[options.damping_position_terms ? 1 : 0];
+  if (!unit.ring) {
+    if (unit.interior) {  // the first to write its range's values
+      std::fill(K + m_pattern.values_begin(unit.a), K + m_pattern.values_begin(unit.b), 0.0);
+      if (D) std::fill(D + m_pattern.values_begin(unit.a), D + m_pattern.values_begin(unit.b), 0.0);
+    }
+    for (const auto& [g, part] : unit.slices) add_slice_directly(g, part, x, v, options, J);
+    return;
+  }
+  // The ring is never zeroed: an interior unit's springs store their first write into each
+  // block (FirstWrites) and the blocks they do not write are zeroed as they enter the ring; a
+  // boundary unit's blocks enter it with the values the interior units wrote, and its springs
+  // add.
+  double* Kr = J.scratch[size_t(thread_number())].data();
+  double* Dr = D ? Kr + 9 * m_ring_blocks : nullptr;
+  // Per-spring blocks of a chunk of springs (Force::per_spring_blocks), on this thread's stack.
+  double BK[9 * Force::kSpringBlockChunk], BD[9 * Force::kSpringBlockChunk];
+  std::array<size_t, 2> zeroed{0, 0};  // of first.unwritten[u]
+  Index brought = unit.first, copied = brought;
+  for (size_t s = 0; s < unit.slices.size(); ++s) {
+    const auto [g, part] = unit.slices[s];
+    const Window& w = unit.windows[s];
+    if (unit.interior) {
+      const Index end = m_pattern.blocks_begin(w.brought);
+      for (int m = 0; m < (D ? 2 : 1); ++m) {
+        const std::vector<Index>& blocks = first.unwritten[u][size_t(m)];
+        double* ring = m == 0 ? Kr : Dr;
+        for (size_t& z = zeroed[size_t(m)]; z < blocks.size() && blocks[z] < end; ++z)
+          std::fill_n(ring + 9 * (blocks[z] & mask), 9, 0.0);
+      }
+    } else {
+      m_pattern.copy_values_to_blocks(brought, w.brought, K, Kr, mask);
+      if (D) m_pattern.copy_values_to_blocks(brought, w.brought, D, Dr, mask);
+    }
+    brought = w.brought;
+    for (size_t b = 0; b < m_spring_bundles.size(); ++b) {
+      const auto& bundle = m_spring_bundles[b];
+      const SpringSet& set = *bundle.front()->jacobian_groups();
+      const auto [begin, end] = set.slice(g, part, m_group_parts[g]);
+      for (size_t c = begin; c < end; c += Force::kSpringBlockChunk) {
+        const size_t c_end = std::min(end, c + Force::kSpringBlockChunk);
+        int wrote = 0;
+        for (const Force* force : bundle)
+          wrote |= force->per_spring_blocks(x, v, options, c, c_end, wrote & Force::kWroteK,
+                                            wrote & Force::kWroteD, BK, BD);
+        const unsigned char* flags = first.flags[b].data() + c;
+        if (wrote & Force::kWroteK)
+          spring_blocks::add_springs(set, c, c_end, BK, flags, 0, mask, Kr);
+        if (wrote & Force::kWroteD) {
+          HOOKE_ASSERT(Dr, "a force without has_velocity_jacobian() wrote df/dv blocks");
+          spring_blocks::add_springs(set, c, c_end, BD, flags, 4, mask, Dr);
+        }
+      }
+    }
+    m_pattern.write_blocks_to_values(copied, w.complete, Kr, mask, K, streaming);
+    if (D) m_pattern.write_blocks_to_values(copied, w.complete, Dr, mask, D, streaming);
+    copied = w.complete;
+  }
+  if (streaming) BlockPattern::store_fence();  // before the phase's barrier
 }
 
 void MassSpringSystem::assemble_discrete_gradient_jacobians(ConstRef x0, ConstRef x1, ConstRef xm,

@@ -223,6 +223,12 @@ class MassSpringSystem {
   std::vector<std::vector<Unit>> m_phases;
   /// The windows of a unit whose slices are set; returns the widest (blocks).
   Index plan_windows(Unit& unit) const;
+  /// assemble_jacobians' work on unit number u of its phase (on the calling thread's ring).
+  void assemble_unit(const Unit& unit, size_t u, ConstRef x, ConstRef v,
+                     const JacobianOptions& options, Jacobians& J, bool streaming) const;
+  /// Every grouped force's springs of slice `part` of group g, added straight into K and D.
+  void add_slice_directly(size_t g, size_t part, ConstRef x, ConstRef v,
+                          const JacobianOptions& options, Jacobians& J) const;
   /// Which writes into the ring of an interior unit are a block's first (stored, not added: the
   /// ring is never zeroed), for one value of JacobianOptions::damping_position_terms (what the
   /// bundles write depends on it: Force::per_spring_blocks).
