@@ -195,7 +195,7 @@ void MassSpringSystem::plan_assembly() {
     else
       same->push_back(force);
   }
-  // Every group is run as slices of about kSlice springs of each force in turn.
+  // Every group is run as slices of at most kSlice springs of each bundle in turn.
   const size_t groups = m_jacobian_groups->num_groups(), ranges = m_jacobian_groups->phase_start[1];
   m_group_parts.assign(groups, 1);
   for (size_t g = 0; g < groups; ++g) {
@@ -272,8 +272,8 @@ Index MassSpringSystem::plan_windows(Unit& u) const {
   const size_t slices = u.slices.size();
   std::vector<Index> lo(slices, num_particles()), hi(slices, 0);
   for (size_t s = 0; s < slices; ++s)
-    for (const Force* force : m_grouped_jacobians) {
-      const SpringSet& set = *force->jacobian_groups();
+    for (const auto& bundle : m_spring_bundles) {  // a bundle's forces share their springs
+      const SpringSet& set = *bundle.front()->jacobian_groups();
       const auto [g, part] = u.slices[s];
       const auto [begin, end] = set.slice(g, part, m_group_parts[g]);
       for (size_t n = begin; n < end; ++n) {
