@@ -164,6 +164,14 @@ inline void parallel_ranges(long long n, Body&& body) {
   }
 }
 
+/// dst = src (resized), over blocks in parallel for long vectors.
+inline void parallel_copy(const Eigen::Ref<const Eigen::VectorXd>& src, Eigen::VectorXd& dst) {
+  dst.resize(src.size());
+  parallel_ranges(src.size(), [&](long long b, long long e) {
+    std::copy(src.data() + b, src.data() + e, dst.data() + b);
+  });
+}
+
 /// True if every entry of a is finite; over blocks in parallel for long vectors.
 inline bool all_finite(const Eigen::Ref<const Eigen::VectorXd>& a) {
   const long long n = a.size();

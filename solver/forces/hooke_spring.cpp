@@ -16,11 +16,9 @@ inline Vec3 spring_vector(ConstRef x, int a, int b) {
 
 void HookeSpring::add_forces(ConstRef x, ConstRef /*v*/, VecRef f) const {
   const SpringSet& s = m_springs;
-  s.for_each([&](size_t n) {
-    const Vec3 fa =
-        hooke_spring_kernel::force(spring_vector(x, s.i[n], s.j[n]), s.coeff[n], s.rest_length[n]);
-    f.segment<3>(3 * s.i[n]) += fa;
-    f.segment<3>(3 * s.j[n]) -= fa;
+  s.for_each_range([&](size_t begin, size_t end) {
+    for (size_t b = begin; b < end; b += kSpringBlockChunk)
+      spring_blocks::hooke_forces(s, x, b, std::min(end, b + kSpringBlockChunk), f.data());
   });
 }
 

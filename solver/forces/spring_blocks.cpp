@@ -1,6 +1,7 @@
 #include "hooke/forces/spring_blocks.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 
 #include "hooke/config.hpp"
@@ -24,7 +25,9 @@ namespace hooke::spring_blocks {
 namespace avx2 {
 #pragma GCC push_options
 #pragma GCC target("avx2")
+#define HOOKE_SPRING_KERNELS_AVX2_COPY 1
 #include "spring_block_kernels.inc"
+#undef HOOKE_SPRING_KERNELS_AVX2_COPY
 #pragma GCC pop_options
 }  // namespace avx2
 #endif
@@ -33,7 +36,9 @@ namespace avx2 {
 // warn that the ABI differs from AVX code, which matters only across separately compiled files.
 #pragma GCC diagnostic ignored "-Wpsabi"
 namespace base {
+#define HOOKE_SPRING_KERNELS_AVX2_COPY 0
 #include "spring_block_kernels.inc"
+#undef HOOKE_SPRING_KERNELS_AVX2_COPY
 }  // namespace base
 
 #if HOOKE_SPRING_BLOCKS_AVX2
@@ -68,6 +73,28 @@ void add_springs(const SpringSet& set, size_t begin, size_t end, const double* B
   if (use_avx2()) return avx2::add_springs(set, begin, end, B, first, shift, mask, out);
 #endif
   base::add_springs(set, begin, end, B, first, shift, mask, out);
+}
+
+void lengths_and_ratios(const double* q, const double* num, size_t m, double* l, double* r) {
+#if HOOKE_SPRING_BLOCKS_AVX2
+  if (use_avx2()) return avx2::lengths_and_ratios(q, num, m, l, r);
+#endif
+  base::lengths_and_ratios(q, num, m, l, r);
+}
+
+void hooke_forces(const SpringSet& set, ConstRef x, size_t begin, size_t end, double* f) {
+#if HOOKE_SPRING_BLOCKS_AVX2
+  if (use_avx2()) return avx2::hooke_forces(set, x, begin, end, f);
+#endif
+  base::hooke_forces(set, x, begin, end, f);
+}
+
+void damper_forces(const SpringSet& set, ConstRef x, ConstRef v, size_t begin, size_t end,
+                   double* f) {
+#if HOOKE_SPRING_BLOCKS_AVX2
+  if (use_avx2()) return avx2::damper_forces(set, x, v, begin, end, f);
+#endif
+  base::damper_forces(set, x, v, begin, end, f);
 }
 
 }  // namespace hooke::spring_blocks

@@ -1,18 +1,16 @@
 #include "hooke/forces/spring_damper.hpp"
 
+#include <algorithm>
+
 #include "hooke/forces/spring_blocks.hpp"
 
 namespace hooke {
 
 void SpringDamper::add_forces(ConstRef x, ConstRef v, VecRef f) const {
   const SpringSet& s = m_springs;
-  s.for_each([&](size_t n) {
-    const int a = s.i[n], b = s.j[n];
-    const Vec3 fa =
-        spring_damper_kernel::force(x.segment<3>(3 * a) - x.segment<3>(3 * b),
-                                    v.segment<3>(3 * a) - v.segment<3>(3 * b), s.coeff[n]);
-    f.segment<3>(3 * a) += fa;
-    f.segment<3>(3 * b) -= fa;
+  s.for_each_range([&](size_t begin, size_t end) {
+    for (size_t b = begin; b < end; b += kSpringBlockChunk)
+      spring_blocks::damper_forces(s, x, v, b, std::min(end, b + kSpringBlockChunk), f.data());
   });
 }
 

@@ -129,6 +129,16 @@ struct SpringSet {
     }
     for_each_group([&](size_t g) { for_each_in_group(g, body); });
   }
+  /// Calls body(begin, end) for each group's springs [begin, end) as for_each_group does, or once
+  /// for all springs (in storage order) when unbound.
+  template <typename RangeBody>
+  void for_each_range(RangeBody&& body) const {
+    if (group_start.empty()) {
+      body(size_t(0), size());
+      return;
+    }
+    for_each_group([&](size_t g) { body(group_start[g], group_start[g + 1]); });
+  }
   /// Splits particles into ranges of about 8192 ids (at most 256 ranges) and reorders the springs
   /// stably into the groups of the class comment (setup time only).
   void partition(long long num_particles) {

@@ -28,14 +28,28 @@ double backward_euler_residual(const MassSpringSystem& system, const State& s0, 
                                const State& s1, Vec& force) {
   system.compute_forces(s1.x, s1.v, force);
   const Vec& mass = system.mass_diagonal();
+  const auto& pinned = system.pinned();
+  // Maxima over blocks of particles, in parallel for large systems: a maximum does not depend on
+  // the order it is taken in (a NaN entry is skipped, as std::max skips it), so neither does the
+  // result.
+  const long long n = system.num_particles();
+  const long long blocks = (n + kRangeBlock - 1) / kRangeBlock;
   double worst = 0.0, scale = 0.0;
-  for (Index p = 0; p < system.num_particles(); ++p) {
-    if (system.pinned()[size_t(p)]) continue;
-    for (Index i = 3 * p; i < 3 * p + 3; ++i) {
-      const double inertia = mass[i] * (s1.x[i] - s0.x[i] - h * s0.v[i]) / (h * h);
-      worst = std::max(worst, std::abs(inertia - force[i]));
-      scale = std::max({scale, std::abs(inertia), std::abs(force[i])});
+  auto block = [&](long long b, double& w, double& s) {
+    for (long long p = b * kRangeBlock; p < std::min(n, (b + 1) * kRangeBlock); ++p) {
+      if (pinned[size_t(p)]) continue;
+      for (Index i = 3 * p; i < 3 * p + 3; ++i) {
+        const double inertia = mass[i] * (s1.x[i] - s0.x[i] - h * s0.v[i]) / (h * h);
+        w = std::max(w, std::abs(inertia - force[i]));
+        s = std::max({s, std::abs(inertia), std::abs(force[i])});
+      }
     }
+  };
+  if (run_parallel(3 * n, kRangeThreshold)) {
+#pragma omp parallel for schedule(dynamic, 1) reduction(max : worst, scale)
+    for (long long b = 0; b < blocks; ++b) block(b, worst, scale);
+  } else {
+    for (long long b = 0; b < blocks; ++b) block(b, worst, scale);
   }
   return scale > 0.0 ? worst / scale : 0.0;
 }
