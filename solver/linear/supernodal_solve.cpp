@@ -1,6 +1,7 @@
 #include "hooke/linear/supernodal_solve.hpp"
 
 #include <algorithm>
+#include <functional>
 #include <type_traits>
 
 #include "hooke/config.hpp"
@@ -88,10 +89,13 @@ namespace sn_base {
 
 namespace {
 /// Splits the supernodal tree into bins of subtrees for threads that take them one at a time:
-/// descends from the roots, moving the heaviest subtree's root into the top while that subtree
-/// holds more than a quarter of the work left below, then deals the remaining subtrees into at
-/// most SupernodalSolver::kMaxBins bins, heaviest first, each to the lightest bin, and orders the
-/// bins heaviest first. With two threads on two free cores the bins pair up evenly; when one
+/// descends from the roots, moving the heaviest subtree's root into the top at each step, and
+/// keeps the step whose estimated time is least (below); deals the subtrees left into at most
+/// SupernodalSolver::kMaxBins bins, heaviest first, each to the lightest bin, and orders the bins
+/// heaviest first. The estimate (work = stored entries) is the top's work, which runs serially,
+/// plus the longest thread's share of the bins when 2 and when 4 threads take them heaviest
+/// first, summed over the two: a fixed choice, so the split and the results do not depend on the
+/// machine's core count. With two threads on two free cores the bins pair up evenly; when one
 /// thread's core is shared, the other takes more of them. Needs the supernodes in a postorder of
 /// their tree (CHOLMOD's default, checked); otherwise everything goes into the top and the solve
 /// is serial.
@@ -137,30 +141,60 @@ void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<
   range.clear();
   bin_start.assign(1, 0);
   if (postordered) {
-    for (;;) {
-      double total = 0.0;
-      size_t heaviest = 0;
-      for (size_t i = 0; i < frontier.size(); ++i) {
-        total += work[size_t(frontier[i])];
-        if (work[size_t(frontier[i])] > work[size_t(frontier[heaviest])]) heaviest = i;
+    // The subtrees dealt into bins: heaviest first (ties by id), each to the lightest bin.
+    auto deal = [&](std::vector<I>& fr, std::vector<std::vector<I>>* bins) {
+      std::sort(fr.begin(), fr.end(), [&](I a, I b) {
+        return work[size_t(a)] > work[size_t(b)] || (work[size_t(a)] == work[size_t(b)] && a < b);
+      });
+      std::vector<double> load(std::min(fr.size(), size_t(SupernodalSolver::kMaxBins)), 0.0);
+      if (bins) bins->assign(load.size(), {});
+      for (const I x : fr) {
+        const size_t b = size_t(std::min_element(load.begin(), load.end()) - load.begin());
+        if (bins) (*bins)[b].push_back(x);
+        load[b] += work[size_t(x)];
       }
-      const I x = frontier.empty() ? -1 : frontier[heaviest];
-      if (x < 0 || children[size_t(x)].empty() || work[size_t(x)] <= 0.25 * total) break;
-      in_top[size_t(x)] = 1;
+      return load;
+    };
+    auto estimate = [&](std::vector<I> fr, double top_work) {
+      std::vector<double> load = deal(fr, nullptr);
+      std::sort(load.begin(), load.end(), std::greater<>());
+      double sum = 0.0;
+      for (const size_t threads : {size_t(2), size_t(4)}) {
+        std::vector<double> share(threads, 0.0);
+        for (const double l : load) *std::min_element(share.begin(), share.end()) += l;
+        sum += top_work + *std::max_element(share.begin(), share.end());
+      }
+      return sum;
+    };
+    // Descend (at most kMaxExpansions steps: beyond a few dozen subtrees the bins are even) and
+    // keep the best step.
+    constexpr int kMaxExpansions = 64;
+    std::vector<I> popped, best_frontier = frontier;
+    double top_work = 0.0, best = estimate(frontier, 0.0);
+    size_t best_popped = 0;
+    for (int step = 0; step < kMaxExpansions && !frontier.empty(); ++step) {
+      size_t heaviest = 0;
+      for (size_t i = 0; i < frontier.size(); ++i)
+        if (work[size_t(frontier[i])] > work[size_t(frontier[heaviest])]) heaviest = i;
+      const I x = frontier[heaviest];
+      if (children[size_t(x)].empty()) break;
+      popped.push_back(x);
+      top_work += work[size_t(x)];
+      for (const I c : children[size_t(x)]) top_work -= work[size_t(c)];  // x's own entries
       frontier.erase(frontier.begin() + std::ptrdiff_t(heaviest));
       frontier.insert(frontier.end(), children[size_t(x)].begin(), children[size_t(x)].end());
+      const double e = estimate(frontier, top_work);
+      if (e < best) {
+        best = e;
+        best_frontier = frontier;
+        best_popped = popped.size();
+      }
     }
-    std::sort(frontier.begin(), frontier.end(), [&](I a, I b) {
-      return work[size_t(a)] > work[size_t(b)] || (work[size_t(a)] == work[size_t(b)] && a < b);
-    });
-    const size_t nbins = std::min(frontier.size(), size_t(SupernodalSolver::kMaxBins));
-    std::vector<std::vector<I>> bins(nbins);
-    std::vector<double> load(nbins, 0.0);
-    for (const I x : frontier) {
-      const size_t b = size_t(std::min_element(load.begin(), load.end()) - load.begin());
-      bins[b].push_back(x);
-      load[b] += work[size_t(x)];
-    }
+    for (size_t k = 0; k < best_popped; ++k) in_top[size_t(popped[k])] = 1;
+    frontier = best_frontier;
+    std::vector<std::vector<I>> bins;
+    const std::vector<double> load = deal(frontier, &bins);
+    const size_t nbins = bins.size();
     std::vector<size_t> order(nbins);
     for (size_t b = 0; b < nbins; ++b) order[b] = b;
     std::stable_sort(order.begin(), order.end(),
