@@ -75,6 +75,7 @@ class AdaptiveTeam {
   int current() const {
     const int all = available();
     if (all <= 1 || m_seen[0] < 1 + kFirstSamples) return all;
+    if (m_last_choice == 1 || m_last_choice == all) return m_last_choice;
     return one_is_faster() ? 1 : all;
   }
   /// Reports that a repetition on `threads` threads took `seconds` of wall time.
@@ -88,7 +89,9 @@ class AdaptiveTeam {
       t = t < 0.0 ? seconds : std::min(t, seconds);
       return;
     }
-    const bool chosen = (k == 0) == one_is_faster();
+    if (k == 1) m_all_fresh = true;
+    const bool on_one = m_last_choice != 0 ? m_last_choice == 1 : one_is_faster();
+    const bool chosen = (k == 0) == on_one;
     // An exponential average: over the last few repetitions for the size in use, which smooths
     // single outliers; a probe of the other size counts half, so that a change of load shows
     // within a few probes.
@@ -111,8 +114,16 @@ class AdaptiveTeam {
       return all;
     }
     // All threads only when they are clearly faster: where the two are about even (a busy second
-    // core), one thread gives the same time without the barriers' stalls and their variance.
-    const int chosen = one_is_faster() ? 1 : all;
+    // core), one thread gives the same time without the barriers' stalls and their variance. The
+    // team leaves all threads as soon as their own repetitions make one thread faster, but returns
+    // to them only on a fresh time of theirs (a probe just counted): one thread's time creeping up
+    // (more load on the machine) does not make all threads' old time right. Returning on it cost
+    // a busy-core 411 x 411 local/global run two slow repetitions on all threads each time, the
+    // stale time having come from a lucky first sample.
+    const bool one = one_is_faster();
+    int chosen = one ? 1 : all;
+    if (m_last_choice == 1 && !one && !m_all_fresh) chosen = 1;
+    m_all_fresh = false;
     if (chosen != m_last_choice) {
       m_last_choice = chosen;
       m_interval = std::min<long long>(kFirstInterval, m_probe_every);
@@ -133,6 +144,7 @@ class AdaptiveTeam {
   double m_time[2] = {-1.0, -1.0};
   int m_last_choice = 0, m_last_threads = 0;
   bool m_uncounted = false, m_probe_pending = false;
+  bool m_all_fresh = false;  // a repetition on all threads was counted since the last choice
   long long m_interval = kFirstInterval, m_since_probe = 0;
 };
 

@@ -3,8 +3,9 @@
 // counts), then runs the faster one (all threads only when clearly faster), probes the other at
 // growing intervals up to every probe_every repetitions (two repetitions on all threads, the first
 // not counted), never counts a repetition on all threads that follows one on a single thread, and
-// follows a change of load (the second core becoming busy, then free again) within a few probes;
-// current() is all threads until both sizes are measured, then the faster.
+// follows a change of load (the second core becoming busy, then free again) within a few probes,
+// returning to all threads only on a fresh time of theirs; current() is all threads until both
+// sizes are measured, then the choice.
 #include "hooke/thread_team.hpp"
 
 #include <gtest/gtest.h>
@@ -118,6 +119,28 @@ TEST(AdaptiveTeam, LeavesAWronglyChosenTeamWithinAFewRepetitions) {
   // 0.95), after the first one, which follows one thread's and is not counted.
   EXPECT_EQ(run(team, 4, 1.0, 1.3), 0);
   EXPECT_EQ(run(team, 1, 1.0, 1.3), 1);
+#else
+  GTEST_SKIP() << "built without OpenMP";
+#endif
+}
+
+TEST(AdaptiveTeam, ReturnsToAllThreadsOnlyOnAFreshTimeOfTheirs) {
+#ifdef _OPENMP
+  const TwoThreads two;
+  AdaptiveTeam team;  // probe_every 64
+  // As above: a lucky two-thread sample, two threads chosen, left when their time reached 1.03.
+  for (int k = 0; k < AdaptiveTeam::kWarmupsAll; ++k) team.record(team.threads(), 1.3);
+  for (const double all : {1.3, 0.5, 1.3}) team.record(team.threads(), all);
+  EXPECT_EQ(run(team, 1 + AdaptiveTeam::kFirstSamples, 1.0, 1.3), 1 + AdaptiveTeam::kFirstSamples);
+  EXPECT_EQ(run(team, 5, 1.0, 1.3), 1);
+  EXPECT_NEAR(team.seconds_all(), 1.0256, 1e-4);
+  // More load: one thread now takes 1.2 s, and its time passes 1.03 / 0.95 within four
+  // repetitions. Two threads' time is old: the team stays on one thread until the next probe...
+  EXPECT_EQ(run(team, 31, 1.2, 1.3), 31);
+  // ...which runs two threads twice (1.3 s counted half: their time 1.163, not clearly faster).
+  EXPECT_EQ(run(team, 2, 1.2, 1.3), 0);
+  EXPECT_NEAR(team.seconds_all(), 1.1628, 1e-4);
+  EXPECT_EQ(run(team, 20, 1.2, 1.3), 20);
 #else
   GTEST_SKIP() << "built without OpenMP";
 #endif
