@@ -88,6 +88,71 @@ namespace sn_base {
 }  // namespace sn_base
 
 namespace {
+/// Sorts the subtrees (roots) fr heaviest first (ties by id) and deals them, in that order, each to
+/// the lightest of at most SupernodalSolver::kMaxBins bins (into *bins unless null); returns the
+/// bins' loads.
+std::vector<double> deal_bins(const std::vector<double>& work, std::vector<I>& fr,
+                              std::vector<std::vector<I>>* bins) {
+  std::sort(fr.begin(), fr.end(), [&](I a, I b) {
+    return work[size_t(a)] > work[size_t(b)] || (work[size_t(a)] == work[size_t(b)] && a < b);
+  });
+  std::vector<double> load(std::min(fr.size(), size_t(SupernodalSolver::kMaxBins)), 0.0);
+  if (bins) bins->assign(load.size(), {});
+  for (const I x : fr) {
+    const size_t b = size_t(std::min_element(load.begin(), load.end()) - load.begin());
+    if (bins) (*bins)[b].push_back(x);
+    load[b] += work[size_t(x)];
+  }
+  return load;
+}
+
+/// split_tree's estimated time of a split: the top's work plus the longest thread's share of the
+/// bins of fr, taken heaviest first, for 2 and for 4 threads, summed.
+double estimated_time(const std::vector<double>& work, std::vector<I> fr, double top_work) {
+  std::vector<double> load = deal_bins(work, fr, nullptr);
+  std::sort(load.begin(), load.end(), std::greater<>());
+  double sum = 0.0;
+  for (const size_t threads : {size_t(2), size_t(4)}) {
+    std::vector<double> share(threads, 0.0);
+    for (const double l : load) *std::min_element(share.begin(), share.end()) += l;
+    sum += top_work + *std::max_element(share.begin(), share.end());
+  }
+  return sum;
+}
+
+/// split_tree's descent from the subtrees `frontier` (subtree work in `work`): moves the heaviest
+/// subtree's root into the top, step by step (at most 64 steps: beyond a few dozen subtrees the
+/// bins are even), and keeps the step of least estimated_time. Leaves that step's subtrees in
+/// `frontier` and returns the roots it moved into the top.
+std::vector<I> descend(const std::vector<double>& work, const std::vector<std::vector<I>>& children,
+                       std::vector<I>& frontier) {
+  constexpr int kMaxSteps = 64;
+  std::vector<I> popped, best_frontier = frontier;
+  double top_work = 0.0, best = estimated_time(work, frontier, 0.0);
+  size_t best_popped = 0;
+  for (int step = 0; step < kMaxSteps && !frontier.empty(); ++step) {
+    size_t heaviest = 0;
+    for (size_t i = 0; i < frontier.size(); ++i)
+      if (work[size_t(frontier[i])] > work[size_t(frontier[heaviest])]) heaviest = i;
+    const I x = frontier[heaviest];
+    if (children[size_t(x)].empty()) break;
+    popped.push_back(x);
+    top_work += work[size_t(x)];
+    for (const I c : children[size_t(x)]) top_work -= work[size_t(c)];  // x's own entries
+    frontier.erase(frontier.begin() + std::ptrdiff_t(heaviest));
+    frontier.insert(frontier.end(), children[size_t(x)].begin(), children[size_t(x)].end());
+    const double e = estimated_time(work, frontier, top_work);
+    if (e < best) {
+      best = e;
+      best_frontier = frontier;
+      best_popped = popped.size();
+    }
+  }
+  frontier = best_frontier;
+  popped.resize(best_popped);
+  return popped;
+}
+
 /// Splits the supernodal tree into bins of subtrees for threads that take them one at a time:
 /// descends from the roots, moving the heaviest subtree's root into the top at each step, and
 /// keeps the step whose estimated time is least (below); deals the subtrees left into at most
@@ -141,59 +206,9 @@ void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<
   range.clear();
   bin_start.assign(1, 0);
   if (postordered) {
-    // The subtrees dealt into bins: heaviest first (ties by id), each to the lightest bin.
-    auto deal = [&](std::vector<I>& fr, std::vector<std::vector<I>>* bins) {
-      std::sort(fr.begin(), fr.end(), [&](I a, I b) {
-        return work[size_t(a)] > work[size_t(b)] || (work[size_t(a)] == work[size_t(b)] && a < b);
-      });
-      std::vector<double> load(std::min(fr.size(), size_t(SupernodalSolver::kMaxBins)), 0.0);
-      if (bins) bins->assign(load.size(), {});
-      for (const I x : fr) {
-        const size_t b = size_t(std::min_element(load.begin(), load.end()) - load.begin());
-        if (bins) (*bins)[b].push_back(x);
-        load[b] += work[size_t(x)];
-      }
-      return load;
-    };
-    auto estimate = [&](std::vector<I> fr, double top_work) {
-      std::vector<double> load = deal(fr, nullptr);
-      std::sort(load.begin(), load.end(), std::greater<>());
-      double sum = 0.0;
-      for (const size_t threads : {size_t(2), size_t(4)}) {
-        std::vector<double> share(threads, 0.0);
-        for (const double l : load) *std::min_element(share.begin(), share.end()) += l;
-        sum += top_work + *std::max_element(share.begin(), share.end());
-      }
-      return sum;
-    };
-    // Descend (at most kMaxExpansions steps: beyond a few dozen subtrees the bins are even) and
-    // keep the best step.
-    constexpr int kMaxExpansions = 64;
-    std::vector<I> popped, best_frontier = frontier;
-    double top_work = 0.0, best = estimate(frontier, 0.0);
-    size_t best_popped = 0;
-    for (int step = 0; step < kMaxExpansions && !frontier.empty(); ++step) {
-      size_t heaviest = 0;
-      for (size_t i = 0; i < frontier.size(); ++i)
-        if (work[size_t(frontier[i])] > work[size_t(frontier[heaviest])]) heaviest = i;
-      const I x = frontier[heaviest];
-      if (children[size_t(x)].empty()) break;
-      popped.push_back(x);
-      top_work += work[size_t(x)];
-      for (const I c : children[size_t(x)]) top_work -= work[size_t(c)];  // x's own entries
-      frontier.erase(frontier.begin() + std::ptrdiff_t(heaviest));
-      frontier.insert(frontier.end(), children[size_t(x)].begin(), children[size_t(x)].end());
-      const double e = estimate(frontier, top_work);
-      if (e < best) {
-        best = e;
-        best_frontier = frontier;
-        best_popped = popped.size();
-      }
-    }
-    for (size_t k = 0; k < best_popped; ++k) in_top[size_t(popped[k])] = 1;
-    frontier = best_frontier;
+    for (const I x : descend(work, children, frontier)) in_top[size_t(x)] = 1;
     std::vector<std::vector<I>> bins;
-    const std::vector<double> load = deal(frontier, &bins);
+    const std::vector<double> load = deal_bins(work, frontier, &bins);
     const size_t nbins = bins.size();
     std::vector<size_t> order(nbins);
     for (size_t b = 0; b < nbins; ++b) order[b] = b;
