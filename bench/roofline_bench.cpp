@@ -74,7 +74,6 @@ Fixture& fixture() {
   return f;
 }
 
-/// Sets the thread count of this case and returns it.
 /// The triad's GB/s just before the running case's loop (threads() measures it), per thread count.
 std::map<int, double>& triad_before() {
   static std::map<int, double> rates;

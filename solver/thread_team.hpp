@@ -68,9 +68,9 @@ class AdaptiveTeam {
     return t;
   }
   /// The size the team runs at present, without counting a repetition: all available threads
-  /// until it has its first samples of both sizes, then the faster. For the parallel loops around
-  /// the repeated region (a step's set-up and residual), which then do not wait at every loop for
-  /// a thread whose core is busy once the team has left it (run them inside a
+  /// until it has its first samples of both sizes, then the size chosen. For the parallel loops
+  /// around the repeated region (a step's set-up and residual), which then do not wait at every
+  /// loop for a thread whose core is busy once the team has left it (run them inside a
   /// ThreadCountScope(team.current())).
   int current() const {
     const int all = available();
@@ -144,7 +144,7 @@ class AdaptiveTeam {
   double m_time[2] = {-1.0, -1.0};
   int m_last_choice = 0, m_last_threads = 0;
   bool m_uncounted = false, m_probe_pending = false;
-  bool m_all_fresh = false;  // a repetition on all threads was counted since the last choice
+  bool m_all_fresh = false;  // a repetition on all threads was counted since the last decision
   long long m_interval = kFirstInterval, m_since_probe = 0;
 };
 

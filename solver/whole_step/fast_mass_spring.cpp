@@ -277,8 +277,7 @@ double FastMassSpringStepper::local_step(ConstRef x, bool gradient) {
           }
           const Eigen::Map<const Vec3> u(uk[q]);
           const double l = len[q], L = s.rest_length[k], c = s.coeff[k];
-          // At l = 0 every direction is optimal (the energy is c L^2 / 2 for all of them): take
-          // x.
+          // At l = 0 every direction is optimal (the energy is c L^2 / 2 for any): take x.
           const Vec3 d = l > 0.0 ? Vec3(ratio[q] * u) : Vec3(L, 0.0, 0.0);
           acc += c * d;
           m_acc.segment<3>(3 * j) -= c * d;
