@@ -1,5 +1,6 @@
 #pragma once
 #include <memory>
+#include <vector>
 
 #include "hooke/integrators/explicit_stepper.hpp"
 #include "hooke/integrators/stepper.hpp"
@@ -10,7 +11,7 @@ namespace hooke {
 /// Runs any ExplicitStepper on a mass-spring system through MassSpringOde, packing (x, v) into the
 /// first-order state [x; v] in preallocated buffers. Symplectic Euler (without scripted pins)
 /// takes a fused path instead: the forces, then v1 = v0 + h (f / m) and x1 = x0 + h v1 in one
-/// parallel pass over the state, the same arithmetic per entry as SymplecticEuler on
+/// parallel pass over the particles, the same arithmetic per entry as SymplecticEuler on
 /// MassSpringOde (the same bits, tested) without its six passes of packing and unpacking, which
 /// at a million particles cost a third of the step and keep a second thread from paying off.
 class ExplicitMassSpringStepper final : public Stepper {
@@ -28,6 +29,10 @@ class ExplicitMassSpringStepper final : public Stepper {
   std::unique_ptr<ExplicitStepper> m_method;
   bool m_symplectic = false;  // the fused symplectic Euler path (unless pins are scripted)
   Vec m_f;                    // its forces (sized once)
+  // Its inverse masses and moving mask per particle (the per-DOF arrays' entries, which repeat
+  // for a particle's three DOFs): 9 bytes a particle instead of 48.
+  Vec m_inv_mass;
+  std::vector<char> m_moving;
   Vec m_X0, m_X1;
   Vec m_err;  // the embedded pair's error estimate (sized once, for methods that have one)
 };

@@ -14,8 +14,10 @@ struct State {
   explicit State(Index n, double t0 = 0.0) : x(Vec::Zero(3 * n)), v(Vec::Zero(3 * n)), t(t0) {}
   Index num_particles() const { return x.size() / 3; }
   bool operator==(const State& o) const { return t == o.t && x == o.x && v == o.v; }
-  /// True if every position and velocity is finite.
-  bool is_finite() const { return x.allFinite() && v.allFinite(); }
+  /// True if every position and velocity is finite (over blocks in parallel for long vectors:
+  /// the check runs after every step, and one thread alone streams 48 MB of a million particles
+  /// at a fraction of the bandwidth).
+  bool is_finite() const { return all_finite(x) && all_finite(v); }
 };
 
 }  // namespace hooke
