@@ -5,6 +5,7 @@
 
 #include <sched.h>
 #include <signal.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -15,8 +16,13 @@ class BusyCore {
  public:
   explicit BusyCore(bool busy) {
     if (!busy) return;
+    const pid_t parent = getpid();
     m_pid = fork();
     if (m_pid == 0) {
+      // Killed with the benchmark, should it die first (a crash, a timeout's SIGKILL): an orphan
+      // would spin on that core until someone found it and slow every later measurement.
+      prctl(PR_SET_PDEATHSIG, SIGKILL);
+      if (getppid() != parent) _exit(0);
       cpu_set_t set;
       CPU_ZERO(&set);
       CPU_SET(int(sysconf(_SC_NPROCESSORS_ONLN)) - 1, &set);

@@ -71,7 +71,7 @@ class AdaptiveTeam {
   /// until it has its first samples of both sizes, then the size chosen. For the parallel loops
   /// around the repeated region (a step's set-up and residual), which then do not wait at every
   /// loop for a thread whose core is busy once the team has left it (run them inside a
-  /// ThreadCountScope(team.current())).
+  /// TeamStep).
   int current() const {
     const int all = available();
     if (all <= 1 || m_seen[0] < 1 + kFirstSamples) return all;
@@ -102,7 +102,9 @@ class AdaptiveTeam {
   double seconds_all() const { return m_time[1]; }
 
  private:
-  static int available() { return max_threads(); }
+  friend class TeamStep;
+  /// All threads: omp_get_max_threads(), or inside a TeamStep the count before it.
+  int available() const { return m_step_all > 0 ? m_step_all : max_threads(); }
   bool one_is_faster() const { return !(m_time[1] < kMargin * m_time[0]); }
   int next(int all) {
     // First kFirstSamples counted repetitions on all threads (after kWarmupsAll), then as many on
@@ -146,6 +148,7 @@ class AdaptiveTeam {
   bool m_uncounted = false, m_probe_pending = false;
   bool m_all_fresh = false;  // a repetition on all threads was counted since the last decision
   long long m_interval = kFirstInterval, m_since_probe = 0;
+  int m_step_all = 0;  // inside a TeamStep: the thread count before it (else 0)
 };
 
 /// Sets the OpenMP thread count of the regions the calling thread starts (omp_set_num_threads)
@@ -173,6 +176,31 @@ class ThreadCountScope {
 
  private:
   int m_previous = 1;
+};
+
+/// The rest of a step (its own parallel loops: set-up, residuals) on the size an AdaptiveTeam
+/// runs at present (current()), with the team's repetitions inside it still choosing between one
+/// thread and all the threads there were before it. A plain ThreadCountScope(team.current()) made
+/// every repetition inside it see one thread available once the team had chosen one: the team
+/// then never probed all threads again, and a run stayed on one thread after the other core had
+/// become free. Nests; does nothing without OpenMP beyond what ThreadCountScope does.
+class TeamStep {
+ public:
+  explicit TeamStep(AdaptiveTeam& team)
+      : m_team(team), m_outer(team.m_step_all), m_scope(narrow(team)) {}
+  ~TeamStep() { m_team.m_step_all = m_outer; }
+  TeamStep(const TeamStep&) = delete;
+  TeamStep& operator=(const TeamStep&) = delete;
+
+ private:
+  /// Records the team's count of all threads before the scope narrows it; returns current().
+  static int narrow(AdaptiveTeam& team) {
+    team.m_step_all = team.available();
+    return team.current();
+  }
+  AdaptiveTeam& m_team;
+  int m_outer;
+  ThreadCountScope m_scope;
 };
 
 /// One timed repetition on an AdaptiveTeam's choice of threads, for a repetition made of several

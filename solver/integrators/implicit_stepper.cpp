@@ -3,10 +3,12 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <optional>
 #include <sstream>
 
 #include "hooke/integrators/step_controller.hpp"
 #include "hooke/linear/linear_registry.hpp"
+#include "hooke/thread_team.hpp"
 
 namespace hooke {
 
@@ -331,6 +333,11 @@ double ImplicitStepper::error_norm(double rtol, double atol) {
 
 StepSummary ImplicitStepper::step(const State& s0, double h, State& s1) {
   const auto t0 = Clock::now();
+  // The step's own parallel loops (assembly, right-hand sides, updates) on the size the linear
+  // solver's iterations run at present (CG's AdaptiveTeam), as fast-mass-spring's: with one core
+  // busy, a loop on two threads waits for the descheduled one.
+  std::optional<TeamStep> team_step;
+  if (AdaptiveTeam* team = m_solver->team()) team_step.emplace(*team);
   const StepSummary out = m_doubling ? doubled(s0, h, s1) : newton(s0, h, s1, *m_solver);
   if (m_estimating && m_scheme == ImplicitScheme::Bdf2 && out.status != Status::BrokeDown &&
       out.status != Status::Fatal)

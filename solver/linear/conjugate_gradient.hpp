@@ -29,6 +29,7 @@ class ConjugateGradientSolver final : public LinearSolver {
   bool exact_resume() const override { return m_pre->exact_resume(); }
   /// The preconditioner's factorizations so far.
   long long factorizations() const override { return m_pre->factorizations(); }
+  AdaptiveTeam* team() override { return &m_team; }
   const Preconditioner& preconditioner() const { return *m_pre; }
   bool requires_spd() const override { return true; }
   LinearSummary analyze(const SparseMatrix& A) override;

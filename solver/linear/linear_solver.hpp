@@ -5,6 +5,8 @@
 
 namespace hooke {
 
+class AdaptiveTeam;
+
 /// Options of one solve; they may change on every call.
 struct LinearSolveOptions {
   /// Stop when ||b - A x|| <= tolerance * ||b|| (iterative backends; direct ones ignore it).
@@ -68,6 +70,9 @@ class LinearSolver {
   /// Numeric factorizations (or preconditioner refactorizations) done so far; 0 for backends
   /// that factor nothing.
   virtual long long factorizations() const { return 0; }
+  /// The AdaptiveTeam that chooses the thread count of the backend's iterations (CG), or null:
+  /// a stepper runs the rest of its step on the team's present size (TeamStep).
+  virtual AdaptiveTeam* team() { return nullptr; }
 };
 
 }  // namespace hooke

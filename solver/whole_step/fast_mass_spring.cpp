@@ -446,8 +446,8 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
   // the 411 x 411 local/global target with a busy core, two threads minus one thread per
   // iteration in one invocation, five invocations: -1.0 to +0.7 ms with these loops on two
   // threads, -2.2 to -0.2 ms with them on the team's size. The iterations choose their own size
-  // (TeamRepetition).
-  const ThreadCountScope threads(m_team.current());
+  // (TeamRepetition) between one thread and all there were before the step (TeamStep).
+  const TeamStep team_step(m_team);
   StepSummary out;
   prepare(h);
   begin_step(s0, h);

@@ -5,7 +5,8 @@
 // not counted), never counts a repetition on all threads that follows one on a single thread, and
 // follows a change of load (the second core becoming busy, then free again) within a few probes,
 // returning to all threads only on a fresh time of theirs; current() is all threads until both
-// sizes are measured, then the choice.
+// sizes are measured, then the choice; inside a TeamStep on one thread the repetitions still
+// probe all threads.
 #include "hooke/thread_team.hpp"
 
 #include <gtest/gtest.h>
@@ -211,6 +212,41 @@ TEST(AdaptiveTeam, CurrentIsAllThreadsUntilBothSizesAreMeasuredThenTheChoice) {
   // A probe of one thread does not change it.
   EXPECT_EQ(run(quiet, 30, 1.0, 0.5), 1);
   EXPECT_EQ(quiet.current(), 2);
+#else
+  GTEST_SKIP() << "built without OpenMP";
+#endif
+}
+
+TEST(AdaptiveTeam, RepetitionsInsideAStepOnOneThreadStillProbeAllThreads) {
+#ifdef _OPENMP
+  const TwoThreads two;
+  AdaptiveTeam team;  // probe_every 64
+  // One thread chosen (a busy second core)...
+  EXPECT_EQ(run_first_samples(team, 1.0, 2.0), 1 + AdaptiveTeam::kFirstSamples);
+  {
+    const TeamStep step(team);
+    // ...so the step's own loops run on one thread, while its repetitions still probe both
+    // sizes: 32 on one thread, then two on all (the second counted), as outside a step.
+    EXPECT_EQ(omp_get_max_threads(), 1);
+    EXPECT_EQ(team.current(), 1);
+    EXPECT_EQ(run(team, 32, 1.0, 2.0), 32);
+    EXPECT_EQ(team.threads(), 2);
+    team.record(2, 0.5);
+    EXPECT_EQ(team.threads(), 2);
+    // The core is free again: two threads take 0.5 s (time 1.25, then 0.875 at the next probe).
+    team.record(2, 0.5);
+    EXPECT_EQ(run(team, 64, 1.0, 0.5), 64);
+    EXPECT_EQ(run(team, 2, 1.0, 0.5), 0);
+    // The repetitions return to all threads...
+    EXPECT_EQ(run(team, 10, 1.0, 0.5), 0);
+  }
+  EXPECT_EQ(omp_get_max_threads(), 2);
+  // ...and the next step runs its own loops on them.
+  {
+    const TeamStep step(team);
+    EXPECT_EQ(omp_get_max_threads(), 2);
+    EXPECT_EQ(run(team, 10, 1.0, 0.5), 0);
+  }
 #else
   GTEST_SKIP() << "built without OpenMP";
 #endif
