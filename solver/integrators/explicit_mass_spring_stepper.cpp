@@ -47,7 +47,7 @@ StepSummary ExplicitMassSpringStepper::step(const State& s0, double h, State& s1
     const char* moving = m_moving.data();
     const double *x0 = s0.x.data(), *v0 = s0.v.data();
     double *x1 = s1.x.data(), *v1 = s1.v.data();
-    // In 64 pieces of particles, in parallel from as many entries as the per-entry passes.
+    // Particles in 64 pieces, in parallel at the same sizes as the per-entry passes (work = 3n).
     parallel_pieces(n3 / 3, n3, kRangeThreshold, [&](long long b, long long e) {
       for (long long p = b; p < e; ++p) {
         const double im = inv_mass[p], mv = moving[p] ? 1.0 : 0.0;
