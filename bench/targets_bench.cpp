@@ -3,7 +3,8 @@
 //  - LocalGlobal411: target_local_global_411.toml, a 411 x 411 cloth with 842k springs solved by
 //    fast-mass-spring (Liu et al. 2013). Counters: one-off analysis and factorization, nnz(L), and
 //    one local/global iteration split into its local step and its global solve (3 right-hand
-//    sides), averaged over steps of 10 iterations after a warm-up step. The target is 27 ms per
+//    sides), averaged over steps of 10 iterations after a warm-up step, and team_all, the share of
+//    those iterations run on all threads (the adaptive team's choice). The target is 27 ms per
 //    iteration (4x a typical public implementation's 107 ms). .../single:1 reads the factor
 //    rounded to float (integrator.factor_precision = "single", issue 18).
 //  - BackwardEuler256/<linear solver>: target_backward_euler_256.toml, a 256 x 256 cloth (391k
@@ -12,7 +13,8 @@
 //    included: it is what a user pays; first_step_s and later_steps_s split it). The stepper's
 //    set-up (the symbolic analysis of the pattern, made when it is constructed) is outside the
 //    timed steps and reported as its own figure, setup_s. Counters: PCG iterations,
-//    factorizations and their seconds, solve and assembly seconds per step. The target is 0.64 s
+//    factorizations and their seconds, solve and assembly seconds per step, and team_all, the
+//    share of the linear iterations run on all threads (CG's adaptive team). The target is 0.64 s
 //    per step (10x a classic Jacobi-PCG's 6.4 s).
 // Busy-core mode (issue 18): LocalGlobal411 and BackwardEuler256/pcg-nodal also run as
 // .../threads:T/busy:1 with T = 1 and 2 while a competing process spins on the last core
@@ -76,6 +78,7 @@ void BM_LocalGlobal411(benchmark::State& state) {
   const double factor = fms.last_factor_seconds();
   std::swap(s0, s1);
   const double local0 = fms.local_seconds(), global0 = fms.global_seconds();
+  const long long one0 = fms.team().repetitions_one(), all0 = fms.team().repetitions_all();
   long long iterations = 0;
   for (auto _ : state) {
     t0 = Clock::now();
@@ -91,6 +94,10 @@ void BM_LocalGlobal411(benchmark::State& state) {
   state.counters["factor_nnz"] = fms.factor_nonzeros();
   state.counters["local_ms"] = 1e3 * (fms.local_seconds() - local0) / it;
   state.counters["global_ms"] = 1e3 * (fms.global_seconds() - global0) / it;
+  // The share of the timed iterations that the team ran on all threads (solver/thread_team.hpp).
+  const double one = double(fms.team().repetitions_one() - one0);
+  const double all = double(fms.team().repetitions_all() - all0);
+  state.counters["team_all"] = one + all > 0.0 ? all / (one + all) : 0.0;
 }
 
 void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int steps) {
@@ -102,6 +109,7 @@ void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int
   long long iterations = 0, taken = 0;
   double factor = 0.0, solve = 0.0, assembly = 0.0, first = 0.0, later = 0.0, setup = 0.0;
   int factorizations = 0;
+  long long team_one = 0, team_all = 0;
   for (auto _ : state) {
     const auto t_setup = Clock::now();
     hooke::Simulation sim(
@@ -128,6 +136,11 @@ void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int
     solve += st.solve_seconds;
     assembly += st.assembly_seconds;
     factorizations += int(st.factorizations);
+    const auto* implicit = dynamic_cast<const hooke::ImplicitStepper*>(&sim.stepper());
+    if (const hooke::AdaptiveTeam* team = implicit ? implicit->linear_solver().team() : nullptr) {
+      team_one += team->repetitions_one();
+      team_all += team->repetitions_all();
+    }
   }
   const double n = double(std::max(1LL, taken));
   state.counters["springs"] = double(scene.edges.size());
@@ -139,6 +152,9 @@ void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int
   state.counters["factor_s"] = factor / n;
   state.counters["solve_s"] = solve / n;
   state.counters["assembly_s"] = assembly / n;
+  // The share of the linear iterations the team ran on all threads (CG: its adaptive team).
+  state.counters["team_all"] =
+      team_one + team_all > 0 ? double(team_all) / double(team_one + team_all) : 0.0;
 }
 
 const int registered = [] {

@@ -3,9 +3,33 @@
 /// of an iterative method), chosen by timing the region on all threads and on one.
 #include <algorithm>
 
+#ifdef __linux__
+#include <sched.h>
+#endif
+
 #include "hooke/core.hpp"
 
 namespace hooke {
+
+/// The idle time of the CPUs the calling thread may run on (its affinity mask), summed over them,
+/// at a wall-clock time: two readings tell how many CPUs stood idle on average between them.
+struct IdleReading {
+  double wall = 0.0;   ///< s, steady clock
+  double idle = 0.0;   ///< s of idle (and I/O wait) CPU time since boot, summed over the CPUs
+  bool known = false;  ///< false where it could not be read (no /proc/stat: not Linux)
+};
+/// Reads /proc/stat's idle and iowait times of the CPUs in the calling thread's affinity mask
+/// (in ticks of 1/sysconf(_SC_CLK_TCK) s: two readings need some tens of ms between them to say
+/// anything). No allocation.
+IdleReading read_idle();
+#ifdef __linux__
+namespace detail {
+/// read_idle's parse of one line of /proc/stat: adds a "cpuN user nice system idle iowait ..."
+/// line's idle and iowait ticks to *idle when CPU N is in `mask` (other lines, the "cpu" total
+/// among them, add nothing); false on a cpuN line it cannot read.
+bool add_cpu_line(const char* line, const cpu_set_t& mask, unsigned long long* idle);
+}  // namespace detail
+#endif
 
 /// Picks, for a region that repeats, between all available threads and one thread, by the wall
 /// time each has taken recently (all threads when they take at most 95% of one thread's time). On a
@@ -32,6 +56,16 @@ namespace hooke {
 /// all threads of which the second counts. Probing after 4, 8, 16, ... made a busy-core two-thread
 /// 411 x 411 local/global run 1.5-2% slower than one thread over 30 iterations.
 ///
+/// Only one in kBusyProbes probes of all threads runs while no CPU has been free for them: while
+/// the CPUs this process may use stood idle less than kIdleToProbe CPUs on average since the team
+/// chose one thread or last looked (read_idle(), over at least kIdleWindow s; a shorter window, or
+/// no reading, probes as above). A second thread then has no core of its own, and its probe mostly
+/// costs time: two slow repetitions on all threads every 32 made a busy-core two-thread 411 x 411
+/// local/global run 1-3% slower than one thread over 30 iterations, the one systematic difference
+/// between the two. Not none: a thread that shares a busy core still gets its share of it, and
+/// whether that pays depends on where the threads land (the same busy-core case, 2026-11-28: two
+/// threads at 0.61-0.76 of one thread's time in 3 of 12 invocations, 0.86-1.17 in the others).
+///
 /// Use: `const int t = team.threads();` run the region with num_threads(t) (or inside a
 /// ThreadCountScope(t), for a repetition made of several regions) and time it, then
 /// `team.record(t, seconds)`.
@@ -45,7 +79,13 @@ class AdaptiveTeam {
   static constexpr long long kFirstInterval = 32;
   /// probe_every: the longest interval (repetitions) between probes of the size not chosen (the
   /// cost of watching: at most about 1/probe_every of the repetitions on the slower size).
-  explicit AdaptiveTeam(int probe_every = 64) : m_probe_every(std::max(2, probe_every)) {
+  /// Every probe of all threads runs when kIdleToProbe CPUs stood idle on average over at least
+  /// kIdleWindow s; otherwise one in kBusyProbes runs.
+  static constexpr double kIdleToProbe = 0.5, kIdleWindow = 0.05;
+  static constexpr int kBusyProbes = 4;
+  /// idle: where the team reads the CPUs' idle time (read_idle; tests pass their own).
+  explicit AdaptiveTeam(int probe_every = 64, IdleReading (*idle)() = read_idle)
+      : m_probe_every(std::max(2, probe_every)), m_read_idle(idle) {
 #ifdef _OPENMP
     // libgomp allocates a thread's own copy of its settings the first time the thread changes one
     // (omp_set_num_threads): here, at set-up, by setting the count it has, rather than at the
@@ -100,6 +140,9 @@ class AdaptiveTeam {
   /// The smoothed wall time per repetition on one thread and on all (s); -1 until measured.
   double seconds_one() const { return m_time[0]; }
   double seconds_all() const { return m_time[1]; }
+  /// Repetitions recorded so far on one thread and on all threads (warm-ups and probes included).
+  long long repetitions_one() const { return m_seen[0]; }
+  long long repetitions_all() const { return m_seen[1]; }
 
  private:
   friend class TeamStep;
@@ -130,14 +173,32 @@ class AdaptiveTeam {
       m_last_choice = chosen;
       m_interval = std::min<long long>(kFirstInterval, m_probe_every);
       m_since_probe = 0;
+      m_busy_skips = 0;
+      if (chosen == 1) m_idle_since = m_read_idle();  // the window for the first probe
     }
     if (++m_since_probe > m_interval) {
       m_since_probe = 0;
+      // No core of their own for the other threads: three of four probes are skipped.
+      if (chosen == 1 && !cpu_was_free() && ++m_busy_skips < kBusyProbes) return 1;
+      m_busy_skips = 0;
       m_interval = std::min<long long>(2 * m_interval, m_probe_every);
       if (chosen == 1) m_probe_pending = true;  // a second repetition on all threads follows
       return chosen == 1 ? all : 1;
     }
     return chosen;
+  }
+  /// Whether the CPUs stood idle for kIdleToProbe CPUs on average since m_idle_since (true when
+  /// unknown, or over less than kIdleWindow s); starts the next window when it could tell.
+  bool cpu_was_free() {
+    const IdleReading now = m_read_idle();
+    const double wall = now.wall - m_idle_since.wall;
+    if (!now.known || !m_idle_since.known || !(wall >= kIdleWindow)) {
+      if (!m_idle_since.known) m_idle_since = now;
+      return true;
+    }
+    const bool free = now.idle - m_idle_since.idle >= kIdleToProbe * wall;
+    m_idle_since = now;
+    return free;
   }
 
   static constexpr double kMargin = 0.95;
@@ -149,6 +210,9 @@ class AdaptiveTeam {
   bool m_all_fresh = false;  // a repetition on all threads was counted since the last decision
   long long m_interval = kFirstInterval, m_since_probe = 0;
   int m_step_all = 0;  // inside a TeamStep: the thread count before it (else 0)
+  IdleReading (*m_read_idle)();
+  IdleReading m_idle_since;  // the start of the window that decides the next probe of all threads
+  int m_busy_skips = 0;      // probes of all threads skipped in a row, no CPU having been idle
 };
 
 /// Sets the OpenMP thread count of the regions the calling thread starts (omp_set_num_threads)

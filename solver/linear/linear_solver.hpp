@@ -73,6 +73,7 @@ class LinearSolver {
   /// The AdaptiveTeam that chooses the thread count of the backend's iterations (CG), or null:
   /// a stepper runs the rest of its step on the team's present size (TeamStep).
   virtual AdaptiveTeam* team() { return nullptr; }
+  const AdaptiveTeam* team() const { return const_cast<LinearSolver*>(this)->team(); }
 };
 
 }  // namespace hooke

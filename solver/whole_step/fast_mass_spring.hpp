@@ -157,6 +157,8 @@ class FastMassSpringStepper final : public Stepper {
   /// steps (the triangular solves with three right-hand sides, or the Jacobi sweeps).
   double local_seconds() const { return m_local_seconds; }
   double global_seconds() const { return m_global_seconds; }
+  /// The team that chooses the iterations' thread count (its repetition counts, for benchmarks).
+  const AdaptiveTeam& team() const { return m_team; }
   /// The global matrix M/h^2 + C/h + L of the free particles (free x free, both triangles), with
   /// the values of the last factorization.
   const SparseMatrix& global_matrix() const { return m_A; }

@@ -6,13 +6,22 @@
 // follows a change of load (the second core becoming busy, then free again) within a few probes,
 // returning to all threads only on a fresh time of theirs; current() is all threads until both
 // sizes are measured, then the choice; inside a TeamStep on one thread the repetitions still
-// probe all threads.
+// probe all threads; only one in kBusyProbes probes of all threads runs while the CPUs stood idle
+// less than kIdleToProbe CPUs on average over a window of at least kIdleWindow s, and read_idle
+// reads /proc/stat's idle ticks of the CPUs in this thread's affinity mask.
 #include "hooke/thread_team.hpp"
 
 #include <gtest/gtest.h>
 
 #ifdef _OPENMP
 #include <omp.h>
+#endif
+
+#include <chrono>
+#include <thread>
+
+#ifdef __linux__
+#include <unistd.h>
 #endif
 
 namespace hooke {
@@ -251,6 +260,107 @@ TEST(AdaptiveTeam, RepetitionsInsideAStepOnOneThreadStillProbeAllThreads) {
   GTEST_SKIP() << "built without OpenMP";
 #endif
 }
+
+/// A machine whose CPUs' idle time the tests set: each repetition of run_timed() takes
+/// `rep_wall` s and leaves `idle_rate` CPUs idle meanwhile.
+struct FakeMachine {
+  static inline double wall = 0.0, idle = 0.0;
+  static IdleReading read() { return {wall, idle, true}; }
+};
+
+/// As run(), the fake machine's clock advancing `rep_wall` s a repetition, with `idle_rate` CPUs
+/// idle.
+int run_timed(AdaptiveTeam& team, int repetitions, double one, double all, double rep_wall,
+              double idle_rate) {
+  int on_one = 0;
+  for (int k = 0; k < repetitions; ++k) {
+    const int t = team.threads();
+    if (t == 1) ++on_one;
+    team.record(t, t == 1 ? one : all);
+    FakeMachine::wall += rep_wall;
+    FakeMachine::idle += idle_rate * rep_wall;
+  }
+  return on_one;
+}
+
+TEST(AdaptiveTeam, ProbesAllThreadsAQuarterAsOftenWhileNoCpuIsIdle) {
+#ifdef _OPENMP
+  const TwoThreads two;
+  AdaptiveTeam team(64, FakeMachine::read);
+  static_assert(AdaptiveTeam::kBusyProbes == 4);
+  // One thread faster (a busy second core); repetitions of 10 ms.
+  EXPECT_EQ(run_timed(team, AdaptiveTeam::kWarmupsAll + 1 + 2 * AdaptiveTeam::kFirstSamples, 1.0,
+                      2.0, 0.01, 0.0),
+            1 + AdaptiveTeam::kFirstSamples);
+  // A tenth of a CPU idle on average (less than kIdleToProbe): the probes due at the 33rd, 66th
+  // and 99th repetitions are skipped, the one due at the 132nd runs (two repetitions on all
+  // threads), and finds them still slower.
+  EXPECT_EQ(run_timed(team, 132, 1.0, 2.0, 0.01, 0.1), 131);
+  EXPECT_EQ(run_timed(team, 1, 1.0, 2.0, 0.01, 0.1), 0);
+  // The interval doubled to 64: the next probe runs at the fourth due time, 4 x 65 later.
+  EXPECT_EQ(run_timed(team, 4 * 65, 1.0, 2.0, 0.01, 0.1), 4 * 65 - 1);
+  EXPECT_EQ(run_timed(team, 1, 1.0, 2.0, 0.01, 0.1), 0);
+  // A CPU free: every due probe runs; two find all threads faster (the first counts half against
+  // the old time), and then all threads run.
+  for (int probe = 0; probe < 2; ++probe) {
+    EXPECT_EQ(run_timed(team, 65, 1.0, 0.5, 0.01, 1.0), 64) << probe;
+    EXPECT_EQ(run_timed(team, 1, 1.0, 0.5, 0.01, 1.0), 0) << probe;
+  }
+  EXPECT_EQ(run_timed(team, 10, 1.0, 0.5, 0.01, 1.0), 0);
+#else
+  GTEST_SKIP() << "built without OpenMP";
+#endif
+}
+
+TEST(AdaptiveTeam, ProbesAllThreadsWhenTheIdleWindowIsTooShortToTell) {
+#ifdef _OPENMP
+  const TwoThreads two;
+  AdaptiveTeam team(64, FakeMachine::read);
+  // Repetitions of 0.1 ms: 32 of them span less than kIdleWindow, so the team probes as it
+  // would without readings, after 32 repetitions, however idle the CPUs look.
+  static_assert(32 * 1e-4 < AdaptiveTeam::kIdleWindow);
+  EXPECT_EQ(run_timed(team, AdaptiveTeam::kWarmupsAll + 1 + 2 * AdaptiveTeam::kFirstSamples, 1.0,
+                      2.0, 1e-4, 0.0),
+            1 + AdaptiveTeam::kFirstSamples);
+  EXPECT_EQ(run_timed(team, 32, 1.0, 2.0, 1e-4, 0.0), 32);
+  EXPECT_EQ(run_timed(team, 2, 1.0, 2.0, 1e-4, 0.0), 0);
+#else
+  GTEST_SKIP() << "built without OpenMP";
+#endif
+}
+
+#ifdef __linux__
+TEST(ReadIdle, SumsIdleAndIoWaitTicksOfTheCpusInTheMask) {
+  cpu_set_t mask;
+  CPU_ZERO(&mask);
+  CPU_SET(0, &mask);
+  CPU_SET(2, &mask);
+  unsigned long long idle = 0;
+  for (const char* line : {"cpu  100 0 50 9000 30 0 0 0 0 0", "cpu0 10 0 5 1000 3 0 0 0 0 0",
+                           "cpu1 10 0 5 2000 4 0 0 0 0 0", "cpu2 10 0 5 3000 5 0 0 0 0 0",
+                           "intr 12345 0 0", "ctxt 777", "cpu12 1 2 3 4000 5 0 0 0 0 0"})
+    EXPECT_TRUE(detail::add_cpu_line(line, mask, &idle)) << line;
+  EXPECT_EQ(idle, 1000u + 3u + 3000u + 5u);
+  EXPECT_FALSE(detail::add_cpu_line("cpu0 10 0", mask, &idle));
+}
+
+TEST(ReadIdle, ReadsThisMachinesIdleTime) {
+  const IdleReading a = read_idle();
+  std::this_thread::sleep_for(std::chrono::milliseconds(200));
+  const IdleReading b = read_idle();
+  ASSERT_TRUE(a.known && b.known);
+  cpu_set_t mask;
+  ASSERT_EQ(sched_getaffinity(0, sizeof(mask), &mask), 0);
+  const double cpus = CPU_COUNT(&mask), wall = b.wall - a.wall;
+  EXPECT_GE(wall, 0.2);
+  // Idle time grows, by at most every CPU of the mask idle all the time (plus a tick of each:
+  // the readings count whole ticks).
+  const double tick = 1.0 / double(sysconf(_SC_CLK_TCK));
+  EXPECT_GE(b.idle, a.idle);
+  EXPECT_LE(b.idle - a.idle, cpus * (wall + 2 * tick));
+  EXPECT_GT(a.idle, 0.0);
+}
+#endif
 
 }  // namespace
 }  // namespace hooke
