@@ -178,7 +178,7 @@ class AdaptiveTeam {
     }
     if (++m_since_probe > m_interval) {
       m_since_probe = 0;
-      // No core of their own for the other threads: three of four probes are skipped.
+      // No core of their own for the other threads: all but one in kBusyProbes probes skipped.
       if (chosen == 1 && !cpu_was_free() && ++m_busy_skips < kBusyProbes) return 1;
       m_busy_skips = 0;
       m_interval = std::min<long long>(2 * m_interval, m_probe_every);

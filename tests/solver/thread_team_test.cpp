@@ -353,7 +353,7 @@ TEST(ReadIdle, ReadsThisMachinesIdleTime) {
   ASSERT_EQ(sched_getaffinity(0, sizeof(mask), &mask), 0);
   const double cpus = CPU_COUNT(&mask), wall = b.wall - a.wall;
   EXPECT_GE(wall, 0.2);
-  // Idle time grows, by at most every CPU of the mask idle all the time (plus a tick of each:
+  // Idle time grows, by at most every CPU of the mask idle all the time (plus two ticks of each:
   // the readings count whole ticks).
   const double tick = 1.0 / double(sysconf(_SC_CLK_TCK));
   EXPECT_GE(b.idle, a.idle);
