@@ -60,11 +60,12 @@ bool add_cpu_line(const char* line, const cpu_set_t& mask, unsigned long long* i
 /// the CPUs this process may use stood idle less than kIdleToProbe CPUs on average since the team
 /// chose one thread or last looked (read_idle(), over at least kIdleWindow s; a shorter window, or
 /// no reading, probes as above). A second thread then has no core of its own, and its probe mostly
-/// costs time: two slow repetitions on all threads every 32 made a busy-core two-thread 411 x 411
-/// local/global run 1-3% slower than one thread over 30 iterations, the one systematic difference
-/// between the two. Not none: a thread that shares a busy core still gets its share of it, and
-/// whether that pays depends on where the threads land (the same busy-core case, 2026-11-28: two
-/// threads at 0.61-0.76 of one thread's time in 3 of 12 invocations, 0.86-1.17 in the others).
+/// costs time: its two slow repetitions on all threads, within 30 iterations, made the busy-core
+/// two-thread 411 x 411 local/global case of bench/targets_bench.cpp 1.1-1.8% slower than the
+/// one-thread case in 3 of 4 invocations, the one systematic difference between the two. Not none:
+/// a thread that shares a busy core still gets its share of it, and whether that pays depends on
+/// where the threads land (the same case, 2026-11-28: two threads at 0.61-0.76 of one thread's
+/// time in 3 of 12 invocations, 0.86-1.17 in the others).
 ///
 /// Use: `const int t = team.threads();` run the region with num_threads(t) (or inside a
 /// ThreadCountScope(t), for a repetition made of several regions) and time it, then
