@@ -119,6 +119,10 @@ class AdaptiveTeam {
     if (m_last_choice == 1 || m_last_choice == all) return m_last_choice;
     return one_is_faster() ? 1 : all;
   }
+  /// All the threads the team chooses from: omp_get_max_threads(), or inside a TeamStep the count
+  /// before it. For work inside a repetition that runs on all of them whatever the team chose
+  /// (SupernodalSolver's helped solves, whose second thread never holds the first up).
+  int all_threads() const { return available(); }
   /// Reports that a repetition on `threads` threads took `seconds` of wall time.
   void record(int threads, double seconds) {
     const int k = threads > 1 ? 1 : 0;

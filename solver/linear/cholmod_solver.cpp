@@ -32,6 +32,7 @@ struct CholmodSolver::Impl {
   long long factorizations = 0;
   bool analyzed = false;  // analyze() succeeded (with no factor L when n = 0)
   bool factored = false;
+  int solve_threads = 0;                                // set_solve_threads
   std::array<std::unique_ptr<SupernodalSolver>, 4> sn;  // per K, made on first use
   Vec column;                                           // simplicial fallback's one column
   std::vector<double> to_rows;  // solve_interleaved_to_rows' solution before it is placed
@@ -245,7 +246,7 @@ LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K
                                                      : SupernodalSolver::Precision::Double);
       sn->bind(m->view());
     }
-    sn->solve(b, x, x_perm);
+    sn->solve(b, x, x_perm, m->solve_threads);
   } else {
     HOOKE_ASSERT(!x_perm, "cholmod: rows for a simplicial factor's solve");
     m->column.resize(m->n);
@@ -259,6 +260,8 @@ LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K
   s.solve_seconds = seconds_since(t0);
   return s;
 }
+
+void CholmodSolver::set_solve_threads(int threads) { m->solve_threads = std::max(0, threads); }
 
 void CholmodSolver::set_solution_rows(std::vector<Index> rows) {
   m->rows = std::move(rows);

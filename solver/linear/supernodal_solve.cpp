@@ -1,11 +1,15 @@
 #include "hooke/linear/supernodal_solve.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <chrono>
 #include <functional>
+#include <thread>
 #include <type_traits>
 
 #include "hooke/config.hpp"
 #include "hooke/core.hpp"
+#include "hooke/helper_thread.hpp"
 
 // The AVX2 copy of the kernels (with FMA: every AVX2 CPU has it, but GCC's target "avx2" alone does
 // not fuse the kernels' multiply-adds, which then cost two instructions each) needs an x86 target
@@ -62,7 +66,111 @@ struct Packed {
 struct Work {
   double *D, *W, *T;
 };
+
+inline void cpu_pause() {
+#if defined(__x86_64__) || defined(__i386__)
+  __builtin_ia32_pause();
+#endif
+}
+inline std::int64_t steady_ns() {
+  return std::chrono::duration_cast<std::chrono::nanoseconds>(
+             std::chrono::steady_clock::now().time_since_epoch())
+      .count();
+}
+/// A bin's state in a helped sweep (HelpedSweeps::state), tagged with the sweep's generation as
+/// (generation << 3) | state, so that a late helper's claim of a bin of an earlier sweep fails.
+/// Free -> Claimed (the helper copies its inputs) -> Running (it computes in its own rows) ->
+/// Done, through Scattering in the backward sweep (it writes its rows of x); Free, Claimed or
+/// Running -> Owner (the owner computes it).
+enum : std::uint64_t { kBinFree, kBinClaimed, kBinRunning, kBinScattering, kBinOwner, kBinDone };
+inline std::uint64_t sweep_tag(std::uint64_t generation, std::uint64_t state) {
+  return generation << 3 | state;
+}
 }  // namespace
+
+/// What the owner of a helped solve (the caller of SupernodalSolver::solve) and its helper share;
+/// see the helped solves in supernodal_kernels.inc. bind() sets the views and buffers while the
+/// helper is idle; the atomics carry each sweep.
+struct HelpedSweeps {
+  static constexpr int kMaxBins = SupernodalSolver::kMaxBins;
+  SupernodalFactorView f;
+  SplitView split{};
+  int K = 1;
+  bool single = false, avx2 = false;
+  Packed<double> pd{};
+  Packed<float> pf{};
+  // The owner's rows (SupernodalSolver::m_y), deltas and scratch, and its rows for the bins it
+  // takes over in the backward sweep (M).
+  double *Y = nullptr, *delta = nullptr, *M = nullptr;
+  Work owner_work{};
+  // The helper's own: forward rows, backward rows, deltas, scratch.
+  double *Yw = nullptr, *Zw = nullptr, *dw = nullptr;
+  Work work{};
+  std::array<double, kMaxBins> bin_work{};    // each bin's share of the factor's work
+  double total_work = 1.0;                    // the bins' work (supernode_work summed)
+  std::vector<double> rows, deltas, scratch;  // storage of Yw, Zw and M; dw; the helper's scratch
+
+  std::atomic<const double*> b{nullptr};           // the forward sweep's right-hand sides
+  std::atomic<double*> x{nullptr};                 // the backward sweep's solution
+  std::atomic<const I*> x_perm{nullptr};           // and where its rows go
+  std::atomic<std::uint64_t> state[2][kMaxBins];   // per sweep (forward, backward) and bin
+  std::atomic<std::int64_t> claimed_ns[kMaxBins];  // when the helper claimed the bin
+  std::atomic<std::int64_t> progress[kMaxBins];    // the helper's work done in it so far
+  std::atomic<std::uint64_t> reading{0};  // a sweep's generation while the helper copies inputs
+
+  // The owner's alone.
+  std::uint64_t generation = 0;  // of the last sweep (odd: forward, even: backward)
+  double ns_per_work = 0.0;      // the owner's time per unit of bin work, smoothed
+  long long taken_over = 0;      // bins the owner took over from the helper
+  long long helper_bins = 0;     // bins whose result the helper computed
+  // The helper's progress in each bin when the owner last saw it change, and when (-1: not seen
+  // in this sweep).
+  std::array<std::int64_t, kMaxBins> seen{}, seen_ns{};
+
+  HelpedSweeps() {
+    for (auto& sweep : state)
+      for (auto& s : sweep) s.store(0);
+    for (auto& c : claimed_ns) c.store(0);
+    for (auto& p : progress) p.store(0);
+  }
+  /// The owner's own bin `bin` took `ns`.
+  void observe(std::int64_t bin, std::int64_t ns) {
+    const double r = double(ns) / bin_work[size_t(bin)];
+    ns_per_work = ns_per_work > 0.0 ? 0.75 * ns_per_work + 0.25 * r : r;
+  }
+  /// Whether the owner, with nothing else to do, should compute bin `bin` itself rather than wait
+  /// for the helper that holds it. While the helper's progress moves, it runs: wait, unless it
+  /// has held the bin kLate times as long as the owner would take for it. Once its progress has
+  /// stood still for kStall ns, the kernel has descheduled it (its core is busy), typically until
+  /// its next tick (kResume ns): take over unless what it has done is worth more than that wait
+  /// (waiting costs kResume plus the rest of the bin, computing costs the whole bin).
+  bool take_over(std::int64_t bin) {
+    const std::size_t b = size_t(bin);
+    const std::int64_t now = steady_ns(), p = progress[b].load(std::memory_order_relaxed);
+    const std::int64_t claimed = claimed_ns[b].load(std::memory_order_relaxed);
+    if (p != seen[b]) {
+      seen[b] = p;
+      seen_ns[b] = now;
+    }
+    const double whole = ns_per_work * bin_work[b];  // the owner's time for the bin
+    if (double(now - claimed) > kLate * whole + kStall) return true;
+    if (double(now - std::max(seen_ns[b], claimed)) < kStall) return false;
+    return double(p) / total_work / bin_work[b] * whole < kResume;
+  }
+  static constexpr double kLate = 3.0, kStall = 300e3, kResume = 4e6;
+  /// SupernodalSolver::HelperTest's flags: the owner lets the helper claim the heaviest bin of
+  /// each forward sweep first (for up to 1 s); the helper sleeps kTestStall s in every bin it
+  /// claims.
+  std::atomic<int> test_mode{0};
+  static constexpr int kTestHelperFirst = SupernodalSolver::kHelperFirst;
+  static constexpr int kTestHelperStalls = SupernodalSolver::kHelperStalls;
+  static constexpr double kTestStall = 0.5;
+  /// How long the helper spins after its part of a sweep for the next one: after the forward
+  /// sweep through the owner's serial top of the tree (1-2 ms on the 1M-spring factor) to the
+  /// backward sweep; after the backward sweep briefly, the caller's next solve being usually a
+  /// whole iteration of other work away.
+  static constexpr double kSpinForward = 20e-3, kSpinBackward = 100e-6;
+};
 
 // The kernels twice on x86: for AVX2 (4-wide vectors in one register) and for the baseline ISA
 // (the same vector code in SSE2 halves). Chosen at run time; results differ between the two only
@@ -237,6 +345,73 @@ void split_tree(const SupernodalFactorView& f, std::vector<I>& top, std::vector<
 }
 }  // namespace
 
+namespace {
+/// Calls fn(std::integral_constant<int, K>{}, packed factor, kernels' namespace tag) for h's K,
+/// precision and ISA.
+struct Avx2Tag {};
+struct BaseTag {};
+template <typename Fn>
+void dispatch(const HelpedSweeps& h, Fn&& fn) {
+  auto with_k = [&](const auto& pk, auto isa) {
+    switch (h.K) {
+      case 1:
+        return fn(std::integral_constant<int, 1>{}, pk, isa);
+      case 2:
+        return fn(std::integral_constant<int, 2>{}, pk, isa);
+      case 3:
+        return fn(std::integral_constant<int, 3>{}, pk, isa);
+      default:
+        return fn(std::integral_constant<int, 4>{}, pk, isa);
+    }
+  };
+  auto with_isa = [&](const auto& pk) {
+#if HOOKE_SUPERNODAL_AVX2
+    if (h.avx2) return with_k(pk, Avx2Tag{});
+#endif
+    return with_k(pk, BaseTag{});
+  };
+  if (h.single)
+    with_isa(h.pf);
+  else
+    with_isa(h.pd);
+}
+
+/// The helper's job: its part of sweep `generation`.
+void help_job(void* context, std::uint64_t generation) {
+  HelpedSweeps& h = *static_cast<HelpedSweeps*>(context);
+  dispatch(h, [&](auto k, const auto& pk, auto isa) {
+    constexpr int K = decltype(k)::value;
+#if HOOKE_SUPERNODAL_AVX2
+    if constexpr (std::is_same_v<decltype(isa), Avx2Tag>) {
+      sn_avx2::help_sweep<K>(h, pk, generation);
+      return;
+    }
+#endif
+    (void)isa;
+    sn_base::help_sweep<K>(h, pk, generation);
+  });
+}
+
+void solve_helped(int K, HelpedSweeps& h, HelperThread& helper, const double* b, double* x,
+                  const I* x_perm) {
+  HOOKE_ASSERT(K == h.K, "SupernodalSolver: helped solve with K = " << K << " != " << h.K);
+  dispatch(h, [&](auto k, const auto& pk, auto isa) {
+    constexpr int KK = decltype(k)::value;
+#if HOOKE_SUPERNODAL_AVX2
+    if constexpr (std::is_same_v<decltype(isa), Avx2Tag>) {
+      sn_avx2::solve_k_helped<KK>(h, helper, pk, b, x, x_perm);
+      return;
+    }
+#endif
+    (void)isa;
+    sn_base::solve_k_helped<KK>(h, helper, pk, b, x, x_perm);
+  });
+}
+}  // namespace
+
+SupernodalSolver::~SupernodalSolver() = default;
+SupernodalSolver::SupernodalSolver(SupernodalSolver&&) noexcept = default;
+
 SupernodalSolver::SupernodalSolver(int K, Precision precision) : m_K(K), m_precision(precision) {
   HOOKE_ASSERT(K >= 1 && K <= 4, "SupernodalSolver: K = " << K << " right-hand sides (1..4)");
 #if HOOKE_SUPERNODAL_AVX2
@@ -248,6 +423,7 @@ SupernodalSolver::SupernodalSolver(int K, Precision precision) : m_K(K), m_preci
 }
 
 void SupernodalSolver::bind(const SupernodalFactorView& f) {
+  if (m_helper) m_helper->wait_idle();  // no helper job reads what this changes
   m_f = f;
   auto round4 = [](I v) { return (v + 3) / 4 * 4; };
   // Sizes: the packed blocks (lower-triangular chunks of the inverse: chunk q from row group q),
@@ -341,6 +517,79 @@ void SupernodalSolver::bind(const SupernodalFactorView& f) {
     else
       pack_blocks(m_packed.data());
   }
+  bind_helped();
+}
+
+void SupernodalSolver::bind_helped() {
+  const I bins = I(m_bin_start.size()) - 1;
+#ifdef _OPENMP
+  const bool helped = bins >= 2 && omp_get_num_procs() > 1;
+#else
+  const bool helped = false;
+#endif
+  if (!helped) {
+    m_helper.reset();
+    m_helped.reset();
+    return;
+  }
+  if (!m_helped) m_helped = std::make_unique<HelpedSweeps>();
+  HelpedSweeps& h = *m_helped;
+  h.f = m_f;
+  h.split = SplitView{m_top.data(),
+                      I(m_top_row.size()),
+                      m_top_row.data(),
+                      I(m_top_supernode.size()),
+                      m_top_supernode.data(),
+                      m_range.data(),
+                      bins,
+                      m_bin_start.data()};
+  h.K = m_K;
+  h.single = m_precision == Precision::Single;
+  h.avx2 = m_avx2;
+  h.pd = Packed<double>{m_inv_start.data(), m_off_start.data(), m_packed.data(), m_rows.data()};
+  h.pf =
+      Packed<float>{m_inv_start.data(), m_off_start.data(), m_packed_single.data(), m_rows.data()};
+  const size_t n = size_t(m_K * m_f.n);
+  if (h.rows.size() < 3 * n) h.rows.resize(3 * n);
+  if (h.deltas.size() < m_delta.size()) h.deltas.resize(m_delta.size());
+  if (h.scratch.size() < size_t(m_stride)) h.scratch.resize(size_t(m_stride));
+  h.Y = m_y.data();
+  h.delta = m_delta.data();
+  h.Yw = h.rows.data();
+  h.Zw = h.Yw + n;
+  h.M = h.Zw + n;
+  h.dw = h.deltas.data();
+  auto work_at = [&](double* base) {
+    return Work{base, base + m_K * m_cols_max, base + 2 * m_K * m_cols_max};
+  };
+  h.owner_work = work_at(m_scratch.data());
+  h.work = work_at(h.scratch.data());
+  double total = 0.0;
+  h.bin_work.fill(0.0);
+  for (I b = 0; b < bins; ++b)
+    for (I r = m_bin_start[size_t(b)]; r < m_bin_start[size_t(b) + 1]; ++r)
+      for (I s = m_range[size_t(2 * r)]; s <= m_range[size_t(2 * r + 1)]; ++s)
+        h.bin_work[size_t(b)] +=
+            double(m_f.super[s + 1] - m_f.super[s]) * double(m_f.pi[s + 1] - m_f.pi[s]);
+  for (I b = 0; b < bins; ++b) total += h.bin_work[size_t(b)];
+  h.total_work = total;
+  for (I b = 0; b < bins; ++b)
+    h.bin_work[size_t(b)] = std::max(h.bin_work[size_t(b)] / total, 1e-12);
+  h.ns_per_work = 0.0;
+  if (!m_helper) m_helper = std::make_unique<HelperThread>(help_job, m_helped.get());
+}
+
+void SupernodalSolver::test_helper(int flags) {
+  if (m_helped) m_helped->test_mode.store(flags);
+}
+
+SupernodalSolver::Helped SupernodalSolver::helped() const {
+  Helped out;
+  if (m_helped) {
+    out.helper_bins = m_helped->helper_bins;
+    out.taken_over = m_helped->taken_over;
+  }
+  return out;
 }
 
 SupernodalSolver::Shape SupernodalSolver::shape() const {
@@ -367,7 +616,8 @@ SupernodalSolver::Shape SupernodalSolver::shape() const {
   return out;
 }
 
-void SupernodalSolver::solve(const double* b, double* x, const std::int64_t* x_perm) {
+void SupernodalSolver::solve(const double* b, double* x, const std::int64_t* x_perm,
+                             int threads_wanted) {
   if (!x_perm) x_perm = m_f.perm;
   HOOKE_ASSERT(m_f.value, "SupernodalSolver: solve before bind");
   SplitView split{m_top.data(),
@@ -388,9 +638,15 @@ void SupernodalSolver::solve(const double* b, double* x, const std::int64_t* x_p
   // Threads pay off from about 1e5 factor entries (a 10k-spring cloth's factor has 7e4).
   int threads = 1;
 #ifdef _OPENMP
-  if (run_parallel(static_cast<long long>(m_work_total), 100000))
-    threads = std::min(omp_get_max_threads(), m_threads);
+  if (m_work_total >= 100000)
+    threads = std::min(threads_wanted > 0 ? threads_wanted : omp_get_max_threads(), m_threads);
+#else
+  (void)threads_wanted;
 #endif
+  if (threads == 2 && m_helper) {  // the caller and a helper thread (supernodal_kernels.inc)
+    solve_helped(m_K, *m_helped, *m_helper, b, x, x_perm);
+    return;
+  }
   auto run = [&](const auto& pk) {
 #if HOOKE_SUPERNODAL_AVX2
     if (m_avx2) {

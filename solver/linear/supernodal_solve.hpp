@@ -1,9 +1,13 @@
 #pragma once
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <vector>
 
 namespace hooke {
+
+struct HelpedSweeps;
+class HelperThread;
 
 /// A read-only view of a supernodal Cholesky factor L (L L^T = P A P^T) in CHOLMOD's layout:
 /// supernode s owns columns super[s] .. super[s+1]-1; its row indices are row[pi[s] .. pi[s+1]-1]
@@ -44,6 +48,9 @@ class SupernodalSolver {
   enum class Precision { Double, Single };
   /// K right-hand sides (1..4).
   explicit SupernodalSolver(int K, Precision precision = Precision::Double);
+  ~SupernodalSolver();
+  SupernodalSolver(SupernodalSolver&&) noexcept;
+  SupernodalSolver& operator=(SupernodalSolver&&) = delete;  // the helper reads this one's buffers
   /// Solves with factor f from now on: inverts its diagonal blocks (call again after every
   /// refactorization); grows the workspace if f needs more (the only allocation).
   void bind(const SupernodalFactorView& f);
@@ -52,7 +59,12 @@ class SupernodalSolver {
   /// K perm[k]: a caller whose unknowns are some rows of a larger vector passes its rows composed
   /// with the factor's permutation and needs no pass of its own to scatter them (x must not alias
   /// b then, and must hold every row x_perm names).
-  void solve(const double* b, double* x, const std::int64_t* x_perm = nullptr);
+  /// threads: how many threads to run on (0: omp_get_max_threads(); one thread below about 1e5
+  /// factor entries whatever the count). Two threads are the calling one and a helper thread
+  /// (HelperThread) that never holds it up: each sweep's bins are claimed one at a time, and a bin
+  /// the helper holds while the kernel has descheduled it (another process on its core) the
+  /// calling thread computes itself. More threads: an OpenMP team.
+  void solve(const double* b, double* x, const std::int64_t* x_perm = nullptr, int threads = 0);
   int rhs() const { return m_K; }
   /// The most bins of subtrees the tree is split into (split_tree in the .cpp).
   static constexpr int kMaxBins = 8;
@@ -67,6 +79,20 @@ class SupernodalSolver {
     std::array<double, kMaxBins> bin_fraction{};  ///< shares of the bins, heaviest first
   };
   Shape shape() const;
+  /// What the helper thread did in the solves on two threads so far: bins of either sweep whose
+  /// result it computed, and bins it had claimed that the caller's thread took over (computed
+  /// itself) because the helper held them too long.
+  struct Helped {
+    long long helper_bins = 0, taken_over = 0;
+  };
+  Helped helped() const;
+  /// For tests of the two-thread solves, flags: kHelperFirst, the calling thread lets the helper
+  /// claim the first bin of each forward sweep before it starts (for up to 1 s; so that the
+  /// helper's results are used); kHelperStalls, the helper sleeps 0.5 s in every bin it claims, as
+  /// if descheduled (so that the calling thread takes them over). After bind(); results are the
+  /// same whatever the flags.
+  enum HelperTest : int { kHelperFirst = 1, kHelperStalls = 2 };
+  void test_helper(int flags);
 
  private:
   SupernodalFactorView m_f;
@@ -90,6 +116,11 @@ class SupernodalSolver {
   std::int64_t m_packed_entries = 0;
   std::vector<double> m_packed, m_block;
   std::vector<float> m_packed_single;  // the same, rounded (Precision::Single; m_packed unused)
+  // Two threads: the caller and a helper thread (HelpedSweeps, in the .cpp). Last, so that the
+  // helper stops before anything it reads goes.
+  void bind_helped();
+  std::unique_ptr<HelpedSweeps> m_helped;
+  std::unique_ptr<HelperThread> m_helper;
 };
 
 }  // namespace hooke

@@ -16,6 +16,7 @@
 
 #include <Eigen/SparseCholesky>
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -23,6 +24,7 @@
 #include <numeric>
 #include <random>
 #include <string>
+#include <thread>
 #include <unsupported/Eigen/KroneckerProduct>
 #include <utility>
 #include <vector>
@@ -871,6 +873,60 @@ TEST(SupernodalSolve, SameBitsWithOneOrTwoThreads) {
   EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0);
   EXPECT_GT(x1.norm(), 0.0);
 #endif
+}
+
+TEST(SupernodalSolve, HelperThreadsBinsGiveTheSameBitsAsOneThread) {
+  // Two threads are the caller and a helper thread (SupernodalSolver::solve): the bins the helper
+  // computes, in rows of its own, must give the one-thread bits, in place (x = b) too.
+  const SparseMatrix& A = cloth_problem().A();
+  hooke::CholmodSolver chol;
+  ASSERT_EQ(setup(chol, A).status, Status::Converged);
+  for (const auto precision :
+       {hooke::SupernodalSolver::Precision::Double, hooke::SupernodalSolver::Precision::Single}) {
+    hooke::SupernodalSolver sn(3, precision);
+    sn.bind(chol.supernodal_view());
+    if (sn.shape().bins < 2 || std::thread::hardware_concurrency() < 2)
+      GTEST_SKIP() << "one CPU, or a factor that does not split: no helper thread";
+    sn.test_helper(hooke::SupernodalSolver::kHelperFirst);
+    for (int k = 0; k < 4; ++k) {
+      const Vec b = random_vector(3 * A.rows(), 300 + k);
+      Vec x1(b.size()), x2(b.size()), x3 = b;
+      sn.solve(b.data(), x1.data(), nullptr, 1);
+      sn.solve(b.data(), x2.data(), nullptr, 2);
+      sn.solve(x3.data(), x3.data(), nullptr, 2);
+      EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0) << k;
+      EXPECT_EQ((x1 - x3).cwiseAbs().maxCoeff(), 0.0) << k << ": in place";
+      EXPECT_GT(x1.norm(), 0.0);
+    }
+    EXPECT_GT(sn.helped().helper_bins, 0) << "the helper's results were used";
+  }
+}
+
+TEST(SupernodalSolve, CallerTakesOverFromAStalledHelperWithoutWaitingForIt) {
+  // A helper descheduled while it holds a bin (here: asleep 0.5 s in it) must not hold the solve
+  // up: the caller computes that bin itself, and the helper's late result is never used.
+  const SparseMatrix& A = cloth_problem().A();
+  hooke::CholmodSolver chol;
+  ASSERT_EQ(setup(chol, A).status, Status::Converged);
+  hooke::SupernodalSolver sn(3);
+  sn.bind(chol.supernodal_view());
+  if (sn.shape().bins < 2 || std::thread::hardware_concurrency() < 2)
+    GTEST_SKIP() << "one CPU, or a factor that does not split: no helper thread";
+  const Vec b = random_vector(3 * A.rows(), 310);
+  Vec x1(b.size()), x2(b.size()), x3(b.size());
+  sn.solve(b.data(), x1.data(), nullptr, 1);
+  sn.test_helper(hooke::SupernodalSolver::kHelperFirst | hooke::SupernodalSolver::kHelperStalls);
+  const auto t0 = std::chrono::steady_clock::now();
+  sn.solve(b.data(), x2.data(), nullptr, 2);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_LT(seconds, 0.25) << "the caller waited for the stalled helper";
+  EXPECT_GE(sn.helped().taken_over, 1);
+  EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0);
+  // The next solve, with the helper still asleep in the last one's bin: its late claim fails.
+  sn.test_helper(0);
+  sn.solve(b.data(), x3.data(), nullptr, 2);
+  EXPECT_EQ((x1 - x3).cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST(ConjugateGradient, SameBitsOnOneOrTwoThreadsWhateverTheTeamRuns) {

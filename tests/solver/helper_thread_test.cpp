@@ -1,0 +1,62 @@
+#include "hooke/helper_thread.hpp"
+
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <chrono>
+#include <cstdint>
+#include <thread>
+
+namespace {
+
+struct Log {
+  std::atomic<std::uint64_t> last{0};
+  std::atomic<int> runs{0};
+  std::atomic<int> out_of_order{0};
+  double sleep = 0.0;
+};
+void record(void* context, std::uint64_t generation) {
+  Log& log = *static_cast<Log*>(context);
+  if (log.sleep > 0.0) std::this_thread::sleep_for(std::chrono::duration<double>(log.sleep));
+  if (generation <= log.last.load()) log.out_of_order.fetch_add(1);
+  log.last.store(generation);
+  log.runs.fetch_add(1);
+}
+
+TEST(HelperThread, RunsTheNewestPostedGenerationAndWaitsIdle) {
+  Log log;
+  hooke::HelperThread helper(record, &log);
+  // Posts farther apart than the helper's spin (it sleeps in between): each wakes it.
+  for (std::uint64_t g = 1; g <= 3; ++g) {
+    helper.post(g, 0.0);
+    helper.wait_idle();
+    EXPECT_EQ(log.last.load(), g);
+    std::this_thread::sleep_for(std::chrono::milliseconds(2));
+  }
+  // Posts faster than it runs them: it may skip some, never goes back, ends on the newest.
+  log.sleep = 1e-3;
+  for (std::uint64_t g = 4; g <= 40; ++g) helper.post(g, 1e-3);
+  helper.wait_idle();
+  EXPECT_EQ(log.last.load(), 40u);
+  EXPECT_LE(log.runs.load(), 40);
+  EXPECT_EQ(log.out_of_order.load(), 0);
+}
+
+TEST(HelperThread, PostReturnsAtOnceWhileTheHelperIsBusy) {
+  // The owner never waits for its helper: a post while the job runs (0.3 s) returns at once.
+  Log log;
+  log.sleep = 0.3;
+  hooke::HelperThread helper(record, &log);
+  helper.post(1, 0.0);
+  std::this_thread::sleep_for(std::chrono::milliseconds(20));  // the job has started
+  const auto t0 = std::chrono::steady_clock::now();
+  helper.post(2, 0.0);
+  const double seconds =
+      std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_LT(seconds, 0.1);
+  helper.wait_idle();
+  EXPECT_EQ(log.last.load(), 2u);
+  // Destroyed while asleep: the destructor wakes and joins it.
+}
+
+}  // namespace
