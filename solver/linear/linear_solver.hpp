@@ -74,6 +74,10 @@ class LinearSolver {
   /// a stepper runs the rest of its step on the team's present size (TeamStep).
   virtual AdaptiveTeam* team() { return nullptr; }
   const AdaptiveTeam* team() const { return const_cast<LinearSolver*>(this)->team(); }
+  /// The threads this backend's solves run on, where it chooses them per solve (CHOLMOD's
+  /// supernodal solves, SupernodalSolver::solve): 0, OpenMP's count at each solve (the default), or
+  /// a fixed count. Does nothing elsewhere.
+  virtual void set_solve_threads(int /*threads*/) {}
 };
 
 }  // namespace hooke

@@ -35,6 +35,7 @@ class NodalPreconditioner final : public LinearSolver {
   /// x = (N (x) I3)^-1 b (3n vectors, particle-major: x, y, z of each particle); x may alias b.
   LinearSummary solve(ConstRef b, VecRef x, const LinearSolveOptions& options) override;
   double factor_cost_in_solves() const override { return m_chol.factor_cost_in_solves(); }
+  void set_solve_threads(int threads) override { m_chol.set_solve_threads(threads); }
   /// Entries of N's Cholesky factor (after factor()).
   double factor_nonzeros() const { return m_chol.factor_nonzeros(); }
   /// The nodal matrix of the last factor() (n x n, both triangles).

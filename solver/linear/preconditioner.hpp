@@ -27,6 +27,9 @@ class Preconditioner {
 
   /// Told after each solve how many Krylov iterations it took (reuse policies count them).
   virtual void solved(int /*iterations*/) {}
+  /// The threads apply() runs on where the preconditioner chooses them (a reused factorization:
+  /// LinearSolver::set_solve_threads); 0, OpenMP's count at each call. Does nothing elsewhere.
+  virtual void set_apply_threads(int /*threads*/) {}
   /// True if P was set up for an older A than the last setup() call's.
   virtual bool stale() const { return false; }
   /// Sets P up for the last setup() call's A now (after a failed solve with a stale P).

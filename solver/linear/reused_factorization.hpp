@@ -25,6 +25,7 @@ class ReusedFactorization final : public Preconditioner {
   LinearSummary setup(const SparseMatrix& A) override;
   Status apply(ConstRef r, VecRef z) override;
   void solved(int iterations) override;
+  void set_apply_threads(int threads) override { m_direct->set_solve_threads(threads); }
   bool stale() const override { return !m_fresh; }
   LinearSummary refresh() override;
   long long factorizations() const override { return m_factorizations; }
