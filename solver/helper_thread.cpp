@@ -41,6 +41,7 @@ void wake(std::atomic<std::uint32_t>& word) {
 HelperThread::HelperThread(Job job, void* context)
     : m_job(job), m_context(context), m_thread([this] { loop(); }) {
 #ifdef __linux__
+  m_pid = getpid();
   cpu_set_t set;
   CPU_ZERO(&set);
   if (sched_getaffinity(0, sizeof(set), &set) == 0 && CPU_COUNT(&set) > 1) {
@@ -55,7 +56,7 @@ void HelperThread::keep_off_owner_cpu() {
 #ifdef __linux__
   if (!m_own_cpus) return;
   const int cpu = sched_getcpu();
-  if (cpu < 0 || cpu == m_owner_cpu) return;
+  if (cpu < 0 || cpu == m_owner_cpu || forked()) return;
   m_owner_cpu = cpu;
   cpu_set_t set;
   __builtin_memcpy(&set, m_allowed, sizeof(set));
@@ -65,6 +66,12 @@ void HelperThread::keep_off_owner_cpu() {
 }
 
 HelperThread::~HelperThread() {
+  if (forked()) {
+    // The helper is not in this process: nothing to stop or join, and detaching it fails (no
+    // such thread). Its handle is left behind (a std::thread destroyed joinable terminates).
+    new std::thread(std::move(m_thread));
+    return;
+  }
   m_stop.store(true);
   m_posts.fetch_add(1);
   wake(m_posts);
@@ -79,7 +86,16 @@ void HelperThread::post(std::uint64_t generation, double spin_seconds) {
   if (m_sleeping.load()) wake(m_posts);
 }
 
+bool HelperThread::forked() const {
+#ifdef __linux__
+  return getpid() != m_pid;
+#else
+  return false;
+#endif
+}
+
 void HelperThread::wait_idle() const {
+  if (forked()) return;
   while (m_done.load(std::memory_order_acquire) != m_posts.load()) std::this_thread::yield();
 }
 

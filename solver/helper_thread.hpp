@@ -48,6 +48,11 @@ class HelperThread {
   void loop();
   /// On Linux with more than one CPU allowed: the helper's affinity without the calling CPU.
   void keep_off_owner_cpu();
+  /// Whether this is a child forked after construction, which has no helper thread: the owner
+  /// does all the work (it never waits for the helper), and wait_idle and the destructor return
+  /// at once (joining would wait for ever).
+  bool forked() const;
+  long m_pid = 0;
 
   Job m_job;
   void* m_context;

@@ -5,7 +5,13 @@
 #include <atomic>
 #include <chrono>
 #include <cstdint>
+#include <memory>
 #include <thread>
+
+#ifdef __linux__
+#include <sys/wait.h>
+#include <unistd.h>
+#endif
 
 namespace {
 
@@ -58,5 +64,37 @@ TEST(HelperThread, PostReturnsAtOnceWhileTheHelperIsBusy) {
   EXPECT_EQ(log.last.load(), 2u);
   // Destroyed while asleep: the destructor wakes and joins it.
 }
+
+#ifdef __linux__
+TEST(HelperThread, AForkedChildDoesNotWaitForTheHelperItHasNot) {
+  // fork() copies only the calling thread: a child that posts to, waits on and destroys the
+  // helper it inherited must neither hang (joining a thread of its parent) nor reach the parent's.
+  Log log;
+  auto helper = std::make_unique<hooke::HelperThread>(record, &log);
+  helper->post(1, 0.0);
+  helper->wait_idle();
+  const pid_t child = fork();
+  ASSERT_GE(child, 0);
+  if (child == 0) {
+    alarm(10);  // a hang fails the test instead of blocking it
+    {
+      hooke::HelperThread own(record, &log);  // a helper of the child's own works
+      own.post(7, 0.0);
+      own.wait_idle();
+      if (log.last.load() != 7) _exit(3);
+    }
+    helper->post(8, 0.0);  // the parent's: no thread here
+    helper->wait_idle();
+    helper.reset();
+    _exit(log.last.load() == 7 ? 0 : 4);
+  }
+  int status = 0;
+  ASSERT_EQ(waitpid(child, &status, 0), child);
+  ASSERT_TRUE(WIFEXITED(status)) << "the child hung or crashed: signal "
+                                 << (WIFSIGNALED(status) ? WTERMSIG(status) : 0);
+  EXPECT_EQ(WEXITSTATUS(status), 0);
+  EXPECT_EQ(log.last.load(), 1u) << "the child's posts reached the parent's helper";
+}
+#endif
 
 }  // namespace
