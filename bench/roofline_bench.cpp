@@ -8,6 +8,7 @@
 #include <benchmark/benchmark.h>
 #include <omp.h>
 
+#include <algorithm>
 #include <cstdlib>
 #include <map>
 #include <memory>
@@ -15,6 +16,7 @@
 #include <vector>
 
 #include "bench/bench_main.hpp"
+#include "bench/busy_core.hpp"
 #include "bench/cloth_fixture.hpp"
 #include "bench/implicit_operator.hpp"
 #include "bench/triad.hpp"
@@ -263,6 +265,19 @@ void triangular_solves(benchmark::State& state, hooke::SupernodalSolver& sn, dou
   state.counters["top_fraction"] = shape.top_fraction;  // the serial part of the tree split
 }
 void BM_TriangularSolves3(benchmark::State& state) { triangular_solves(state, *fixture().sn, 8.0); }
+/// The same with a competing process spinning on the last core (busy_core.hpp; the triad is
+/// measured beside it too): two threads are the caller and SupernodalSolver's helper thread.
+/// helper_bins and taken_over: per solve, the bins whose results the helper computed and those the
+/// caller took over from it.
+void BM_TriangularSolves3Busy(benchmark::State& state) {
+  const hooke::bench::BusyCore busy(true);
+  hooke::SupernodalSolver& sn = *fixture().sn;
+  const auto before = sn.helped();
+  triangular_solves(state, sn, 8.0);
+  const double solves = double(std::max<benchmark::IterationCount>(1, state.iterations()));
+  state.counters["helper_bins"] = double(sn.helped().helper_bins - before.helper_bins) / solves;
+  state.counters["taken_over"] = double(sn.helped().taken_over - before.taken_over) / solves;
+}
 void BM_TriangularSolves3Single(benchmark::State& state) {
   triangular_solves(state, *fixture().sn_single, 4.0);
 }
@@ -315,6 +330,7 @@ const int registered = [] {
   both(benchmark::RegisterBenchmark("Roofline/MatrixFreeOperator", BM_MatrixFreeOperator));
   both(benchmark::RegisterBenchmark("Roofline/PcgIteration", BM_PcgIteration));
   both(benchmark::RegisterBenchmark("Roofline/TriangularSolves3", BM_TriangularSolves3));
+  both(benchmark::RegisterBenchmark("Roofline/TriangularSolves3Busy", BM_TriangularSolves3Busy));
   both(
       benchmark::RegisterBenchmark("Roofline/TriangularSolves3Single", BM_TriangularSolves3Single));
   benchmark::RegisterBenchmark("Roofline/LocalGlobalIteration", BM_LocalGlobalIteration)

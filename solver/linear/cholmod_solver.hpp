@@ -78,7 +78,7 @@ class CholmodSolver final : public LinearSolver {
   /// The threads the supernodal solves of solve_interleaved run on (SupernodalSolver::solve):
   /// 0, OpenMP's count at each call (the default), or a fixed count (a caller whose other loops
   /// run on fewer threads than it has, AdaptiveTeam's one thread on a busy machine, can keep the
-  /// solves on two: their second thread never holds the first up).
+  /// solves on two: the first does not wait for the second while the kernel has descheduled it).
   void set_solve_threads(int threads) override;
   /// Where solve_interleaved_to_rows writes row r of the solution: x + K rows[r] (one row per
   /// unknown, n in all, distinct). Kept across analyze() and factor().

@@ -76,8 +76,9 @@ LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x,
   const double bnorm = linear_detail::begin_solve(name(), m_A, b, x, options, t0, s);
   if (bnorm == 0.0) return s;
   // The preconditioner's solves on all threads whatever the team runs the iterations' products
-  // on: a reused factorization's two-thread solves never wait for their second thread
-  // (SupernodalSolver::solve), so with one core busy they still gain from its share of that core.
+  // on: a reused factorization's two-thread solves do not wait for their second thread while the
+  // kernel has descheduled it (SupernodalSolver::solve), so with one core busy they still gain
+  // from its share of that core.
   m_pre->set_apply_threads(m_team.all_threads());
   m_product.multiply(*m_A, x, m_r);
   m_r = b - m_r;

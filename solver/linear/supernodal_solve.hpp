@@ -61,9 +61,9 @@ class SupernodalSolver {
   /// b then, and must hold every row x_perm names).
   /// threads: how many threads to run on (0: omp_get_max_threads(); one thread below about 1e5
   /// factor entries whatever the count). Two threads are the calling one and a helper thread
-  /// (HelperThread) that never holds it up: each sweep's bins are claimed one at a time, and a bin
-  /// the helper holds while the kernel has descheduled it (another process on its core) the
-  /// calling thread computes itself. More threads: an OpenMP team.
+  /// (HelperThread): each sweep's bins are claimed one at a time, and a bin the helper holds while
+  /// the kernel has descheduled it (another process on its core) the calling thread computes
+  /// itself, waiting only for the helper's short copies in and out. More threads: an OpenMP team.
   void solve(const double* b, double* x, const std::int64_t* x_perm = nullptr, int threads = 0);
   int rhs() const { return m_K; }
   /// The most bins of subtrees the tree is split into (split_tree in the .cpp).

@@ -449,9 +449,9 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
   // (TeamRepetition) between one thread and all there were before the step (TeamStep).
   const TeamStep team_step(m_team);
   // The global solves on all threads whatever the team runs the rest of an iteration on: their
-  // second thread is a helper that the first never waits for (SupernodalSolver::solve), so with one
-  // core busy they still gain from its share of that core (busy-core 411 x 411 target: see
-  // bench/README.md).
+  // second thread is a helper that the first does not wait for while the kernel has descheduled
+  // it (SupernodalSolver::solve), so with one core busy they still gain from its share of that
+  // core (busy-core 411 x 411 target: see bench/README.md).
   if (m_chol) m_chol->set_solve_threads(m_team.all_threads());
   StepSummary out;
   prepare(h);
