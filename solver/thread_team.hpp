@@ -122,7 +122,8 @@ class AdaptiveTeam {
   /// All the threads the team chooses from: omp_get_max_threads(), or inside a TeamStep the count
   /// before it. For work inside a repetition that runs on all of them whatever the team chose
   /// (SupernodalSolver's two-thread solves, whose first thread does not wait for a descheduled
-  /// second).
+  /// second), or that takes a helper thread when the team runs one (FastMassSpringStepper's
+  /// local step).
   int all_threads() const { return available(); }
   /// Reports that a repetition on `threads` threads took `seconds` of wall time.
   void record(int threads, double seconds) {

@@ -89,14 +89,21 @@ struct SpringSet {
   /// for_each.
   template <typename GroupBody>
   void for_each_group(GroupBody&& body) const {
+    for_each_group_from(0, body);
+  }
+  /// The same for the groups of phases first_phase, first_phase + 1, ... only (first_phase 1: all
+  /// but the interior groups, for a caller that runs those itself).
+  template <typename GroupBody>
+  void for_each_group_from(int first_phase, GroupBody&& body) const {
     const long long groups = static_cast<long long>(num_groups());
     // Serial (fewer than two interior groups, or one thread): the groups in storage = phase order.
     if (!run_parallel(static_cast<long long>(phase_start[1]), 2)) {
-      for (long long g = 0; g < groups; ++g) body(size_t(g));
+      for (long long g = (long long)phase_start[size_t(first_phase)]; g < groups; ++g)
+        body(size_t(g));
       return;
     }
 #pragma omp parallel
-    for (int p = 0; p < 3; ++p) {
+    for (int p = first_phase; p < 3; ++p) {
 #pragma omp for schedule(dynamic, 1)
       for (long long g = (long long)phase_start[size_t(p)];
            g < (long long)phase_start[size_t(p) + 1]; ++g)

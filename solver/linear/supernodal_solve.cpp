@@ -9,6 +9,7 @@
 
 #include "hooke/config.hpp"
 #include "hooke/core.hpp"
+#include "hooke/helped_bins.hpp"
 #include "hooke/helper_thread.hpp"
 
 // The AVX2 copy of the kernels (with FMA: every AVX2 CPU has it, but GCC's target "avx2" alone does
@@ -67,32 +68,13 @@ struct Work {
   double *D, *W, *T;
 };
 
-inline void cpu_pause() {
-#if defined(__x86_64__) || defined(__i386__)
-  __builtin_ia32_pause();
-#endif
-}
-inline std::int64_t steady_ns() {
-  return std::chrono::duration_cast<std::chrono::nanoseconds>(
-             std::chrono::steady_clock::now().time_since_epoch())
-      .count();
-}
-/// A bin's state in a helped sweep (HelpedSweeps::state), tagged with the sweep's generation as
-/// (generation << 3) | state, so that a late helper's claim of a bin of an earlier sweep fails.
-/// Free -> Claimed (the helper copies its inputs) -> Running (it computes in its own rows) ->
-/// Done, through Scattering in the backward sweep (it writes its rows of x); Free, Claimed or
-/// Running -> Owner (the owner computes it).
-enum : std::uint64_t { kBinFree, kBinClaimed, kBinRunning, kBinScattering, kBinOwner, kBinDone };
-inline std::uint64_t sweep_tag(std::uint64_t generation, std::uint64_t state) {
-  return generation << 3 | state;
-}
 }  // namespace
 
 /// What the owner of a helped solve (the caller of SupernodalSolver::solve) and its helper share;
 /// see the helped solves in supernodal_kernels.inc. bind() sets the views and buffers while the
-/// helper is idle; the atomics carry each sweep.
+/// helper is idle; the claims (one HelpedBins per sweep, bins weighted by supernode_work) carry
+/// each sweep.
 struct HelpedSweeps {
-  static constexpr int kMaxBins = SupernodalSolver::kMaxBins;
   SupernodalFactorView f;
   SplitView split{};
   int K = 1;
@@ -106,65 +88,13 @@ struct HelpedSweeps {
   // The helper's own: forward rows, backward rows, deltas, scratch.
   double *Yw = nullptr, *Zw = nullptr, *dw = nullptr;
   Work work{};
-  std::array<double, kMaxBins> bin_work{};    // each bin's share of the factor's work
-  double total_work = 1.0;                    // the bins' work (supernode_work summed)
   std::vector<double> rows, deltas, scratch;  // storage of Yw, Zw and M; dw; the helper's scratch
 
-  std::atomic<const double*> b{nullptr};           // the forward sweep's right-hand sides
-  std::atomic<double*> x{nullptr};                 // the backward sweep's solution
-  std::atomic<const I*> x_perm{nullptr};           // and where its rows go
-  std::atomic<std::uint64_t> state[2][kMaxBins];   // per sweep (forward, backward) and bin
-  std::atomic<std::int64_t> claimed_ns[kMaxBins];  // when the helper claimed the bin
-  std::atomic<std::int64_t> progress[kMaxBins];    // the helper's work done in it so far
-  std::atomic<std::uint64_t> reading{0};  // a sweep's generation while the helper copies inputs
-
-  // The owner's alone.
-  std::uint64_t generation = 0;  // of the last sweep (odd: forward, even: backward)
-  double ns_per_work = 0.0;      // the owner's time per unit of bin work, smoothed
-  long long taken_over = 0;      // bins the owner took over from the helper
-  long long helper_bins = 0;     // bins whose result the helper computed
-  // The helper's progress in each bin when the owner last saw it change, and when (-1: not seen
-  // in this sweep).
-  std::array<std::int64_t, kMaxBins> seen{}, seen_ns{};
-
-  HelpedSweeps() {
-    for (auto& sweep : state)
-      for (auto& s : sweep) s.store(0);
-    for (auto& c : claimed_ns) c.store(0);
-    for (auto& p : progress) p.store(0);
-  }
-  /// The owner's own bin `bin` took `ns`.
-  void observe(std::int64_t bin, std::int64_t ns) {
-    const double r = double(ns) / bin_work[size_t(bin)];
-    ns_per_work = ns_per_work > 0.0 ? 0.75 * ns_per_work + 0.25 * r : r;
-  }
-  /// Whether the owner, with nothing else to do, should compute bin `bin` itself rather than wait
-  /// for the helper that holds it. While the helper's progress moves, it runs: wait, unless it
-  /// has held the bin kLate times as long as the owner would take for it. Once its progress has
-  /// stood still for kStall ns, the kernel has descheduled it (its core is busy), typically until
-  /// its next tick (kResume ns): take over unless what it has done is worth more than that wait
-  /// (waiting costs kResume plus the rest of the bin, computing costs the whole bin).
-  bool take_over(std::int64_t bin) {
-    const std::size_t b = size_t(bin);
-    const std::int64_t now = steady_ns(), p = progress[b].load(std::memory_order_relaxed);
-    const std::int64_t claimed = claimed_ns[b].load(std::memory_order_relaxed);
-    if (p != seen[b]) {
-      seen[b] = p;
-      seen_ns[b] = now;
-    }
-    const double whole = ns_per_work * bin_work[b];  // the owner's time for the bin
-    if (double(now - claimed) > kLate * whole + kStall) return true;
-    if (double(now - std::max(seen_ns[b], claimed)) < kStall) return false;
-    return double(p) / total_work / bin_work[b] * whole < kResume;
-  }
-  static constexpr double kLate = 3.0, kStall = 300e3, kResume = 4e6;
-  /// SupernodalSolver::HelperTest's flags: the owner lets the helper claim the heaviest bin of
-  /// each forward sweep first (for up to 1 s); the helper sleeps kTestStall s in every bin it
-  /// claims.
-  std::atomic<int> test_mode{0};
-  static constexpr int kTestHelperFirst = SupernodalSolver::kHelperFirst;
-  static constexpr int kTestHelperStalls = SupernodalSolver::kHelperStalls;
-  static constexpr double kTestStall = 0.5;
+  HelpedBins sweep[2];                    // forward, backward
+  std::atomic<const double*> b{nullptr};  // the forward sweep's right-hand sides
+  std::atomic<double*> x{nullptr};        // the backward sweep's solution
+  std::atomic<const I*> x_perm{nullptr};  // and where its rows go
+  std::uint64_t generation = 0;  // of the last sweep (odd: forward, even: backward; the owner's)
   /// How long the helper spins after its part of a sweep for the next one: after the forward
   /// sweep through the owner's serial top of the tree (1-2 ms on the 1M-spring factor) to the
   /// backward sweep; after the backward sweep briefly, the caller's next solve being usually a
@@ -564,30 +494,36 @@ void SupernodalSolver::bind_helped() {
   };
   h.owner_work = work_at(m_scratch.data());
   h.work = work_at(h.scratch.data());
-  double total = 0.0;
-  h.bin_work.fill(0.0);
-  for (I b = 0; b < bins; ++b)
+  // Each bin's work in the units of the helper's progress (supernode_work in the kernels).
+  std::vector<double> work(size_t(bins), 0.0);
+  for (I b = 0; b < bins; ++b) {
     for (I r = m_bin_start[size_t(b)]; r < m_bin_start[size_t(b) + 1]; ++r)
       for (I s = m_range[size_t(2 * r)]; s <= m_range[size_t(2 * r + 1)]; ++s)
-        h.bin_work[size_t(b)] +=
+        work[size_t(b)] +=
             double(m_f.super[s + 1] - m_f.super[s]) * double(m_f.pi[s + 1] - m_f.pi[s]);
-  for (I b = 0; b < bins; ++b) total += h.bin_work[size_t(b)];
-  h.total_work = total;
-  for (I b = 0; b < bins; ++b)
-    h.bin_work[size_t(b)] = std::max(h.bin_work[size_t(b)] / total, 1e-12);
-  h.ns_per_work = 0.0;
+    work[size_t(b)] = std::max(work[size_t(b)], 1.0);
+  }
+  for (HelpedBins& sweep : h.sweep) sweep.set_bins(work);
   if (!m_helper) m_helper = std::make_unique<HelperThread>(help_job, m_helped.get());
 }
 
+static_assert(int(SupernodalSolver::kHelperFirst) == int(HelpedBins::kHelperFirst) &&
+                  int(SupernodalSolver::kHelperStalls) == int(HelpedBins::kHelperStalls),
+              "SupernodalSolver's test flags are HelpedBins'");
+
 void SupernodalSolver::test_helper(int flags) {
-  if (m_helped) m_helped->test_mode.store(flags);
+  if (!m_helped) return;
+  m_helped->sweep[0].set_test(flags);  // kHelperFirst: the forward sweep's bins only
+  m_helped->sweep[1].set_test(flags & kHelperStalls);
 }
 
 SupernodalSolver::Helped SupernodalSolver::helped() const {
   Helped out;
   if (m_helped) {
-    out.helper_bins = m_helped->helper_bins;
-    out.taken_over = m_helped->taken_over;
+    for (const HelpedBins& sweep : m_helped->sweep) {
+      out.helper_bins += sweep.helper_bins();
+      out.taken_over += sweep.taken_over();
+    }
   }
   return out;
 }

@@ -5,8 +5,11 @@
 #include <cmath>
 #include <sstream>
 #include <stdexcept>
+#include <thread>
 
 #include "hooke/forces/spring_blocks.hpp"
+#include "hooke/helped_bins.hpp"
+#include "hooke/helper_thread.hpp"
 #include "hooke/linear/cholmod_solver.hpp"
 #include "hooke/whole_step/spring_potential_forces.hpp"
 
@@ -17,7 +20,124 @@ namespace {
 /// <A, B> of two equally sized matrices.
 using Rows3 = FastMassSpringStepper::Rows3;
 double inner(const Rows3& A, const Rows3& B) { return A.cwiseProduct(B).sum(); }
+
+/// The local step's springs [begin, end) of s at positions x, in order: each spring's best
+/// direction d = L (x_i - x_j) / |x_i - x_j| enters b as +c d at i and -c d at j, added to acc;
+/// with grad, the springs' part of grad g, c (u - d) at i and -c (u - d) at j, added there.
+/// Particle p's rows are at 3 (p - base) of x, acc and grad (a helper computes a range of particles
+/// in rows of its own). Returns the springs' energy. With bins, the springs done (plus done0) are
+/// reported to it as bin `bin`'s progress after every chunk.
+double local_springs(const SpringSet& s, size_t begin, size_t end, const double* x, double* acc,
+                     double* grad, long long base, HelpedBins* bins = nullptr, int bin = 0,
+                     std::int64_t done0 = 0) {
+  auto row = [base](double* v, int p) { return Eigen::Map<Vec3>(v + 3 * (p - base)); };
+  auto xrow = [x, base](int p) { return Eigen::Map<const Vec3>(x + 3 * (p - base)); };
+  double e = 0.0;
+  int run = -1;
+  Vec3 a = Vec3::Zero(), g = Vec3::Zero();
+  // The i side is summed in registers over each run of springs that share i (the mesh builders
+  // list a particle's springs together) and added once per run: added spring by spring, each
+  // addition waited for the previous one's store (411 x 411 target, one thread: 4.7-5.1 -> 4.4-4.6
+  // ms per local step).
+  auto close_run = [&] {
+    if (run < 0) return;
+    row(acc, run) += a;
+    if (grad) row(grad, run) += g;
+  };
+  // In chunks: the chunk's square roots and divisions L / l first, four at a time (one by one they
+  // took a fifth of the step: 411 x 411 target, one thread, 4.3-4.5 -> 4.0 ms per local step;
+  // chunks of 64 springs 4.1-4.2 ms, 256 4.3-4.4), then the sums.
+  constexpr size_t kChunk = 16;
+  double uk[kChunk][3], len[kChunk], ratio[kChunk];
+  for (size_t c0 = begin; c0 < end; c0 += kChunk) {
+    const size_t m = std::min(kChunk, end - c0);
+    for (size_t q = 0; q < m; ++q) {
+      const Vec3 u = xrow(s.i[c0 + q]) - xrow(s.j[c0 + q]);
+      Eigen::Map<Vec3>{uk[q]} = u;
+      len[q] = u.squaredNorm();
+    }
+    spring_blocks::lengths_and_ratios(len, s.rest_length.data() + c0, m, len, ratio);
+    for (size_t q = 0; q < m; ++q) {
+      const size_t k = c0 + q;
+      const int i = s.i[k], j = s.j[k];
+      if (i != run) {
+        close_run();
+        run = i;
+        a.setZero();
+        g.setZero();
+      }
+      const Eigen::Map<const Vec3> u(uk[q]);
+      const double l = len[q], L = s.rest_length[k], c = s.coeff[k];
+      // At l = 0 every direction is optimal (the energy is c L^2 / 2 for any): take x.
+      const Vec3 d = l > 0.0 ? Vec3(ratio[q] * u) : Vec3(L, 0.0, 0.0);
+      a += c * d;
+      row(acc, j) -= c * d;
+      if (grad) {  // grad_i of c/2 (l - L)^2 is c (u - d), formed without cancellation
+        g += c * (u - d);
+        row(grad, j) -= c * (u - d);
+      }
+      e += 0.5 * c * (l - L) * (l - L);
+    }
+    if (bins) bins->progress(bin, done0 + std::int64_t(c0 + m - begin));
+  }
+  close_run();
+  return e;
+}
 }  // namespace
+
+/// The local step's interior groups shared with a helper thread (FastMassSpringStepper::
+/// helped_interior): bin r is particle range r, the interior group r of every spring set. The
+/// helper copies the range's rows of x into rows of its own, computes the groups' sums there from
+/// zero (the stepper's own rows of b and of the gradient are zero for those particles until the
+/// interior groups are added: the same sums), and writes them over the stepper's rows once the bin
+/// is its own (HelpedBins).
+struct FastMassSpringStepper::HelpedLocal {
+  HelpedBins bins;
+  std::uint64_t generation = 0;  // of the last round (the stepper's)
+  std::vector<const SpringSet*> springs;
+  long long width = 0, particles = 0;
+  int ranges = 0;
+  double *acc = nullptr, *grad_out = nullptr;  // the stepper's m_acc and m_spring_grad
+  // Set by the stepper before each round (read by the helper once it holds a bin of it).
+  std::atomic<const double*> x{nullptr};
+  std::atomic<bool> gradient{false};
+  // The helper's own: a range's rows of x, b and the gradient; energies per set and range.
+  std::vector<double> hx, hacc, hgrad, energy;
+  /// After its part of a local step the helper spins this long for the next one (the rest of the
+  /// iteration, tens of ms on the targets, lies between: it then sleeps).
+  static constexpr double kSpin = 100e-6;
+
+  static void job(void* context, std::uint64_t generation) {
+    static_cast<HelpedLocal*>(context)->help(generation);
+  }
+  void help(std::uint64_t gen) {
+    for (int r = 0; r < ranges; ++r) {
+      const int claimed = bins.claim(gen, r);
+      if (claimed < 0) return;
+      if (claimed == 0) continue;
+      const double* xs = x.load(std::memory_order_relaxed);
+      const bool with_grad = gradient.load(std::memory_order_relaxed);
+      const long long base = r * width, rows = 3 * (std::min(particles, base + width) - base);
+      std::copy(xs + 3 * base, xs + 3 * base + rows, hx.data());
+      std::fill(hacc.begin(), hacc.begin() + rows, 0.0);
+      if (with_grad) std::fill(hgrad.begin(), hgrad.begin() + rows, 0.0);
+      if (!bins.run(gen, r)) continue;
+      std::int64_t done = 0;
+      for (size_t si = 0; si < springs.size(); ++si) {
+        const SpringSet& s = *springs[si];
+        const size_t b = s.group_start[size_t(r)], e = s.group_start[size_t(r) + 1];
+        energy[si * size_t(ranges) + size_t(r)] =
+            local_springs(s, b, e, hx.data(), hacc.data(), with_grad ? hgrad.data() : nullptr, base,
+                          &bins, r, done);
+        done += std::int64_t(e - b);
+      }
+      if (!bins.scatter(gen, r)) continue;
+      std::copy(hacc.begin(), hacc.begin() + rows, acc + 3 * base);
+      if (with_grad) std::copy(hgrad.begin(), hgrad.begin() + rows, grad_out + 3 * base);
+      bins.scattered(gen, r);
+    }
+  }
+};
 
 OptionError FastMassSpringOptions::validate() const {
   std::ostringstream e;
@@ -141,12 +261,48 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
     m_rho_lbfgs.assign(size_t(m_opt.lbfgs_history), 0.0);
     m_alpha.assign(size_t(m_opt.lbfgs_history), 0.0);
   }
-  size_t groups = 0;
-  for (const SpringSet* s : m_f.springs) groups = std::max(groups, s->num_groups());
-  m_group_energy.assign(groups, 0.0);
+  m_groups = 1;  // an ungrouped set's energy takes one slot
+  for (const SpringSet* s : m_f.springs) m_groups = std::max(m_groups, s->num_groups());
+  m_group_energy.assign(m_groups * m_f.springs.size(), 0.0);
+  m_uniform = !m_f.springs.empty();
+  for (const SpringSet* s : m_f.springs)
+    m_uniform = m_uniform && s->num_groups() > 0 && s->same_groups(*m_f.springs[0]);
+  m_ranges = m_uniform ? int(m_f.springs[0]->phase_start[1]) : 0;
+  if (m_uniform && m_ranges >= 2 && std::thread::hardware_concurrency() > 1) {
+    auto h = std::make_unique<HelpedLocal>();
+    h->springs = m_f.springs;
+    h->width = m_f.springs[0]->range_width;
+    h->particles = n;
+    h->ranges = m_ranges;
+    h->acc = m_acc.data();
+    h->grad_out = m_spring_grad.data();
+    h->hx.assign(size_t(3 * h->width), 0.0);
+    h->hacc = h->hx;
+    h->hgrad = h->hx;
+    h->energy.assign(size_t(m_ranges) * m_f.springs.size(), 0.0);
+    std::vector<double> work(size_t(m_ranges), 0.0);
+    for (int r = 0; r < m_ranges; ++r)
+      for (const SpringSet* s : m_f.springs)
+        work[size_t(r)] += double(s->group_start[size_t(r) + 1] - s->group_start[size_t(r)]);
+    for (double& w : work) w = std::max(w, 1.0);
+    h->bins.set_bins(work);
+    m_helped = std::move(h);
+    m_local_helper = std::make_unique<HelperThread>(&HelpedLocal::job, m_helped.get());
+  }
 }
 
 FastMassSpringStepper::~FastMassSpringStepper() = default;
+
+FastMassSpringStepper::Helped FastMassSpringStepper::local_helped() const {
+  if (!m_helped) return {};
+  return {m_helped->bins.helper_bins(), m_helped->bins.taken_over()};
+}
+
+void FastMassSpringStepper::test_local_helper(int flags, bool always) {
+  if (m_local_helper) m_local_helper->wait_idle();
+  if (m_helped) m_helped->bins.set_test(flags);
+  m_always_helped = always;
+}
 
 double FastMassSpringStepper::factor_nonzeros() const {
   return m_chol ? m_chol->factor_nonzeros() : 0.0;
@@ -236,81 +392,90 @@ double FastMassSpringStepper::local_step(ConstRef x, bool gradient) {
     parallel_ranges(m_spring_grad.size(), [&](long long b, long long e) {
       std::fill(m_spring_grad.data() + b, m_spring_grad.data() + e, 0.0);
     });
-  double energy = 0.0;
-  for (const SpringSet* sp : m_f.springs) {
-    const SpringSet& s = *sp;
-    // Springs [begin, end) in order; returns their energy. Each spring's best direction d =
-    // L (x_i - x_j) / |x_i - x_j| enters b as +c d at i and -c d at j. The i side is summed in
-    // registers over each run of springs that share i (the mesh builders list a particle's springs
-    // together) and added once per run: added spring by spring, each addition waited for the
-    // previous one's store (411 x 411 target, one thread: 4.7-5.1 -> 4.4-4.6 ms per local step).
-    auto springs = [&](size_t begin, size_t end) {
-      double e = 0.0;
-      int run = -1;
-      Vec3 acc = Vec3::Zero(), grad = Vec3::Zero();
-      auto close_run = [&] {
-        if (run < 0) return;
-        m_acc.segment<3>(3 * run) += acc;
-        if (gradient) m_spring_grad.segment<3>(3 * run) += grad;
-      };
-      // In chunks: the chunk's square roots and divisions L / l first, four at a time (one by
-      // one they took a fifth of the step: 411 x 411 target, one thread, 4.3-4.5 -> 4.0 ms per
-      // local step; chunks of 64 springs 4.1-4.2 ms, 256 4.3-4.4), then the sums.
-      constexpr size_t kChunk = 16;
-      double uk[kChunk][3], len[kChunk], ratio[kChunk];
-      for (size_t c0 = begin; c0 < end; c0 += kChunk) {
-        const size_t m = std::min(kChunk, end - c0);
-        for (size_t q = 0; q < m; ++q) {
-          const Vec3 u = x.segment<3>(3 * s.i[c0 + q]) - x.segment<3>(3 * s.j[c0 + q]);
-          Eigen::Map<Vec3>{uk[q]} = u;
-          len[q] = u.squaredNorm();
-        }
-        spring_blocks::lengths_and_ratios(len, s.rest_length.data() + c0, m, len, ratio);
-        for (size_t q = 0; q < m; ++q) {
-          const size_t k = c0 + q;
-          const int i = s.i[k], j = s.j[k];
-          if (i != run) {
-            close_run();
-            run = i;
-            acc.setZero();
-            grad.setZero();
-          }
-          const Eigen::Map<const Vec3> u(uk[q]);
-          const double l = len[q], L = s.rest_length[k], c = s.coeff[k];
-          // At l = 0 every direction is optimal (the energy is c L^2 / 2 for any): take x.
-          const Vec3 d = l > 0.0 ? Vec3(ratio[q] * u) : Vec3(L, 0.0, 0.0);
-          acc += c * d;
-          m_acc.segment<3>(3 * j) -= c * d;
-          if (gradient) {  // grad_i of c/2 (l - L)^2 is c (u - d), formed without cancellation
-            grad += c * (u - d);
-            m_spring_grad.segment<3>(3 * j) -= c * (u - d);
-          }
-          e += 0.5 * c * (l - L) * (l - L);
-        }
-      }
-      close_run();
-      return e;
-    };
-    // Spring groups run in parallel (SpringSet's phases: no two threads write one particle),
-    // energies are summed per group and then in group order: deterministic.
-    if (s.num_groups() == 0) {
-      energy += springs(0, s.size());
-      continue;
+  double* acc = m_acc.data();
+  double* grad = gradient ? m_spring_grad.data() : nullptr;
+  // Spring groups run in parallel (SpringSet's phases: no two threads write one particle), and
+  // each particle sums its springs in a fixed order: the same bits on any thread count. With every
+  // set grouped alike, the interior groups of all sets come first (range by range, sets in order),
+  // then each set's other phases: a range's interior groups are then a bin of work that a helper
+  // thread can compute from zero in rows of its own (helped_interior).
+  if (m_uniform) {
+    // The helper with the team on one thread (another process holds a core: a second OpenMP
+    // thread would make the groups wait for it), the team's threads otherwise.
+    const bool helped =
+        m_helped && (m_always_helped || (max_threads() == 1 && m_team.all_threads() > 1));
+    if (helped) {
+      helped_interior(x, gradient);
+    } else if (run_parallel(m_ranges, 2)) {
+#pragma omp parallel for schedule(dynamic, 1)
+      for (long long r = 0; r < m_ranges; ++r) interior_groups(x.data(), acc, grad, r);
+    } else {
+      for (long long r = 0; r < m_ranges; ++r) interior_groups(x.data(), acc, grad, r);
     }
-    s.for_each_group(
-        [&](size_t g) { m_group_energy[g] = springs(s.group_start[g], s.group_start[g + 1]); });
-    for (size_t g = 0; g < s.num_groups(); ++g) energy += m_group_energy[g];
+    for (size_t si = 0; si < m_f.springs.size(); ++si) {
+      const SpringSet& s = *m_f.springs[si];
+      s.for_each_group_from(1, [&](size_t g) {
+        m_group_energy[si * m_groups + g] =
+            local_springs(s, s.group_start[g], s.group_start[g + 1], x.data(), acc, grad, 0);
+      });
+    }
+  } else {
+    for (size_t si = 0; si < m_f.springs.size(); ++si) {
+      const SpringSet& s = *m_f.springs[si];
+      if (s.num_groups() == 0) {
+        m_group_energy[si * m_groups] = local_springs(s, 0, s.size(), x.data(), acc, grad, 0);
+        continue;
+      }
+      s.for_each_group([&](size_t g) {
+        m_group_energy[si * m_groups + g] =
+            local_springs(s, s.group_start[g], s.group_start[g + 1], x.data(), acc, grad, 0);
+      });
+    }
+  }
+  // Energies summed per set, in group order: deterministic.
+  double energy = 0.0;
+  for (size_t si = 0; si < m_f.springs.size(); ++si) {
+    const size_t groups = std::max<size_t>(1, m_f.springs[si]->num_groups());
+    for (size_t g = 0; g < groups; ++g) energy += m_group_energy[si * m_groups + g];
   }
   parallel_ranges(static_cast<long long>(m_free.size()), [&](long long b, long long e) {
     for (long long r = b; r < e; ++r) {
-      auto acc = m_acc.segment<3>(3 * m_free[size_t(r)]);
-      m_B.row(Index(r)) = m_const.row(Index(r)) + acc.transpose();
-      acc.setZero();
+      auto acc_r = m_acc.segment<3>(3 * m_free[size_t(r)]);
+      m_B.row(Index(r)) = m_const.row(Index(r)) + acc_r.transpose();
+      acc_r.setZero();
     }
   });
   for (const Index p : m_fixed) m_acc.segment<3>(3 * p).setZero();  // not in b
   m_local_seconds += seconds_since(t0);
   return energy;
+}
+
+void FastMassSpringStepper::interior_groups(const double* x, double* acc, double* grad,
+                                            long long r) {
+  for (size_t si = 0; si < m_f.springs.size(); ++si) {
+    const SpringSet& s = *m_f.springs[si];
+    m_group_energy[si * m_groups + size_t(r)] =
+        local_springs(s, s.group_start[size_t(r)], s.group_start[size_t(r) + 1], x, acc, grad, 0);
+  }
+}
+
+void FastMassSpringStepper::helped_interior(ConstRef x, bool gradient) {
+  HelpedLocal& h = *m_helped;
+  const size_t G = m_groups, R = size_t(m_ranges), sets = m_f.springs.size();
+  double* acc = m_acc.data();
+  double* grad = gradient ? m_spring_grad.data() : nullptr;
+  h.x.store(x.data(), std::memory_order_relaxed);  // published by open()'s stores
+  h.gradient.store(gradient, std::memory_order_relaxed);
+  const std::uint64_t gen = ++h.generation;
+  h.bins.open(gen);
+  m_local_helper->post(gen, HelpedLocal::kSpin);
+  h.bins.own(gen, [&](int r, bool) { interior_groups(x.data(), acc, grad, r); });
+  for (size_t r = 0; r < R; ++r)
+    if (h.bins.helper_did(gen, int(r)))
+      for (size_t si = 0; si < sets; ++si) m_group_energy[si * G + r] = h.energy[si * R + r];
+  // A helper the stepper took a range from may still be copying that range's rows of x, which the
+  // next global step overwrites: a short copy.
+  h.bins.wait_reading(gen);
 }
 
 double FastMassSpringStepper::error_estimate(ConstRef x) const {
@@ -451,7 +616,8 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
   // The global solves on all threads whatever the team runs the rest of an iteration on: their
   // second thread is a helper that the first does not wait for while the kernel has descheduled
   // it (SupernodalSolver::solve), so with one core busy they still gain from its share of that
-  // core (busy-core 411 x 411 target: see bench/README.md).
+  // core (busy-core 411 x 411 target: see bench/README.md). So do the local steps, through a
+  // helper thread of their own, whenever the team runs them on one thread (local_step).
   if (m_chol) m_chol->set_solve_threads(m_team.all_threads());
   StepSummary out;
   prepare(h);

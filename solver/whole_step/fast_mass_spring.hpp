@@ -15,6 +15,7 @@
 namespace hooke {
 
 class CholmodSolver;
+class HelperThread;
 
 /// Where a local/global iteration starts (FastMassSpringOptions::warm_start).
 enum class WarmStart { Inertial, Previous };
@@ -103,7 +104,9 @@ std::string fast_mass_spring_unsupported(const MassSpringSystem& system);
 /// grad g = 0 is exactly the backward-Euler step M (v1 - v0) = h f(x1, v1): gravity f_g is
 /// constant and linear drag -c (v - w) with v = (x - x0)/h is the gradient of the last term, so
 /// both are implicit and exact. The local step picks each spring's best direction
-/// d_s = L_s (x_i - x_j) / |x_i - x_j| (in parallel over particle ranges, deterministic); the
+/// d_s = L_s (x_i - x_j) / |x_i - x_j| (in parallel over particle ranges, deterministic: on the
+/// team's threads, or, when the team runs one thread and there is a second CPU, on the stepper's
+/// thread and a helper thread that it never waits for, as the global solves do); the
 /// global step solves (M/h^2 + C/h + L) x = M y / h^2 + f_g + C (x0 + h w)/h + J d for the free
 /// particles, with x, y and z as three right-hand sides of one n x n CHOLMOD factorization (METIS
 /// nested dissection ordering: less fill than AMD on cloth grids), solved by hooke's own supernodal
@@ -164,6 +167,16 @@ class FastMassSpringStepper final : public Stepper {
   const SparseMatrix& global_matrix() const { return m_A; }
   /// Nonzeros of the Cholesky factor of the global matrix (0 with global_solver = "jacobi").
   double factor_nonzeros() const;
+  /// What the helper thread did in the local steps so far (see local_step in the .cpp): ranges
+  /// whose springs it computed, and ranges it had claimed that the stepper's thread took over.
+  struct Helped {
+    long long helper_bins = 0, taken_over = 0;
+  };
+  Helped local_helped() const;
+  /// For tests of the helped local step: HelpedBins' test flags for its helper, and with `always`
+  /// every local step takes the helped path whatever the team runs (it needs a helper: two CPUs,
+  /// and at least two particle ranges, 16384 particles). Results are the same whatever is set.
+  void test_local_helper(int flags, bool always);
 
  private:
   void prepare(double h);
@@ -171,6 +184,11 @@ class FastMassSpringStepper final : public Stepper {
   /// b(d(x)) into m_B and the spring energy at x; with `gradient`, also the springs' part of
   /// grad g at x into m_spring_grad (for error_estimate()).
   double local_step(ConstRef x, bool gradient = false);
+  /// The local step's interior groups of range r (group r of every spring set, in set order) at x,
+  /// added to acc and grad (3n, grad null for none); their energies into m_group_energy.
+  void interior_groups(const double* x, double* acc, double* grad, long long r);
+  /// All ranges' interior_groups on the calling thread and the helper thread (m_helped).
+  void helped_interior(ConstRef x, bool gradient);
   /// The relative error estimate of iterate x after local_step(x, true) (see Options::tolerance).
   double error_estimate(ConstRef x) const;
   /// The inertia, gravity and drag terms of g at x for a step from x0 with prediction y (3n).
@@ -233,7 +251,16 @@ class FastMassSpringStepper final : public Stepper {
   Rows3 m_const, m_B, m_X, m_G, m_Gnew, m_D, m_Xtrial;  // free x 3
   std::vector<Rows3> m_s, m_t;                          // L-BFGS history
   std::vector<double> m_rho_lbfgs, m_alpha;
-  std::vector<double> m_group_energy;
+  std::vector<double> m_group_energy;  // per spring set and group: set si's at si * m_groups
+  size_t m_groups = 0;                 // the most groups of a set
+  // Every spring set grouped alike (SpringSet::same_groups) into m_ranges >= 1 particle ranges: the
+  // local step then runs the interior groups of all sets first, range by range, and can share
+  // those ranges with a helper thread.
+  bool m_uniform = false;
+  int m_ranges = 0;
+  struct HelpedLocal;
+  std::unique_ptr<HelpedLocal> m_helped;  // null without a helper (one CPU, or one range)
+  bool m_always_helped = false;           // test_local_helper
   double m_h = 0.0;
   const State* m_s0 = nullptr;
 
@@ -246,6 +273,8 @@ class FastMassSpringStepper final : public Stepper {
   double m_worst_residual = 0.0;  // the largest step_residual() so far, at step m_worst_step
   long long m_worst_step = 0;
   double m_local_seconds = 0.0, m_global_seconds = 0.0, m_factor_seconds = 0.0;
+  // Last: stops before anything its jobs read goes.
+  std::unique_ptr<HelperThread> m_local_helper;
 };
 
 }  // namespace hooke

@@ -22,9 +22,11 @@ struct Scene {
 };
 
 /// Stiffnesses (N/m) of a cloth's structural, shear and flexion springs, and the coefficient of an
-/// axial SpringDamper (N s/m) on each structural spring (0: none).
+/// axial SpringDamper (N s/m) on each structural spring (0: none). two_sets: the structural springs
+/// in one HookeSpring force, the shear and flexion springs in another (two spring sets).
 struct ClothSprings {
   double structural = 1e4, shear = 1e3, flexion = 1e2, damper = 0.0;
+  bool two_sets = false;
 };
 
 /// A square cloth of n x n particles (1 m wide, 1 kg) lying flat in the horizontal x-z plane and
@@ -51,7 +53,8 @@ inline Scene hanging_cloth(int n, double drag, double rest_scale, const ClothSpr
   scene.state = State(np);
   for (int r = 0; r < n; ++r)
     for (int c = 0; c < n; ++c) scene.state.x.segment<3>(3 * (r * n + c)) = Vec3(c * s, 0.0, r * s);
-  auto springs = std::make_unique<HookeSpring>();
+  auto springs = std::make_unique<HookeSpring>(), other = std::make_unique<HookeSpring>();
+  HookeSpring& bending = k.two_sets ? *other : *springs;
   auto dampers = std::make_unique<SpringDamper>();
   const double L = rest_scale * s, D = rest_scale * s * std::sqrt(2.0);
   for (int r = 0; r < n; ++r)
@@ -59,14 +62,15 @@ inline Scene hanging_cloth(int n, double drag, double rest_scale, const ClothSpr
       const int i = r * n + c;
       if (c + 1 < n) springs->add(i, i + 1, k.structural, L);
       if (r + 1 < n) springs->add(i, i + n, k.structural, L);
-      if (c + 1 < n && r + 1 < n) springs->add(i, i + n + 1, k.shear, D);
-      if (c > 0 && r + 1 < n) springs->add(i, i + n - 1, k.shear, D);
-      if (c + 2 < n) springs->add(i, i + 2, k.flexion, 2 * L);
-      if (r + 2 < n) springs->add(i, i + 2 * n, k.flexion, 2 * L);
+      if (c + 1 < n && r + 1 < n) bending.add(i, i + n + 1, k.shear, D);
+      if (c > 0 && r + 1 < n) bending.add(i, i + n - 1, k.shear, D);
+      if (c + 2 < n) bending.add(i, i + 2, k.flexion, 2 * L);
+      if (r + 2 < n) bending.add(i, i + 2 * n, k.flexion, 2 * L);
       if (k.damper > 0.0 && c + 1 < n) dampers->add(i, i + 1, k.damper);
       if (k.damper > 0.0 && r + 1 < n) dampers->add(i, i + n, k.damper);
     }
   scene.system->add_force(std::move(springs));
+  if (k.two_sets) scene.system->add_force(std::move(other));
   if (k.damper > 0.0) scene.system->add_force(std::move(dampers));
   scene.system->add_force(std::make_unique<Gravity>(Vec::Constant(np, m), Vec3(0.0, -9.81, 0.0)));
   if (drag > 0.0)

@@ -19,11 +19,13 @@
 #include <memory>
 #include <random>
 #include <string>
+#include <thread>
 #include <utility>
 #include <vector>
 
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/forces/spring_damper.hpp"
+#include "hooke/helped_bins.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
 #include "support/backend_scenes.hpp"
@@ -253,6 +255,69 @@ TEST(FastMassSpring, SameBitsOnOneOrTwoThreadsWhateverTheTeamRuns) {
     EXPECT_EQ((out[0].v - out[1].v).cwiseAbs().maxCoeff(), 0.0) << acceleration;
     EXPECT_GT((out[0].x - scene.state.x).norm(), 0.0) << acceleration << ": the cloth moved";
   }
+#endif
+}
+
+TEST(FastMassSpring, HelpedLocalStepGivesTheSameBitsAsOneThread) {
+#ifndef _OPENMP
+  GTEST_SKIP() << "built without OpenMP";
+#else
+  if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one CPU: no helper thread";
+  // With the team on one thread and a second CPU, the local step shares its particle ranges with
+  // a helper thread that computes a range's springs in rows of its own (FastMassSpringStepper::
+  // local_step). 130 x 130 particles: two ranges. The helper's results must be the one-thread
+  // bits, whether it computes a range (kHelperFirst: the stepper lets it claim first) or the
+  // stepper takes a stalled helper's range over (kHelperStalls: the helper sleeps 0.5 s in each)
+  // rather than wait for it. Plain iterations, and L-BFGS with a tolerance (the gradient's rows
+  // too); one spring set, and two grouped alike. Two OpenMP threads with the team's own choices
+  // give the same bits too.
+  const double h = 1e-2;
+  const int threads = omp_get_max_threads();
+  test::ClothSprings two_sets;
+  two_sets.two_sets = true;
+  const Scene scenes[2] = {hanging_cloth(130, 0.02), hanging_cloth(130, 0.02, 1.0, two_sets)};
+  for (const Scene& scene : scenes)
+    for (const FastMassSpringOptions& o : {with("none", 6), with("lbfgs", 8, 1e-9)}) {
+      const std::string what =
+          std::to_string(scene.system->forces().size()) + " forces, " + to_string(o.acceleration);
+      // The final state, and each step's reported residual (with a tolerance, the error estimate
+      // from the gradient's rows).
+      std::vector<double> residuals[4];
+      int case_no = 0;
+      auto run = [&](int omp_threads, int flags, bool always,
+                     FastMassSpringStepper::Helped* helped = nullptr) {
+        std::vector<double>& residual = residuals[case_no++];
+        omp_set_num_threads(omp_threads);
+        FastMassSpringStepper fms(*scene.system, o);
+        fms.test_local_helper(flags, always);
+        State s = scene.state, s1;
+        for (int k = 0; k < 2; ++k) {
+          const StepSummary r = fms.step(s, h, s1);
+          EXPECT_NE(r.status, Status::Fatal) << what;
+          residual.push_back(r.residual);
+          std::swap(s, s1);
+        }
+        if (helped) *helped = fms.local_helped();
+        omp_set_num_threads(threads);
+        return s;
+      };
+      const State one = run(1, 0, false);
+      EXPECT_GT((one.x - scene.state.x).norm(), 0.0) << what << ": the cloth moved";
+      FastMassSpringStepper::Helped first, stalled;
+      const State by_helper = run(1, HelpedBins::kHelperFirst, true, &first);
+      const State taken_over = run(1, HelpedBins::kHelperStalls, true, &stalled);
+      const State two = run(2, 0, false);
+      EXPECT_GT(first.helper_bins, 0) << what << ": the helper's ranges were used";
+      // Every range a stalled helper held was taken over: had the stepper waited for one, the
+      // helper would have finished it (0.5 s later) and its result would have been used.
+      EXPECT_GT(stalled.taken_over, 0) << what << ": the stepper took ranges over";
+      EXPECT_EQ(stalled.helper_bins, 0) << what << ": the stepper waited for a stalled helper";
+      for (const State* s : {&by_helper, &taken_over, &two}) {
+        EXPECT_EQ((s->x - one.x).cwiseAbs().maxCoeff(), 0.0) << what;
+        EXPECT_EQ((s->v - one.v).cwiseAbs().maxCoeff(), 0.0) << what;
+      }
+      for (int c = 1; c < 4; ++c) EXPECT_EQ(residuals[c], residuals[0]) << what << ", case " << c;
+    }
 #endif
 }
 
