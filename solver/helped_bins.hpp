@@ -13,7 +13,8 @@
 namespace hooke {
 
 /// The claims of one kind of helped work (FastMassSpringStepper's local step: one bin per particle
-/// range; SupernodalSolver's sweeps: one bin per group of subtrees, one HelpedBins per sweep). Each
+/// range; SupernodalSolver's sweeps: one bin per group of subtrees, one HelpedBins per sweep;
+/// SymmetricProduct: one bin per piece of rows). Each
 /// round of the work has a generation (the owner's count, increasing: it opens the round with it
 /// and posts it to its HelperThread) and every bin a state tagged with it, (generation << 3) |
 /// state, so that a late helper's claim of a bin of an earlier round fails:

@@ -10,7 +10,8 @@ namespace hooke {
 /// One persistent thread that runs the jobs its owner posts. The owner does not wait for a job: it
 /// posts one and goes on with the same work itself, and the job and the owner share the work
 /// through atomic claims (HelpedBins: SupernodalSolver's helped sweeps, FastMassSpringStepper's
-/// helped local step; the owner waits only for the helper's short copies in and out). The point is
+/// helped local step, SymmetricProduct's helped product; the owner waits only for the helper's
+/// short copies in and out). The point is
 /// a shared machine:
 /// when another process holds the helper's core, the kernel (HZ = 250 here, no preemption inside
 /// the kernel) deschedules the helper for a tick of 4 ms at a time; an OpenMP region would wait for

@@ -123,7 +123,7 @@ class AdaptiveTeam {
   /// before it. For work inside a repetition that runs on all of them whatever the team chose
   /// (SupernodalSolver's two-thread solves, whose first thread does not wait for a descheduled
   /// second), or that takes a helper thread when the team runs one (FastMassSpringStepper's
-  /// local step).
+  /// local step, ConjugateGradientSolver's products).
   int all_threads() const { return available(); }
   /// Reports that a repetition on `threads` threads took `seconds` of wall time.
   void record(int threads, double seconds) {

@@ -80,6 +80,9 @@ LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x,
   // kernel has descheduled it (SupernodalSolver::solve), so with one core busy they still gain
   // from its share of that core.
   m_pre->set_apply_threads(m_team.all_threads());
+  // The products, when the team runs them on one thread, with a helper thread that they never
+  // wait for either (SymmetricProduct): one core busy, they still gain from its share of it.
+  m_product.set_helper(m_team.all_threads() > 1);
   m_product.multiply(*m_A, x, m_r);
   m_r = b - m_r;
   double res = m_r.norm() / bnorm;
@@ -120,6 +123,9 @@ LinearSummary ConjugateGradientSolver::run(ConstRef b, VecRef x,
       repetition.done();
     }
   }
+  // A helper still computing a product's piece that was taken from it reads A, whose values the
+  // caller may change after this solve (usually it finished long ago: no wait).
+  m_product.wait_helper();
   s.iterations = it;
   s.residual = res;
   s.solve_seconds = seconds_since(t0);

@@ -19,7 +19,9 @@ namespace hooke {
 /// options.warm_start. A solve that breaks down or misses its tolerance with a stale preconditioner
 /// (one reused from an earlier step, see ReusedFactorization) refreshes it and goes on once.
 /// The product A p reads A's columns as its rows (SymmetricProduct): A must be symmetric in values,
-/// not only positive definite, as CG itself assumes.
+/// not only positive definite, as CG itself assumes. When the team runs an iteration on one thread
+/// (a busy core) and there is a second CPU, the product and a reused factorization's solves still
+/// take a helper thread each, which they never wait for (HelpedBins).
 class ConjugateGradientSolver final : public LinearSolver {
  public:
   explicit ConjugateGradientSolver(std::unique_ptr<Preconditioner> preconditioner);

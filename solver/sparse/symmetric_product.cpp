@@ -1,5 +1,12 @@
 #include "hooke/sparse/symmetric_product.hpp"
 
+#include <algorithm>
+#include <atomic>
+#include <thread>
+
+#include "hooke/helped_bins.hpp"
+#include "hooke/helper_thread.hpp"
+
 namespace hooke {
 
 namespace {
@@ -60,12 +67,84 @@ void block_rows(const double* v, const int* start, const int* brow, const double
 
 }  // namespace
 
+/// The helped product's shared state (SymmetricProduct::multiply_helped): piece p is the units
+/// (block rows, or rows) [units p / kHelpedPieces, units (p + 1) / kHelpedPieces), cut into
+/// kSlices slices after each of which the helper reports its progress.
+struct SymmetricProduct::HelpedRows {
+  HelpedBins bins;
+  std::uint64_t generation = 0;  // of the last product (the caller's)
+  const SymmetricProduct* product = nullptr;
+  Index units = 0;
+  int scale = 1;  // rows per unit
+  // Set by the caller before each product (read by the helper once it holds a piece of it).
+  std::atomic<const SparseMatrix*> A{nullptr};
+  std::atomic<const double*> x{nullptr};
+  std::atomic<double*> y{nullptr};
+  std::vector<double> hx, hy;  // the helper's copy of x and its rows of y
+  static constexpr int kSlices = 8;
+  /// After its part of a product the helper spins this long for the next one (a CG iteration's
+  /// preconditioner and vector updates, milliseconds, lie between: it then sleeps).
+  static constexpr double kSpin = 100e-6;
+
+  Index unit(int p) const { return units * p / kHelpedPieces; }
+  static void job(void* context, std::uint64_t generation) {
+    static_cast<HelpedRows*>(context)->help(generation);
+  }
+  void help(std::uint64_t gen) {
+    bool have_x = false;
+    for (int p = 0; p < kHelpedPieces; ++p) {
+      const int claimed = bins.claim(gen, p);
+      if (claimed < 0) return;
+      if (claimed == 0) continue;
+      const SparseMatrix& a = *A.load(std::memory_order_relaxed);
+      if (!have_x) {  // x once per product, while the claim announces the read
+        const double* xs = x.load(std::memory_order_relaxed);
+        std::copy(xs, xs + a.cols(), hx.data());
+        have_x = true;
+      }
+      if (!bins.run(gen, p)) continue;
+      const Index u0 = unit(p), u1 = unit(p + 1);
+      for (int s = 0; s < kSlices; ++s) {
+        product->rows(a, hx.data(), hy.data(), u0 + (u1 - u0) * s / kSlices,
+                      u0 + (u1 - u0) * (s + 1) / kSlices);
+        bins.progress(p, s + 1);
+      }
+      if (!bins.scatter(gen, p)) continue;
+      double* out = y.load(std::memory_order_relaxed);
+      std::copy(hy.data() + scale * u0, hy.data() + scale * u1, out + scale * u0);
+      bins.scattered(gen, p);
+    }
+  }
+};
+
+SymmetricProduct::SymmetricProduct() = default;
+SymmetricProduct::~SymmetricProduct() = default;
+
+SymmetricProduct::Helped SymmetricProduct::helped() const {
+  if (!m_helped) return {};
+  return {m_helped->bins.helper_bins(), m_helped->bins.taken_over()};
+}
+
+void SymmetricProduct::wait_helper() const {
+  if (m_helper) m_helper->wait_idle();
+}
+
+void SymmetricProduct::test_helper(int flags, bool always) {
+  if (m_helper) m_helper->wait_idle();
+  if (m_helped) m_helped->bins.set_test(flags);
+  m_always_helped = always;
+}
+
 void SymmetricProduct::analyze(const SparseMatrix& A) {
   HOOKE_ASSERT(A.rows() == A.cols(), "SymmetricProduct: A is " << A.rows() << " x " << A.cols());
   HOOKE_ASSERT(A.isCompressed(), "SymmetricProduct: A is not compressed");
+  if (m_helper) m_helper->wait_idle();  // no helper job reads what this changes
   m_block_start.clear();
   m_block_row.clear();
-  if (A.cols() == 0 || !made_of_blocks(A)) return;
+  if (A.cols() == 0 || !made_of_blocks(A)) {
+    setup_helper(A);
+    return;
+  }
   const Index nb = A.cols() / 3;
   const int* outer = A.outerIndexPtr();
   const int* row = A.innerIndexPtr();
@@ -76,6 +155,49 @@ void SymmetricProduct::analyze(const SparseMatrix& A) {
     for (int k = outer[3 * j]; k < outer[3 * j + 1]; k += 3) m_block_row.push_back(row[k] / 3);
   }
   m_block_start[size_t(nb)] = int(m_block_row.size());
+  setup_helper(A);
+}
+
+void SymmetricProduct::setup_helper(const SparseMatrix& A) {
+  // A helper for products large enough for two threads (multiply's threshold), and a second CPU.
+  if (A.nonZeros() < kParallelEntries || std::thread::hardware_concurrency() < 2) {
+    m_helper.reset();
+    m_helped.reset();
+    return;
+  }
+  if (!m_helped) m_helped = std::make_unique<HelpedRows>();
+  HelpedRows& h = *m_helped;
+  h.product = this;
+  h.scale = blocked() ? 3 : 1;
+  h.units = blocked() ? A.cols() / 3 : A.cols();
+  h.hx.assign(size_t(A.cols()), 0.0);
+  h.hy.assign(size_t(A.cols()), 0.0);
+  std::vector<double> work(kHelpedPieces);
+  for (int p = 0; p < kHelpedPieces; ++p) work[size_t(p)] = HelpedRows::kSlices;
+  h.bins.set_bins(work);
+  if (!m_helper) m_helper = std::make_unique<HelperThread>(&HelpedRows::job, m_helped.get());
+}
+
+void SymmetricProduct::rows(const SparseMatrix& A, const double* x, double* y, Index u0,
+                            Index u1) const {
+  if (blocked())
+    block_rows(A.valuePtr(), m_block_start.data(), m_block_row.data(), x, y, u0, u1);
+  else
+    scalar_rows(A, x, y, u0, u1);
+}
+
+void SymmetricProduct::multiply_helped(const SparseMatrix& A, const double* x, double* y) const {
+  HelpedRows& h = *m_helped;
+  h.A.store(&A, std::memory_order_relaxed);  // published by open()'s stores
+  h.x.store(x, std::memory_order_relaxed);
+  h.y.store(y, std::memory_order_relaxed);
+  const std::uint64_t gen = ++h.generation;
+  h.bins.open(gen);
+  m_helper->post(gen, HelpedRows::kSpin);
+  h.bins.own(gen, [&](int p, bool) { rows(A, x, y, h.unit(p), h.unit(p + 1)); });
+  // A helper the caller took a piece from may still be copying x, which the caller may change
+  // next: a short copy.
+  h.bins.wait_reading(gen);
 }
 
 void SymmetricProduct::multiply(const SparseMatrix& A, ConstRef x, VecRef y) const {
@@ -87,12 +209,13 @@ void SymmetricProduct::multiply(const SparseMatrix& A, ConstRef x, VecRef y) con
                "SymmetricProduct: A is not the analysed matrix");
   // Pieces of block rows (blocked) or of rows (scalar); each row is one sum in a fixed order.
   const Index units = blocks ? A.cols() / 3 : A.cols();
-  parallel_pieces(units, A.nonZeros(), 200000, [&](long long u0, long long u1) {
-    if (blocks)
-      block_rows(A.valuePtr(), m_block_start.data(), m_block_row.data(), xp, yp, u0, u1);
-    else
-      scalar_rows(A, xp, yp, u0, u1);
-  });
+  if (m_helped && !run_parallel(A.nonZeros(), kParallelEntries) &&
+      (m_helper_allowed || m_always_helped) && units >= kHelpedPieces) {
+    multiply_helped(A, xp, yp);
+    return;
+  }
+  parallel_pieces(units, A.nonZeros(), kParallelEntries,
+                  [&](long long u0, long long u1) { rows(A, xp, yp, u0, u1); });
 }
 
 }  // namespace hooke

@@ -631,6 +631,9 @@ StepSummary FastMassSpringStepper::step(const State& s0, double h, State& s1) {
   if (!m_free.empty())
     converged =
         m_opt.acceleration == Acceleration::Lbfgs ? iterate_lbfgs(out) : iterate_local_global(out);
+  // A helper still computing a range that was taken from it reads the spring sets, which the
+  // caller may change after this step (usually it finished long ago: no wait).
+  if (m_local_helper) m_local_helper->wait_idle();
   if (out.status == Status::Fatal) return out;
   const int it = out.iterations;
   s1.t = s0.t + h;

@@ -1,7 +1,7 @@
 // Claims of solver/sparse/symmetric_product.*: y = A x for symmetric A read by columns as rows
 // agrees with Eigen's product (an independent column-wise one), on the block path for a matrix of
-// 3x3 blocks and the scalar one for any other pattern; the parallel product gives the same bits on
-// one and two threads.
+// 3x3 blocks and the scalar one for any other pattern; the parallel product, and the one-thread
+// product with a helper thread, give the same bits as one thread.
 #include "hooke/sparse/symmetric_product.hpp"
 
 #include <gtest/gtest.h>
@@ -9,8 +9,10 @@
 #include <cmath>
 #include <cstring>
 #include <random>
+#include <thread>
 #include <vector>
 
+#include "hooke/helped_bins.hpp"
 #include "hooke/sparse/block_pattern.hpp"
 
 #ifdef _OPENMP
@@ -131,6 +133,47 @@ TEST(SymmetricProduct, SameBitsOnOneAndTwoThreads) {
 #endif
   EXPECT_EQ(0, std::memcmp(y1.data(), y2.data(), sizeof(double) * size_t(y1.size())));
   EXPECT_LT(relative_difference(y1, A * x), 1e-14);
+}
+
+TEST(SymmetricProduct, HelpedProductGivesTheSameBitsAsOneThread) {
+  if (std::thread::hardware_concurrency() < 2) GTEST_SKIP() << "one CPU: no helper thread";
+  // On one thread a large product can take a helper thread that computes pieces of rows in rows
+  // of its own (SymmetricProduct::set_helper): its pieces (kHelperFirst: the caller lets it claim
+  // first) and the pieces the caller takes over from a stalled helper (kHelperStalls: it sleeps
+  // 0.5 s in each) rather than wait for it must give the one-thread bits, on the block path and
+  // the scalar one.
+  SparseMatrix blocks = chain_matrix(30000, 2);  // 1.35M entries
+  SparseMatrix scalar = blocks;
+  scalar.coeffRef(0, 9) = scalar.coeffRef(9, 0) = 0.25;  // part of a block: not made of blocks
+  scalar.makeCompressed();
+  for (const SparseMatrix* A : {&blocks, &scalar}) {
+    const Vec x = test_vector(A->cols());
+    Vec y1(A->rows()), first(A->rows()), stalled(A->rows());
+#ifdef _OPENMP
+    const int before = omp_get_max_threads();
+    omp_set_num_threads(1);
+#endif
+    SymmetricProduct prod;
+    prod.analyze(*A);
+    ASSERT_EQ(prod.blocked(), A == &blocks);
+    prod.multiply(*A, x, y1);
+    EXPECT_EQ(prod.helped().helper_bins + prod.helped().taken_over, 0) << "helper not allowed";
+    prod.test_helper(hooke::HelpedBins::kHelperFirst, true);
+    for (int k = 0; k < 3; ++k) prod.multiply(*A, x, first);
+    const SymmetricProduct::Helped by_helper = prod.helped();
+    prod.test_helper(hooke::HelpedBins::kHelperFirst | hooke::HelpedBins::kHelperStalls, true);
+    prod.multiply(*A, x, stalled);
+    const SymmetricProduct::Helped after = prod.helped();
+#ifdef _OPENMP
+    omp_set_num_threads(before);
+#endif
+    EXPECT_GT(by_helper.helper_bins, 0) << "the helper's pieces were used";
+    EXPECT_GT(after.taken_over, by_helper.taken_over) << "the caller took stalled pieces over";
+    EXPECT_EQ(after.helper_bins, by_helper.helper_bins) << "the caller waited for a stalled helper";
+    EXPECT_EQ(0, std::memcmp(y1.data(), first.data(), sizeof(double) * size_t(y1.size())));
+    EXPECT_EQ(0, std::memcmp(y1.data(), stalled.data(), sizeof(double) * size_t(y1.size())));
+    EXPECT_LT(relative_difference(y1, *A * x), 1e-14);
+  }
 }
 
 TEST(SymmetricProduct, EmptyMatrix) {
