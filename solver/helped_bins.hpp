@@ -14,10 +14,10 @@ namespace hooke {
 
 /// The claims of one kind of helped work (FastMassSpringStepper's local step: one bin per particle
 /// range; SupernodalSolver's sweeps: one bin per group of subtrees, one HelpedBins per sweep;
-/// SymmetricProduct: one bin per piece of rows). Each
-/// round of the work has a generation (the owner's count, increasing: it opens the round with it
-/// and posts it to its HelperThread) and every bin a state tagged with it, (generation << 3) |
-/// state, so that a late helper's claim of a bin of an earlier round fails:
+/// SymmetricProduct: one bin per piece of rows). Each round of the work has a generation (the
+/// owner's count, increasing: it opens the round with it and posts it to its HelperThread) and
+/// every bin a state tagged with it, (generation << 3) | state, so that a late helper's claim of a
+/// bin of an earlier round fails:
 ///
 ///   Free -> Claimed (the helper copies the bin's inputs into rows of its own) -> Running (it
 ///   computes there) -> [Scattering (it writes the bin's results where the owner reads them) ->]
@@ -27,7 +27,9 @@ namespace hooke {
 /// so whoever computes a bin must compute it the same way (the same code, the same order): then
 /// the result is the same bit for bit whichever thread computed each bin. The owner waits only
 /// for a Scattering bin (a short copy) and, before it changes a bin's inputs, for a helper still
-/// copying them (reading()).
+/// copying them (wait_reading()). A helper whose bin was taken over may still compute it: its
+/// owner waits for it to be idle (HelperThread::wait_idle) before the inputs it reads while
+/// Running change.
 ///
 /// The owner takes over a bin the helper holds once the helper's progress (reported in the
 /// caller's units of work, the same as set_bins' weights) has stood still kStall ns (descheduled:
@@ -124,13 +126,15 @@ class HelpedBins {
   /// 0 if someone else has it, -1 if the owner has gone on to a later round (stop).
   int claim(std::uint64_t gen, int b) {
     m_reading.store(gen);  // before the claim: the owner's wait_reading sees it
+    // Before the claim too (only the helper writes them): an owner that sees the bin Claimed
+    // sees these, never an earlier round's claim time, which would look long overdue.
+    m_progress[b].store(0, std::memory_order_relaxed);
+    m_claimed_ns[b].store(now_ns(), std::memory_order_relaxed);
     std::uint64_t s = tag(gen, kFree);
     if (!m_state[b].compare_exchange_strong(s, tag(gen, kClaimed))) {
       m_reading.store(0);
       return s >> 3 == gen ? 0 : -1;
     }
-    m_progress[b].store(0, std::memory_order_relaxed);
-    m_claimed_ns[b].store(now_ns(), std::memory_order_relaxed);
     return 1;
   }
   /// The inputs are copied (Claimed -> Running): false if the owner took the bin over meanwhile.

@@ -33,6 +33,7 @@ struct CholmodSolver::Impl {
   bool analyzed = false;  // analyze() succeeded (with no factor L when n = 0)
   bool factored = false;
   int solve_threads = 0;                                // set_solve_threads
+  int helper_test = 0;                                  // test_helper
   std::array<std::unique_ptr<SupernodalSolver>, 4> sn;  // per K, made on first use
   Vec column;                                           // simplicial fallback's one column
   std::vector<double> to_rows;  // solve_interleaved_to_rows' solution before it is placed
@@ -41,6 +42,13 @@ struct CholmodSolver::Impl {
   std::vector<Index> rows;
   std::vector<std::int64_t> perm_rows;
   bool perm_rows_ready = false;
+
+  /// Before the factor's arrays change or go: a supernodal solve returns without waiting for a
+  /// late helper thread, which may still read them (SupernodalSolver::wait_helper).
+  void wait_supernodal() const {
+    for (const auto& solver : sn)
+      if (solver) solver->wait_helper();
+  }
 
   SupernodalFactorView view() const {
     static_assert(sizeof(SuiteSparse_long) == sizeof(std::int64_t), "64-bit CHOLMOD indices");
@@ -74,6 +82,7 @@ CholmodSolver::CholmodSolver(CholmodOptions options) : m(std::make_unique<Impl>(
 }
 
 CholmodSolver::~CholmodSolver() {
+  m->wait_supernodal();
   if (m->L) cholmod_l_free_factor(&m->L, &m->c);
   if (m->X) cholmod_l_free_dense(&m->X, &m->c);
   if (m->Y) cholmod_l_free_dense(&m->Y, &m->c);
@@ -105,6 +114,7 @@ LinearSummary CholmodSolver::analyze(const SparseMatrix& A) {
   S.dtype = CHOLMOD_DOUBLE;
   S.sorted = 1;
   S.packed = 1;
+  m->wait_supernodal();
   if (m->L) cholmod_l_free_factor(&m->L, &m->c);
   m->factored = false;
   m->analyzed = false;
@@ -162,6 +172,7 @@ LinearSummary CholmodSolver::factor(const SparseMatrix& A) {
     return s;
   }
   m->A.x = const_cast<double*>(A.valuePtr());
+  m->wait_supernodal();  // the factorization may move the factor's arrays
   cholmod_l_factorize(&m->A, m->L, &m->c);
   ++m->factorizations;
   s.factor_seconds = seconds_since(t0);
@@ -245,6 +256,7 @@ LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K
                                                      ? SupernodalSolver::Precision::Single
                                                      : SupernodalSolver::Precision::Double);
       sn->bind(m->view());
+      sn->test_helper(m->helper_test);
     }
     sn->solve(b, x, x_perm, m->solve_threads);
   } else {
@@ -262,6 +274,12 @@ LinearSummary CholmodSolver::solve_interleaved(const double* b, double* x, int K
 }
 
 void CholmodSolver::set_solve_threads(int threads) { m->solve_threads = std::max(0, threads); }
+
+void CholmodSolver::test_helper(int flags) {
+  m->helper_test = flags;
+  for (auto& sn : m->sn)
+    if (sn) sn->test_helper(flags);
+}
 
 void CholmodSolver::set_solution_rows(std::vector<Index> rows) {
   m->rows = std::move(rows);

@@ -99,6 +99,9 @@ class CholmodSolver final : public LinearSolver {
   double factor_nonzeros() const;
   /// factor() calls so far.
   long long factorizations() const override;
+  /// For tests: SupernodalSolver::test_helper(flags) on the supernodal solves' solvers, those
+  /// made later too.
+  void test_helper(int flags);
 
  private:
   /// solve_interleaved, row k of the factor's order going to x + K x_perm[k] (null: perm[k]).

@@ -352,8 +352,12 @@ SupernodalSolver::SupernodalSolver(int K, Precision precision) : m_K(K), m_preci
 #endif
 }
 
+void SupernodalSolver::wait_helper() const {
+  if (m_helper) m_helper->wait_idle();
+}
+
 void SupernodalSolver::bind(const SupernodalFactorView& f) {
-  if (m_helper) m_helper->wait_idle();  // no helper job reads what this changes
+  wait_helper();  // no helper job reads what this changes
   m_f = f;
   auto round4 = [](I v) { return (v + 3) / 4 * 4; };
   // Sizes: the packed blocks (lower-triangular chunks of the inverse: chunk q from row group q),

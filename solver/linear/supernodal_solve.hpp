@@ -65,6 +65,11 @@ class SupernodalSolver {
   /// the kernel has descheduled it (another process on its core) the calling thread computes
   /// itself, waiting only for the helper's short copies in and out. More threads: an OpenMP team.
   void solve(const double* b, double* x, const std::int64_t* x_perm = nullptr, int threads = 0);
+  /// Waits until the helper thread runs no job. solve() returns without waiting for a helper
+  /// whose bin it took over, and that helper may still read the bound factor's index arrays
+  /// (super, pi, perm): whoever owns the factor calls this before it changes or frees them
+  /// (bind() calls it itself).
+  void wait_helper() const;
   int rhs() const { return m_K; }
   /// The most bins of subtrees the tree is split into (split_tree in the .cpp).
   static constexpr int kMaxBins = 8;

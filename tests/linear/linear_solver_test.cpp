@@ -929,6 +929,54 @@ TEST(SupernodalSolve, CallerTakesOverFromAStalledHelperWithoutWaitingForIt) {
   EXPECT_EQ((x1 - x3).cwiseAbs().maxCoeff(), 0.0);
 }
 
+TEST(SupernodalSolve, FactorOutlivesALateHelper) {
+  // A solve returns without waiting for a helper whose bin it took over, and that helper goes on
+  // reading the factor's index arrays: the factor's owner must wait for it before the arrays
+  // change or go (re-analysis, refactorization, destruction). Here the helper sleeps 0.5 s in its
+  // bin (as if descheduled) and the factor is freed at once; under AddressSanitizer (make
+  // sanitize) a read of the freed arrays fails this test.
+  const SparseMatrix& A = cloth_problem().A();
+  const Vec b = random_vector(3 * A.rows(), 311);
+  Vec x1(b.size()), x2(b.size());
+  {
+    hooke::CholmodSolver one;
+    ASSERT_EQ(setup(one, A).status, Status::Converged);
+    one.set_solve_threads(1);
+    ASSERT_EQ(one.solve_interleaved(b.data(), x1.data(), 3).status, Status::Converged);
+  }
+  int bins = 0;
+  {
+    hooke::CholmodSolver chol;
+    ASSERT_EQ(setup(chol, A).status, Status::Converged);
+    hooke::SupernodalSolver probe(3);
+    probe.bind(chol.supernodal_view());
+    bins = probe.shape().bins;
+  }
+  if (bins < 2 || std::thread::hardware_concurrency() < 2)
+    GTEST_SKIP() << "one CPU, or a factor that does not split: no helper thread";
+  const int stalls = hooke::SupernodalSolver::kHelperFirst | hooke::SupernodalSolver::kHelperStalls;
+  for (const char* change : {"analyze", "factor", "destroy"}) {
+    SCOPED_TRACE(change);
+    auto chol = std::make_unique<hooke::CholmodSolver>();
+    ASSERT_EQ(setup(*chol, A).status, Status::Converged);
+    chol->set_solve_threads(2);
+    chol->test_helper(stalls);
+    ASSERT_EQ(chol->solve_interleaved(b.data(), x2.data(), 3).status, Status::Converged);
+    EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0);
+    if (std::string(change) == "destroy") {
+      chol.reset();
+      continue;
+    }
+    if (std::string(change) == "analyze") {
+      ASSERT_EQ(chol->analyze(A).status, Status::Converged);
+    }
+    ASSERT_EQ(chol->factor(A).status, Status::Converged);
+    chol->test_helper(0);
+    ASSERT_EQ(chol->solve_interleaved(b.data(), x2.data(), 3).status, Status::Converged);
+    EXPECT_EQ((x1 - x2).cwiseAbs().maxCoeff(), 0.0);
+  }
+}
+
 TEST(ConjugateGradient, SameBitsOnOneOrTwoThreadsWhateverTheTeamRuns) {
 #ifndef _OPENMP
   GTEST_SKIP() << "built without OpenMP";
