@@ -324,8 +324,9 @@ void FastMassSpringStepper::restore_history(const std::vector<double>& history) 
 void FastMassSpringStepper::prepare(double h) {
   // A step whose h differs from the factored one by round-off alone (the last step of a run whose
   // duration is a multiple of dt only up to round-off) keeps the factor: the global matrix then
-  // has M / h_f^2 where the step has M / h^2, a relative difference of at most 2e-12 in the mass
-  // term, well below any tolerance the iteration is run to.
+  // has M / h_f^2 + C / h_f where the step has M / h^2 + C / h. begin_step() puts the difference
+  // into every right-hand side (m_shift), so the iteration's fixed point is still this step's
+  // exact minimiser and only its contraction changes, by a relative 2e-12.
   if (m_factored_h > 0.0 && std::abs(h - m_factored_h) <= kSameStep * m_factored_h) {
     if (m_factor_ready && m_sys.revision() == m_factored_revision) return;
     h = m_factored_h;  // a resumed run's factor (restore_history) or a new stiffness
@@ -366,6 +367,12 @@ void FastMassSpringStepper::begin_step(const State& s0, double h) {
   m_h = h;
   m_s0 = &s0;
   if (m_opt.tolerance > 0.0) m_size = system_size(s0.x);
+  // The global matrix holds the diagonal of h_f (prepare); b gets (A_f - A_h) x, so that every
+  // global step is x + A_f^-1 (b_h - A_h x): a fixed point of the iteration solves this step's
+  // equations whatever h the factor was made for. Zero when h = h_f (the same bits as without).
+  const double hf = m_factored_h;
+  m_shift_mass = h == hf ? 0.0 : 1.0 / (hf * hf) - 1.0 / (h * h);
+  m_shift_drag = h == hf ? 0.0 : m_f.drag / hf - m_f.drag / h;
   parallel_ranges(m_y.size(), [&](long long b, long long e) {
     m_y.segment(b, e - b).noalias() = s0.x.segment(b, e - b) + h * s0.v.segment(b, e - b);
   });
@@ -438,10 +445,15 @@ double FastMassSpringStepper::local_step(ConstRef x, bool gradient) {
     const size_t groups = std::max<size_t>(1, m_f.springs[si]->num_groups());
     for (size_t g = 0; g < groups; ++g) energy += m_group_energy[si * m_groups + g];
   }
+  const Vec& m = m_sys.masses();
+  const bool shifted = m_shift_mass != 0.0 || m_shift_drag != 0.0;
   parallel_ranges(static_cast<long long>(m_free.size()), [&](long long b, long long e) {
     for (long long r = b; r < e; ++r) {
-      auto acc_r = m_acc.segment<3>(3 * m_free[size_t(r)]);
+      const Index p = m_free[size_t(r)];
+      auto acc_r = m_acc.segment<3>(3 * p);
       m_B.row(Index(r)) = m_const.row(Index(r)) + acc_r.transpose();
+      if (shifted)
+        m_B.row(Index(r)) += (m[p] * m_shift_mass + m_shift_drag) * x.segment<3>(3 * p).transpose();
       acc_r.setZero();
     }
   });

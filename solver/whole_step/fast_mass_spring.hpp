@@ -239,6 +239,9 @@ class FastMassSpringStepper final : public Stepper {
   Rows3 m_R;  // b - A x of the global step (factor_precision = "single")
   static constexpr double kSameStep = 1e-12;  // relative: the same h for the factor (prepare)
   double m_factored_h = 0.0;
+  // The step's diagonal minus the factored one's, per unit mass and for the drag (begin_step):
+  // A_f - A_h = diag(m_p m_shift_mass + m_shift_drag) on the free rows; both 0 when h = h_f.
+  double m_shift_mass = 0.0, m_shift_drag = 0.0;
   bool m_factor_ready = false;  // the factor of m_factored_h is computed (not just restored)
   unsigned long long m_factored_revision = ~0ULL;
   int m_factorizations = 0;

@@ -23,6 +23,7 @@
 #include <utility>
 #include <vector>
 
+#include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/forces/spring_damper.hpp"
 #include "hooke/helped_bins.hpp"
@@ -366,6 +367,62 @@ TEST(FastMassSpring, RefactorsWhenStepOrStiffnessChangesOnly) {
   EXPECT_EQ((f1.x - s.x).lpNorm<Eigen::Infinity>(), 0.0);
   step(h / 2);
   EXPECT_EQ(fms.factorizations(), 5);
+}
+
+/// The chain of issue 58 (item 1): 6 particles 0.21 m apart on the x axis (5% longer than the
+/// springs' rest length 0.2 m), 0.05 kg each, k = 80 N/m, the first pinned, under gravity.
+struct StretchedChain {
+  std::unique_ptr<MassSpringSystem> system;
+  State state{6};
+  StretchedChain() {
+    std::vector<char> pinned(6, 0);
+    pinned[0] = 1;
+    system = std::make_unique<MassSpringSystem>(Vec::Constant(6, 0.05), pinned);
+    auto springs = std::make_unique<HookeSpring>();
+    for (int p = 0; p < 6; ++p) state.x.segment<3>(3 * p) = Vec3(0.21 * p, 0.0, 0.0);
+    for (int p = 0; p + 1 < 6; ++p) springs->add(p, p + 1, 80.0, 0.2);
+    system->add_force(std::move(springs));
+    system->add_force(std::make_unique<Gravity>(Vec::Constant(6, 0.05), Vec3(0.0, -9.81, 0.0)));
+    system->finalize();
+  }
+};
+
+TEST(FastMassSpring, LastStepRoundedFromDtConvergesAtTightTolerances) {
+  // A run of 0.5 s at dt = 1e-3 (or 5e-4) whose last step lands on the duration, h = 0.5 - t with
+  // t the sum of the steps: that h differs from dt in its last bits, the stepper keeps the factor
+  // of dt (kSameStep), and before issue 58 it iterated towards the fixed point of that factor's
+  // mass term (M / dt^2 where the step has M / h^2), stalling at an error of 1.5e-12 with 5000
+  // iterations (not-converged). Each step must converge, and the last one equal the step of a
+  // fresh stepper factored for its own h to the tolerance.
+  const StretchedChain chain;
+  for (const double dt : {1e-3, 5e-4}) {
+    for (const double tolerance : {1e-12, 1e-13, 1e-14}) {
+      FastMassSpringStepper fms(*chain.system, with("none", 5000, tolerance));
+      State s = chain.state, s1;
+      const long long steps = std::llround(0.5 / dt);
+      int rounded = 0;
+      for (long long k = 1; k <= steps; ++k) {
+        const double h = k == steps ? 0.5 - s.t : dt;
+        rounded += h != dt;
+        const State s0 = s;
+        const StepSummary r = fms.step(s0, h, s1);
+        ASSERT_EQ(r.status, Status::Converged)
+            << "dt " << dt << ", tolerance " << tolerance << ", step " << k
+            << " (h - dt = " << h - dt << "): " << r.message;
+        if (k == steps) {
+          FastMassSpringStepper fresh(*chain.system, with("none", 5000, tolerance));
+          State f1;
+          ASSERT_EQ(fresh.step(s0, h, f1).status, Status::Converged);
+          // Both are within the tolerance (relative to the chain's 1.05 m) of the exact step.
+          EXPECT_LE((f1.x - s1.x).lpNorm<Eigen::Infinity>(), 2 * tolerance * 1.05)
+              << "dt " << dt << ", tolerance " << tolerance;
+        }
+        s = s1;
+      }
+      EXPECT_EQ(fms.factorizations(), 1) << "dt " << dt;  // the rounded h kept dt's factor
+      EXPECT_EQ(rounded, 1) << "dt " << dt << ": the last h is not dt's rounding, test void";
+    }
+  }
 }
 
 TEST(FastMassSpring, PinnedParticlesMoveWithTheirVelocity) {
