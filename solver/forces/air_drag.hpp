@@ -16,6 +16,13 @@ class AirDrag final : public Force {
   /// Drag coefficient c (kg/s per particle) and wind velocity w (m/s).
   double coefficient() const { return m_c; }
   const Vec3& wind() const { return m_wind; }
+  ForceTerms terms() const override {
+    ForceTerms t;
+    t.form = ForceForm::Drag;
+    t.drag = m_c;
+    t.wind = m_wind;
+    return t;
+  }
 
   const char* name() const override { return "air-drag"; }
   /// Particle by particle: the same drag over the local particles.

@@ -9,6 +9,30 @@
 namespace hooke {
 
 struct SpringSet;
+class ElementSet;
+
+/// The form of a force as the whole-step methods read it (ForceTerms::form): they pose backward
+/// Euler as a minimisation or a constraint solve, so they need what a force is, not only its f, K
+/// and D.
+enum class ForceForm {
+  Unknown,   ///< none of the forms below: the whole-step methods refuse the force
+  Springs,   ///< Hooke springs, energy k/2 (l - L)^2 per spring of ForceTerms::springs
+  Dampers,   ///< axial dampers -c (u . (v_i - v_j)) u per spring of ForceTerms::springs (c = coeff)
+  Gravity,   ///< a uniform acceleration ForceTerms::acceleration on every particle's mass
+  Drag,      ///< linear air drag -c (v - w), c = ForceTerms::drag, w = ForceTerms::wind
+  Elements,  ///< an element set's energy (ForceTerms::elements)
+};
+
+/// What a force is in a whole-step method's terms (Force::terms): its form and the data of that
+/// form; the fields of other forms stay at their defaults.
+struct ForceTerms {
+  ForceForm form = ForceForm::Unknown;
+  const SpringSet* springs = nullptr;    ///< Springs, Dampers
+  Vec3 acceleration = Vec3::Zero();      ///< Gravity (m/s^2)
+  double drag = 0.0;                     ///< Drag: c (kg/s per particle)
+  Vec3 wind = Vec3::Zero();              ///< Drag: w (m/s)
+  const ElementSet* elements = nullptr;  ///< Elements
+};
 
 /// Options of a Jacobian assembly that change what is written, not the pattern.
 struct JacobianOptions {
@@ -105,6 +129,9 @@ class Force {
                                     double /*cv*/, double /*cx*/, VecRef /*y*/) const {
     return false;
   }
+  /// This force's form and data as the whole-step methods read it (ForceTerms); the default,
+  /// ForceForm::Unknown, makes them refuse the force, naming it.
+  virtual ForceTerms terms() const { return {}; }
   /// Largest relative elongation (l - L) / L over this force's springs; -infinity if it has none.
   virtual double max_strain(ConstRef /*x*/) const {
     return -std::numeric_limits<double>::infinity();

@@ -11,6 +11,12 @@ class Gravity final : public Force {
   const Vec3& acceleration() const { return m_g; }
 
   const char* name() const override { return "gravity"; }
+  ForceTerms terms() const override {
+    ForceTerms t;
+    t.form = ForceForm::Gravity;
+    t.acceleration = m_g;
+    return t;
+  }
   /// Particle by particle: the local particles' masses, the same g.
   std::unique_ptr<Force> localize(const LocalIndex& index) const override {
     Vec masses(index.num_local());

@@ -89,6 +89,12 @@ class HookeSpring final : public Force {
   void add(int a, int b, double k, double L) { m_springs.add(a, b, k, L); }
   size_t size() const { return m_springs.size(); }
   const SpringSet& springs() const { return m_springs; }
+  ForceTerms terms() const override {
+    ForceTerms t;
+    t.form = ForceForm::Springs;
+    t.springs = &m_springs;
+    return t;
+  }
   /// Multiplies every stiffness by factor >= 0 (a stiffness continuation between steps; call it
   /// through MassSpringSystem::mutable_force so steppers see the change).
   void scale_stiffness(double factor) {

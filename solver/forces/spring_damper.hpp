@@ -77,6 +77,12 @@ class SpringDamper final : public Force {
   size_t size() const { return m_springs.size(); }
   /// The dampers (coeff = c; rest_length unused).
   const SpringSet& springs() const { return m_springs; }
+  ForceTerms terms() const override {
+    ForceTerms t;
+    t.form = ForceForm::Dampers;
+    t.springs = &m_springs;
+    return t;
+  }
 
   const char* name() const override { return "spring-damper"; }
   void add_forces(ConstRef x, ConstRef v, VecRef f) const override;

@@ -12,9 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "hooke/forces/air_drag.hpp"
-#include "hooke/forces/gravity.hpp"
-#include "hooke/forces/hooke_spring.hpp"
+#include "hooke/whole_step/spring_potential_forces.hpp"
 
 namespace hooke {
 
@@ -114,6 +112,50 @@ class SpringCost final : public ceres::SizedCostFunction<1, 3, 3> {
   const double* m_data;
 };
 
+/// The positions x = y + dx of the K particles of element e of `set` (each block a parameter of
+/// Ceres, dx_a = parameters[slot[a]]) written into a per-thread 3n vector, at their ids (the rest
+/// of it is never read): the element sets read positions by particle id. Sized on first use.
+const Vec& stencil_positions(const ElementSet& set, size_t e, const Vec& y,
+                             double const* const* parameters, const int* slot) {
+  thread_local Vec x;
+  if (x.size() != y.size()) x.setZero(y.size());
+  const int* s = set.stencil(e);
+  for (int a = 0; a < set.stencil_size(); ++a)
+    x.segment<3>(3 * s[a]) = y.segment<3>(3 * s[a]) + Eigen::Map<const Vec3>(parameters[slot[a]]);
+  return x;
+}
+
+/// Energy formulation. Residual block of one element of the constraint form k/2 C^2
+/// (ElementSet::has_constraint): r = sqrt(k) C(x_e), x = y + dx, so 1/2 r^2 is the element's
+/// energy; dr/dx_a = sqrt(k) dC_a (1 x 3 each). Parameter block a is the stencil's particle a.
+class ElementCost final : public ceres::DynamicCostFunction {
+ public:
+  ElementCost(const ElementSet& set, size_t e, const Vec& y) : m_set(set), m_e(e), m_y(y) {
+    for (int a = 0; a < set.stencil_size(); ++a) AddParameterBlock(3);
+    SetNumResiduals(1);
+  }
+  bool Evaluate(double const* const* parameters, double* residuals,
+                double** jacobians) const override {
+    static constexpr int kSlots[kMaxStencil] = {0, 1, 2, 3};
+    const Vec& x = stencil_positions(m_set, m_e, m_y, parameters, kSlots);
+    double C = 0.0, k = 0.0;
+    std::array<double, kMaxElementDofs> dC;
+    m_set.constraint(x, m_e, C, dC.data(), k);
+    const double sqrt_k = std::sqrt(k);
+    residuals[0] = sqrt_k * C;
+    if (jacobians)
+      for (int a = 0; a < m_set.stencil_size(); ++a)
+        if (jacobians[a])
+          for (int c = 0; c < 3; ++c) jacobians[a][c] = sqrt_k * dC[size_t(3 * a + c)];
+    return true;
+  }
+
+ private:
+  const ElementSet& m_set;
+  size_t m_e;
+  const Vec& m_y;
+};
+
 /// Residual formulation. One residual block per free particle i: its backward Euler residual
 ///   G_i = m_i / h^2 (x_i - y_i) + c_i / h (x_i - x0_i - h w) - sum_springs f_i(x)      (N)
 /// i.e. M (v1 - v0) / h - f(x1, v1) with v1 = (x1 - x0) / h, over the parameter blocks of i and of
@@ -128,14 +170,23 @@ class ParticleResidualCost final : public ceres::DynamicCostFunction {
     int slot;            ///< parameter slot of the other end
     double sign;         ///< +1 if i is the spring's first end (a), -1 if it is b
   };
-
+  /// An element that holds i: G_i += dE_e/dx_i, dG_i/dx_a += the Hessian's block (i, a).
+  struct IncidentElement {
+    const ElementSet* set;
+    size_t e;
+    int self;                             ///< i's place in the stencil
+    std::array<int, kMaxStencil> slot{};  ///< parameter slot of each stencil particle
+  };
   ParticleResidualCost(double mass, const Vec3& drag_c, const double* inv_h,
-                       const double* drag_offset, std::vector<Incident> incident, int num_slots)
+                       const double* drag_offset, std::vector<Incident> incident,
+                       std::vector<IncidentElement> elements, const Vec& y, int num_slots)
       : m_mass(mass),
         m_c(drag_c),
         m_inv_h(inv_h),
         m_offset(drag_offset),
-        m_incident(std::move(incident)) {
+        m_incident(std::move(incident)),
+        m_elements(std::move(elements)),
+        m_y(y) {
     for (int s = 0; s < num_slots; ++s) AddParameterBlock(3);
     SetNumResiduals(3);
   }
@@ -168,6 +219,23 @@ class ParticleResidualCost final : public ceres::DynamicCostFunction {
       if (jacobians[0]) Eigen::Map<Mat3R>(jacobians[0]) -= B;
       if (jacobians[s.slot]) Eigen::Map<Mat3R>(jacobians[s.slot]) += B;
     }
+    std::array<double, kMaxElementDofs> g;
+    std::array<double, kMaxElementDofs * kMaxElementDofs> H;
+    for (const IncidentElement& in : m_elements) {
+      const Vec& x = stencil_positions(*in.set, in.e, m_y, parameters, in.slot.data());
+      in.set->gradient_hessian(x, in.e, in.e + 1, PsdProjection::None, g.data(),
+                               jacobians ? H.data() : nullptr);
+      G += Eigen::Map<const Vec3>(g.data() + 3 * in.self);
+      if (!jacobians) continue;
+      const int dofs = 3 * in.set->stencil_size();
+      for (int a = 0; a < in.set->stencil_size(); ++a) {
+        double* J = jacobians[in.slot[size_t(a)]];
+        if (!J) continue;
+        for (int r = 0; r < 3; ++r)  // row-major: J[3 r + c] = d G_r / d dx_a,c
+          for (int c = 0; c < 3; ++c)
+            J[3 * r + c] += H[size_t((3 * a + c) * dofs + 3 * in.self + r)];
+      }
+    }
     return true;
   }
 
@@ -178,6 +246,8 @@ class ParticleResidualCost final : public ceres::DynamicCostFunction {
   const double* m_inv_h;
   const double* m_offset;
   std::vector<Incident> m_incident;
+  std::vector<IncidentElement> m_elements;
+  const Vec& m_y;
 };
 
 }  // namespace
@@ -212,37 +282,41 @@ std::string ceres_implicit_unsupported(const MassSpringSystem& system) {
     const Force* f = forces[n].get();
     std::ostringstream os;
     os << "ceres-implicit: force '" << f->name() << "' (force " << n << " of the system) ";
-    if (const auto* s = dynamic_cast<const HookeSpring*>(f)) {
-      const auto& c = s->springs().coeff;
+    const ForceTerms t = f->terms();
+    if (t.form == ForceForm::Elements) {
+      if (t.elements->has_constraint()) continue;  // a sum of squares: sqrt(k) C per element
+      os << "has '" << t.elements->name()
+         << "' elements without the constraint form k/2 C^2, which ceres-implicit needs for its "
+            "least squares; "
+         << element_set_takers(*t.elements);
+      return os.str();
+    }
+    if (t.form == ForceForm::Springs) {
+      const auto& c = t.springs->coeff;
       const auto it = std::find_if(c.begin(), c.end(), [](double k) { return !(k >= 0.0); });
       if (it != c.end()) {
         os << "has a spring with stiffness k = " << *it
            << ": k/2 (l - L)^2 is a sum of squares only for k >= 0";
         return os.str();
       }
-    } else if (dynamic_cast<const Gravity*>(f)) {
+    } else if (t.form == ForceForm::Gravity) {
       // Constant: folds into y.
-    } else if (dynamic_cast<const AirDrag*>(f)) {
-      // AirDrag has no accessor for c: read it from the force's own df/dv = -c I.
-      if (!system.pattern().finalized()) continue;
-      Jacobians J = system.make_jacobians();
-      const Vec zero = Vec::Zero(system.dofs());
-      f->add_jacobians(zero, zero, JacobianOptions{}, J.K, J.D);
-      for (Index j = 0; j < system.dofs(); ++j)
-        if (!(J.D.coeff(j, j) <= 0.0)) {
-          os << "has drag coefficient c = " << -J.D.coeff(j, j)
-             << ": c/(2h) |x - x0 - h w|^2 is a sum of squares only for c >= 0";
-          return os.str();
-        }
-    } else if (f->name() == std::string("spring-damper")) {
+    } else if (t.form == ForceForm::Drag) {
+      if (!(t.drag >= 0.0)) {
+        os << "has drag coefficient c = " << t.drag
+           << ": c/(2h) |x - x0 - h w|^2 is a sum of squares only for c >= 0";
+        return os.str();
+      }
+    } else if (t.form == ForceForm::Dampers) {
       os << "(axial spring damping) is not supported: its force -c (u . (v_a - v_b)) u is not "
             "the gradient of any function of x1, so the backward Euler step is not a "
             "minimisation; set the damping to 0 (air-drag is supported) or use method "
             "'implicit' with beta = 1 and newton_iterations > 1 for the same step";
       return os.str();
     } else {
-      os << "is not known to the ceres-implicit backend, which supports hooke-spring, gravity "
-            "and air-drag only; use method 'implicit' with beta = 1 and newton_iterations > 1";
+      os << "is not known to the ceres-implicit backend, which supports hooke-spring, gravity, "
+            "air-drag and element sets of the constraint form only; use method 'implicit' with "
+            "beta = 1 and newton_iterations > 1";
       return os.str();
     }
   }
@@ -260,6 +334,7 @@ struct CeresImplicitStepper::Impl {
   // are never resized after construction; the parameter blocks are the 3-vectors of dx.
   Vec dx;           // parameter values: initial guess 0 (x = y) in, x1 - y out
   Vec dy;           // y - x0 = h v0 + h^2 M^-1 f_ext (0 for pinned particles: they stay at x0)
+  Vec y;            // x0 + dy: the element costs form positions y + dx
   Vec drag_off;     // y - x0 - h w, per DOF with drag
   Vec spring_data;  // kSpringData per spring (see spring_geometry)
   double inv_h = 1.0, inv_sqrt_h = 1.0;
@@ -270,6 +345,7 @@ struct CeresImplicitStepper::Impl {
   std::vector<int> free_particles;
   std::vector<int> spring_a, spring_b;  // springs with k > 0 and a free end
   std::vector<double> spring_k, spring_L;
+  std::vector<const ElementSet*> elements;  // every element force's set, in force order
   Index num_residuals = 0;
   Vec f;  // scratch for the backward Euler residual of the result
   ceres::Problem problem;
@@ -285,27 +361,29 @@ struct CeresImplicitStepper::Impl {
 CeresImplicitStepper::Impl::Impl(const MassSpringSystem& s, CeresImplicitOptions o)
     : system(s), options(std::move(o)) {
   const Index n = system.num_particles(), N = system.dofs();
-  for (Vec* v : {&dx, &dy, &drag_off, &f_ext, &drag_c, &drag_b, &f}) v->setZero(N);
+  for (Vec* v : {&dx, &dy, &y, &drag_off, &f_ext, &drag_c, &drag_b, &f}) v->setZero(N);
+  for (const auto& force : system.forces())
+    if (const ForceTerms t = force->terms(); t.form == ForceForm::Elements)
+      elements.push_back(t.elements);
   const std::vector<char>& pinned = system.pinned();
 
-  // Constant forces and linear drag, read from the forces themselves (AirDrag has no accessors):
-  // c from its df/dv = -c I, c w from its force at v = 0.
+  // Constant forces and linear drag from the forces' terms: gravity's force and drag's c w as
+  // their forces at x = v = 0, drag's c summed per DOF.
   const Vec zero = Vec::Zero(N);
-  Jacobians J = system.make_jacobians();
   for (const auto& force : system.forces()) {
-    if (dynamic_cast<const Gravity*>(force.get())) force->add_forces(zero, zero, f_ext);
-    if (dynamic_cast<const AirDrag*>(force.get())) {
+    const ForceTerms t = force->terms();
+    if (t.form == ForceForm::Gravity) force->add_forces(zero, zero, f_ext);
+    if (t.form == ForceForm::Drag) {
       force->add_forces(zero, zero, drag_b);
-      force->add_jacobians(zero, zero, JacobianOptions{}, J.K, J.D);
+      drag_c.array() += t.drag;
     }
   }
-  for (Index j = 0; j < N; ++j) drag_c[j] = -J.D.coeff(j, j);
 
   for (Index i = 0; i < n; ++i)
     if (!pinned[size_t(i)]) free_particles.push_back(int(i));
   for (const auto& force : system.forces())
-    if (const auto* hs = dynamic_cast<const HookeSpring*>(force.get())) {
-      const SpringSet& set = hs->springs();
+    if (const ForceTerms t = force->terms(); t.form == ForceForm::Springs) {
+      const SpringSet& set = *t.springs;
       for (size_t k = 0; k < set.size(); ++k)
         if (set.coeff[k] != 0.0 && !(pinned[size_t(set.i[k])] && pinned[size_t(set.j[k])])) {
           spring_a.push_back(set.i[k]);
@@ -361,6 +439,20 @@ void CeresImplicitStepper::Impl::add_energy_blocks() {
         dx.data() + 3 * spring_a[s], dx.data() + 3 * spring_b[s]);
     num_residuals += 1;
   }
+  const std::vector<char>& pinned = system.pinned();
+  for (const ElementSet* set : elements)
+    for (size_t e = 0; e < set->size(); ++e) {
+      const int* s = set->stencil(e);
+      std::vector<double*> blocks;
+      bool moves = false;
+      for (int a = 0; a < set->stencil_size(); ++a) {
+        blocks.push_back(dx.data() + 3 * s[a]);
+        moves = moves || !pinned[size_t(s[a])];
+      }
+      if (!moves) continue;  // a constant
+      problem.AddResidualBlock(new ElementCost(*set, e, y), nullptr, blocks);
+      num_residuals += 1;
+    }
   for (int i : free_particles) {
     const Vec3 c = drag_c.segment<3>(3 * i);
     if (c.maxCoeff() == 0.0) continue;
@@ -378,20 +470,41 @@ void CeresImplicitStepper::Impl::add_residual_blocks() {
     incident[size_t(spring_a[s])].push_back({s, 1.0});
     incident[size_t(spring_b[s])].push_back({s, -1.0});
   }
+  struct Held {  // element e of set holds the particle as its stencil's particle `self`
+    const ElementSet* set;
+    size_t e;
+    int self;
+  };
+  std::vector<std::vector<Held>> holds(size_t(system.num_particles()));
+  for (const ElementSet* set : elements)
+    for (size_t e = 0; e < set->size(); ++e)
+      for (int a = 0; a < set->stencil_size(); ++a)
+        holds[size_t(set->stencil(e)[a])].push_back({set, e, a});
   for (int i : free_particles) {
     std::vector<double*> blocks = {dx.data() + 3 * i};
+    auto slot_of = [&](double* block) {  // blocks shared by several springs or elements once
+      const auto it = std::find(blocks.begin(), blocks.end(), block);
+      if (it != blocks.end()) return int(it - blocks.begin());
+      blocks.push_back(block);
+      return int(blocks.size()) - 1;
+    };
     std::vector<ParticleResidualCost::Incident> springs;
     for (const auto& [s, sign] : incident[size_t(i)]) {
-      double* other = dx.data() + 3 * (sign > 0.0 ? spring_b[s] : spring_a[s]);
-      const auto it = std::find(blocks.begin(), blocks.end(), other);  // parallel springs share
-      const int slot = int(it - blocks.begin());
-      if (it == blocks.end()) blocks.push_back(other);
+      const int slot = slot_of(dx.data() + 3 * (sign > 0.0 ? spring_b[s] : spring_a[s]));
       springs.push_back(
           {spring_k[s], spring_L[s], spring_data.data() + kSpringData * s, slot, sign});
     }
+    std::vector<ParticleResidualCost::IncidentElement> held;
+    for (const Held& hd : holds[size_t(i)]) {
+      ParticleResidualCost::IncidentElement in{hd.set, hd.e, hd.self, {}};
+      for (int a = 0; a < hd.set->stencil_size(); ++a)
+        in.slot[size_t(a)] = slot_of(dx.data() + 3 * hd.set->stencil(hd.e)[a]);
+      held.push_back(in);
+    }
     problem.AddResidualBlock(
         new ParticleResidualCost(system.masses()[i], drag_c.segment<3>(3 * i), &inv_h,
-                                 drag_off.data() + 3 * i, std::move(springs), int(blocks.size())),
+                                 drag_off.data() + 3 * i, std::move(springs), std::move(held), y,
+                                 int(blocks.size())),
         nullptr, blocks);
     num_residuals += 3;
   }
@@ -406,9 +519,11 @@ void CeresImplicitStepper::Impl::set_step_data(const State& s0, double h) {
     if (pinned[size_t(i)]) {
       dy.segment<3>(3 * i).setZero();
       dx.segment<3>(3 * i).setZero();
+      y.segment<3>(3 * i) = s0.x.segment<3>(3 * i);
       continue;
     }
     dy.segment<3>(3 * i) = h * s0.v.segment<3>(3 * i) + (h * h / mass[i]) * f_ext.segment<3>(3 * i);
+    y.segment<3>(3 * i) = s0.x.segment<3>(3 * i) + dy.segment<3>(3 * i);
     for (Index j = 3 * i; j < 3 * i + 3; ++j)
       drag_off[j] = drag_c[j] > 0.0 ? dy[j] - h * drag_b[j] / drag_c[j] : 0.0;
   }

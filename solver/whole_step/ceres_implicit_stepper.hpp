@@ -86,10 +86,10 @@ struct CeresReport {
 };
 
 /// "" if every force of system is one the backend can write as least-squares terms (HookeSpring
-/// with k >= 0, Gravity, AirDrag with c >= 0), else a message naming the first force that cannot
-/// and why (e.g. SpringDamper: axial damping is not the gradient of any function of x1). The same
-/// set holds for both formulations. Constraints (colliders, strain limiting) are applied after the
-/// step by Simulation and never block it.
+/// with k >= 0, Gravity, AirDrag with c >= 0, element sets of the constraint form k/2 C^2), else a
+/// message naming the first force that cannot and why (e.g. SpringDamper: axial damping is not the
+/// gradient of any function of x1). The same set holds for both formulations. Constraints
+/// (colliders, strain limiting) are applied after the step by Simulation and never block it.
 std::string ceres_implicit_unsupported(const MassSpringSystem& system);
 
 /// The backward Euler step M (v1 - v0) = h f(x1, v1), x1 = x0 + h v1, solved to convergence by
@@ -100,7 +100,7 @@ std::string ceres_implicit_unsupported(const MassSpringSystem& system);
 /// "Fast simulation of mass-spring systems", eq. 3-4, there multiplied by h^2):
 ///
 ///   x1 = argmin_x  1/(2 h^2) (x - y)^T M (x - y) + E(x) + 1/(2h) (x - x0 - h w)^T C (x - x0 - h w)
-///   E  = sum over Hooke springs k/2 (|x_a - x_b| - L)^2,
+///   E  = sum over Hooke springs k/2 (|x_a - x_b| - L)^2 + sum over elements E_e(x_e),
 ///
 /// whose gradient is G(x) = M (x - y)/h^2 + C (x - x0 - h w)/h - f_springs(x), i.e.
 /// M (v1 - v0)/h - f(x1, v1) with v1 = (x - x0)/h. Two least-squares forms (options.formulation):
@@ -109,16 +109,20 @@ std::string ceres_implicit_unsupported(const MassSpringSystem& system);
 ///               inertia, per free particle i   r = sqrt(m_i) / h (x_i - y_i)        3 x 3
 ///               spring, per Hooke spring       r = sqrt(k) (|x_a - x_b| - L)        1 x (3 + 3)
 ///               drag, per free particle (c>0)  r = sqrt(c / h) (x_i - x0_i - h w)    3 x 3
+///               element, E_e = k/2 C(x_e)^2    r = sqrt(k) C(x_e)                   1 x 3K
 ///   residual: r = G(x), per free particle i the 3-vector G_i over the blocks of i and of its
-///             spring neighbours, Jacobian dG/dx = M/h^2 + C/h - K(x) (exact K, no clamping).
+///             spring and element neighbours, Jacobian dG/dx = M/h^2 + C/h - K(x) (exact K, no
+///             clamping; the elements' exact Hessian blocks).
 ///
 /// Pinned particles are constant parameter blocks held at x0 (v1 = 0, as in ImplicitStepper).
 /// The unknowns are x - y per particle (a contiguous 3n buffer of ours; y is the initial guess),
-/// which keeps the residuals' rounding relative to themselves rather than to |x|. (Ceres'
+/// which keeps the residuals' rounding relative to themselves rather than to |x| (not the
+/// elements': an element set reads positions, formed as y + dx). (Ceres'
 /// check_gradients is not offered: its differences use steps relative to the parameter values,
 /// here near 0, and drown in round-off; the tests check the Jacobians by central differences.)
 ///
-/// Supports HookeSpring, Gravity and AirDrag only (see ceres_implicit_unsupported); constraints
+/// Supports HookeSpring, Gravity, AirDrag and element sets of the constraint form only (see
+/// ceres_implicit_unsupported); constraints
 /// are applied by Simulation after the step. This is a reference backend: the ceres::Problem is
 /// built once in the constructor and step() only updates the buffers the cost functions read,
 /// but ceres::Solve itself allocates and redoes its symbolic analysis on every call, so step() is

@@ -3,23 +3,33 @@
 #include <algorithm>
 #include <cmath>
 
-#include "hooke/forces/air_drag.hpp"
-#include "hooke/forces/gravity.hpp"
-#include "hooke/forces/hooke_spring.hpp"
-#include "hooke/forces/spring_damper.hpp"
-
 namespace hooke {
+
+std::string element_set_takers(const ElementSet& set) {
+  return std::string("the explicit and implicit steppers, cvode, ida and vbd") +
+         (set.has_constraint() ? ", xpbd and ceres-implicit" : "") + " take it";
+}
 
 std::string SpringPotentialForces::unsupported(const MassSpringSystem& system,
                                                const std::string& method, const std::string& why,
-                                               bool takes_dampers) {
+                                               bool takes_dampers, ElementNeed elements) {
   for (const auto& f : system.forces()) {
-    if (takes_dampers && dynamic_cast<const SpringDamper*>(f.get())) continue;
-    if (!dynamic_cast<const HookeSpring*>(f.get()) && !dynamic_cast<const Gravity*>(f.get()) &&
-        !dynamic_cast<const AirDrag*>(f.get()))
-      return method + " handles Hooke springs" + (takes_dampers ? ", spring dampers" : "") +
-             ", gravity and air drag (" + why + "); this scene has a '" + f->name() + "' force (" +
-             (takes_dampers ? "" : "use air drag for damping, or ") + "use an implicit method)";
+    const ForceTerms t = f->terms();
+    if (t.form == ForceForm::Springs || t.form == ForceForm::Gravity || t.form == ForceForm::Drag ||
+        (takes_dampers && t.form == ForceForm::Dampers))
+      continue;
+    if (t.form == ForceForm::Elements) {
+      if (elements == ElementNeed::Energy ||
+          (elements == ElementNeed::Constraint && t.elements->has_constraint()))
+        continue;
+      return method + " cannot take the '" + t.elements->name() + "' elements" +
+             (elements == ElementNeed::Constraint ? " (they have no constraint form k/2 C^2)"
+                                                  : "") +
+             "; " + element_set_takers(*t.elements);
+    }
+    return method + " handles Hooke springs" + (takes_dampers ? ", spring dampers" : "") +
+           ", gravity and air drag (" + why + "); this scene has a '" + f->name() + "' force (" +
+           (takes_dampers ? "" : "use air drag for damping, or ") + "use an implicit method)";
   }
   return "";
 }
@@ -69,13 +79,26 @@ double system_size(ConstRef x) {
 SpringPotentialForces::SpringPotentialForces(const MassSpringSystem& system) {
   Vec3 wind_sum = Vec3::Zero();
   for (const auto& f : system.forces()) {
-    if (const auto* s = dynamic_cast<const HookeSpring*>(f.get())) springs.push_back(&s->springs());
-    if (const auto* d = dynamic_cast<const SpringDamper*>(f.get()))
-      dampers.push_back(&d->springs());
-    if (const auto* g = dynamic_cast<const Gravity*>(f.get())) gravity += g->acceleration();
-    if (const auto* d = dynamic_cast<const AirDrag*>(f.get())) {
-      drag += d->coefficient();
-      wind_sum += d->coefficient() * d->wind();
+    const ForceTerms t = f->terms();
+    switch (t.form) {
+      case ForceForm::Springs:
+        springs.push_back(t.springs);
+        break;
+      case ForceForm::Dampers:
+        dampers.push_back(t.springs);
+        break;
+      case ForceForm::Gravity:
+        gravity += t.acceleration;
+        break;
+      case ForceForm::Drag:
+        drag += t.drag;
+        wind_sum += t.drag * t.wind;
+        break;
+      case ForceForm::Elements:
+        elements.push_back(t.elements);
+        break;
+      case ForceForm::Unknown:
+        break;  // refused by unsupported()
     }
   }
   if (drag > 0.0) wind = wind_sum / drag;

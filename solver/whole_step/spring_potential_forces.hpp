@@ -2,30 +2,49 @@
 #include <string>
 #include <vector>
 
+#include "hooke/forces/element_set.hpp"
 #include "hooke/forces/spring_set.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 
 namespace hooke {
 
-/// The forces of a system as the position-based whole-step methods (fast-mass-spring, xpbd) see
-/// them: Hooke springs (a potential per spring), uniform gravity (constant) and linear air drag
-/// towards a wind (linear in v). Several forces of a kind add up: gravities sum, drags sum their
-/// coefficients and average their winds weighted by coefficient.
+/// What a whole-step method can take of an element set (forces/element_set.hpp).
+enum class ElementNeed {
+  None,        ///< no element sets (the method has no path for them yet)
+  Energy,      ///< any element set: its energy, gradient and Hessian (vbd)
+  Constraint,  ///< element sets of the constraint form k/2 C^2 (xpbd)
+};
+
+/// The forces of a system as the position-based whole-step methods (fast-mass-spring, xpbd, vbd)
+/// see them: Hooke springs (a potential per spring), uniform gravity (constant), linear air drag
+/// towards a wind (linear in v) and element sets (a potential per element). Several forces of a
+/// kind add up: gravities sum, drags sum their coefficients and average their winds weighted by
+/// coefficient.
 struct SpringPotentialForces {
   std::vector<const SpringSet*> springs;  ///< the springs of every HookeSpring force
   std::vector<const SpringSet*> dampers;  ///< the dampers of every SpringDamper force (only vbd
                                           ///< takes them; unsupported() refuses them otherwise)
-  Vec3 gravity = Vec3::Zero();            ///< total gravity acceleration (m/s^2)
-  double drag = 0.0;                      ///< total air-drag coefficient c (kg/s per particle)
-  Vec3 wind = Vec3::Zero();               ///< c-weighted mean wind velocity (m/s)
+  /// The element sets of every force that has one (Force::element_set), in force order; only
+  /// the methods that say so in unsupported() take them.
+  std::vector<const ElementSet*> elements;
+  Vec3 gravity = Vec3::Zero();  ///< total gravity acceleration (m/s^2)
+  double drag = 0.0;            ///< total air-drag coefficient c (kg/s per particle)
+  Vec3 wind = Vec3::Zero();     ///< c-weighted mean wind velocity (m/s)
 
   /// Collects the forces of system; it must pass unsupported().
   explicit SpringPotentialForces(const MassSpringSystem& system);
-  /// "" if every force of system is one of the three kinds, else a message naming the first other
-  /// force; `method` and `why` are spliced into it ("xpbd", "... needs each force to be ...").
+  /// "" if every force of system is one of the three kinds or an element set the method takes
+  /// (`elements`), else a message naming the first other force; `method` and `why` are spliced
+  /// into it ("xpbd", "... needs each force to be ...").
   static std::string unsupported(const MassSpringSystem& system, const std::string& method,
-                                 const std::string& why, bool takes_dampers = false);
+                                 const std::string& why, bool takes_dampers = false,
+                                 ElementNeed elements = ElementNeed::None);
 };
+
+/// Which methods take the element set `set`, for the messages of those that do not: the
+/// Force-driven methods and vbd take every set, xpbd and ceres-implicit those with the constraint
+/// form.
+std::string element_set_takers(const ElementSet& set);
 
 /// How far s1 (with v1 = (x1 - x0) / h) is from solving the backward-Euler step from s0:
 /// max |M (x1 - x0 - h v0) / h^2 - f(x1, v1)| over the free DOFs, relative to the larger of the

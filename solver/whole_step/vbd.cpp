@@ -2,7 +2,9 @@
 
 #include <Eigen/Cholesky>
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -26,7 +28,8 @@ OptionError VbdOptions::validate() const {
 
 std::string vbd_unsupported(const MassSpringSystem& system) {
   return SpringPotentialForces::unsupported(
-      system, "vbd", "each vertex's block needs the force's gradient and Hessian in x", true);
+      system, "vbd", "each vertex's block needs the force's gradient and Hessian in x", true,
+      ElementNeed::Energy);
 }
 
 VbdStepper::VbdStepper(const MassSpringSystem& system, VbdOptions options)
@@ -58,10 +61,37 @@ VbdStepper::VbdStepper(const MassSpringSystem& system, VbdOptions options)
     m_links[size_t(next[size_t(i)]++)] = {j, k, L, c};
     m_links[size_t(next[size_t(j)]++)] = {i, k, L, c};
   });
+  // Element incidences per particle (counting pass, then filling), in set and element order.
+  m_incidence_start.assign(size_t(n) + 1, 0);
+  for (const ElementSet* set : m_f.elements)
+    for (size_t e = 0; e < set->size(); ++e)
+      for (int a = 0; a < set->stencil_size(); ++a)
+        ++m_incidence_start[size_t(set->stencil(e)[a]) + 1];
+  for (size_t p = 0; p < size_t(n); ++p) m_incidence_start[p + 1] += m_incidence_start[p];
+  m_incidence.resize(size_t(m_incidence_start.back()));
+  std::vector<Index> next_incidence(m_incidence_start.begin(), m_incidence_start.end() - 1);
+  for (size_t si = 0; si < m_f.elements.size(); ++si) {
+    const ElementSet& set = *m_f.elements[si];
+    for (size_t e = 0; e < set.size(); ++e)
+      for (int a = 0; a < set.stencil_size(); ++a)
+        m_incidence[size_t(next_incidence[size_t(set.stencil(e)[a])]++)] = {int(si), a, e};
+  }
   colour();
   for (Vec* v : {&m_x0, &m_y, &m_x, &m_xprev, &m_xprev2, &m_xbar, &m_force, &m_last_v0})
     v->setZero(3 * n);
   m_err.setZero(n);
+}
+
+template <typename Visit>
+void VbdStepper::for_each_neighbour(Index p, Visit&& visit) const {
+  for (Index l = m_link_start[size_t(p)]; l < m_link_start[size_t(p) + 1]; ++l)
+    visit(Index(m_links[size_t(l)].other));
+  for (Index i = m_incidence_start[size_t(p)]; i < m_incidence_start[size_t(p) + 1]; ++i) {
+    const Incidence& in = m_incidence[size_t(i)];
+    const ElementSet& set = *m_f.elements[size_t(in.set)];
+    const int* stencil = set.stencil(in.element);
+    for (int a = 0; a < set.stencil_size(); ++a) visit(Index(stencil[a]));
+  }
 }
 
 void VbdStepper::colour() {
@@ -74,10 +104,10 @@ void VbdStepper::colour() {
   int count = 0;
   for (Index p = 0; p < n; ++p) {
     if (pinned[size_t(p)]) continue;
-    for (Index l = m_link_start[size_t(p)]; l < m_link_start[size_t(p) + 1]; ++l) {
-      const int c = m_colour_of[size_t(m_links[size_t(l)].other)];
+    for_each_neighbour(p, [&](Index q) {
+      const int c = m_colour_of[size_t(q)];
       if (c >= 0) seen[size_t(c)] = p + 1;
-    }
+    });
     int c = 0;
     while (c < count && seen[size_t(c)] == p + 1) ++c;
     if (c == count) {
@@ -166,10 +196,40 @@ Vec3 VbdStepper::vertex_gradient(Index p, Mat3* H) const {
       if (H) *H += (s.c / h) * (u * u.transpose());
     }
   }
+  if (!m_incidence.empty()) add_element_terms(p, grad, H);
   return grad;
 }
 
-double VbdStepper::local_change(Index p, const Vec3& s) const {
+void VbdStepper::add_element_terms(Index p, Vec3& grad, Mat3* H) const {
+  std::array<double, kMaxElementDofs> g;
+  std::array<double, kMaxElementDofs * kMaxElementDofs> He;
+  for (Index i = m_incidence_start[size_t(p)]; i < m_incidence_start[size_t(p) + 1]; ++i) {
+    const Incidence& in = m_incidence[size_t(i)];
+    const ElementSet& set = *m_f.elements[size_t(in.set)];
+    set.gradient_hessian(m_x, in.element, in.element + 1, PsdProjection::None, g.data(),
+                         H ? He.data() : nullptr);
+    grad += Eigen::Map<const Vec3>(g.data() + 3 * in.slot);
+    if (!H) continue;
+    // The vertex's diagonal block of the element Hessian (3K x 3K, column-major), made PSD.
+    const int dofs = 3 * set.stencil_size(), o = 3 * in.slot;
+    Mat3 B;
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) B(r, c) = He[size_t((o + c) * dofs + o + r)];
+    project_psd(B.data(), 3, PsdProjection::Clamp);
+    *H += B;
+  }
+}
+
+double VbdStepper::element_energy(Index p) const {
+  double E = 0.0;
+  for (Index i = m_incidence_start[size_t(p)]; i < m_incidence_start[size_t(p) + 1]; ++i) {
+    const Incidence& in = m_incidence[size_t(i)];
+    E += m_f.elements[size_t(in.set)]->energy(m_x, in.element, in.element + 1);
+  }
+  return E;
+}
+
+double VbdStepper::local_change(Index p, const Vec3& s, double& noise) {
   // Every term in difference form: |a + s|^2 - |a|^2 = s . (2a + s), and for a spring
   // l' - l = (|e'|^2 - |e|^2) / (l' + l), so the change is exact to round-off of itself.
   const double m = m_sys.masses()[p], h = m_h, drag = m_f.drag;
@@ -192,6 +252,16 @@ double VbdStepper::local_change(Index p, const Vec3& s) const {
       dg += k.c / (2 * h) * qs * (2.0 * q + qs);
     }
   }
+  noise = 0.0;
+  if (m_incidence_start[size_t(p)] < m_incidence_start[size_t(p) + 1]) {
+    const double before = element_energy(p);
+    m_x.segment<3>(3 * p) = xp + s;
+    const double after = element_energy(p);
+    m_x.segment<3>(3 * p) = xp;  // the same bits as before
+    dg += after - before;
+    // Each energy carries a few roundings of its own size (1e-16 |E|); their difference the sum.
+    noise = 64 * std::numeric_limits<double>::epsilon() * (std::abs(before) + std::abs(after));
+  }
   return dg;
 }
 
@@ -207,7 +277,10 @@ double VbdStepper::update(Index p) {
   if (m_opt.line_search && step.lpNorm<Eigen::Infinity>() > 1e-13 * m_size) {
     const double slope = grad.dot(step);  // < 0: a descent direction
     int tries = 0;
-    while (!(local_change(p, alpha * step) <= 1e-4 * alpha * slope)) {
+    double noise = 0.0;
+    // A decrease that the elements' round-off (noise) can hide says nothing: the step is taken.
+    while (!(local_change(p, alpha * step, noise) <= 1e-4 * alpha * slope) &&
+           !(-alpha * slope <= noise)) {
       if (++tries == 30) {  // no measurable decrease: the vertex is at its minimum
         alpha = 0.0;
         break;
@@ -289,6 +362,7 @@ double VbdStepper::objective(const State& s0, double h, ConstRef x) const {
       const double l = (x.segment<3>(3 * sp->i[k]) - x.segment<3>(3 * sp->j[k])).norm();
       g += 0.5 * sp->coeff[k] * (l - sp->rest_length[k]) * (l - sp->rest_length[k]);
     }
+  for (const ElementSet* set : m_f.elements) g += set->energy(x, 0, set->size());
   return g;
 }
 

@@ -87,6 +87,14 @@ std::string vbd_unsupported(const MassSpringSystem& system);
 /// line search uses the damping quadratic with u frozen at the update's start); it converges to
 /// the same exact step, but g is no longer an objective that must fall.
 ///
+/// Element sets (forces/element_set.hpp: bending, any energy over a small stencil) add their
+/// energies to g: each vertex block sums, over the elements that hold the vertex, the element
+/// gradient's part at the vertex and the Hessian's diagonal block at it, that block made positive
+/// semi-definite (PsdProjection::Clamp) as the springs' is; the line search evaluates the
+/// elements' energy change directly (not in difference form), and takes a step whose predicted
+/// decrease is below that change's round-off unsearched. The colouring keeps any two vertices
+/// of one element apart.
+///
 /// Pinned particles move with their velocity (x1 = x0 + h v0, v1 = v0). Colliders and strain
 /// limiting are applied after the step by Simulation, as for the other whole-step methods (the
 /// paper's collision energies are not modelled).
@@ -124,8 +132,14 @@ class VbdStepper final : public Stepper {
   void initialise(const State& s0, double h);
   /// grad_p g at m_x (with H the 3x3 block, PSD-fixed, when H != nullptr).
   Vec3 vertex_gradient(Index p, Mat3* H) const;
-  /// g(m_x with x_p moved by s) - g(m_x), dampers frozen: for the line search.
-  double local_change(Index p, const Vec3& s) const;
+  /// g(m_x with x_p moved by s) - g(m_x), dampers frozen: for the line search. Moves x_p in m_x
+  /// and back (bit for bit) to evaluate p's elements: no other vertex of p's colour reads it.
+  /// noise: the round-off of the elements' share (their energies are not in difference form).
+  double local_change(Index p, const Vec3& s, double& noise);
+  /// The gradient (and with H, the PSD diagonal blocks) of p's elements at m_x, added in.
+  void add_element_terms(Index p, Vec3& grad, Mat3* H) const;
+  /// The sum of p's elements' energies at m_x.
+  double element_energy(Index p) const;
   /// One Newton step on vertex p; returns position_error() of the gradient it started from.
   double update(Index p);
   /// One pass over the colours: the largest position_error() met (relative to the size).
@@ -139,6 +153,17 @@ class VbdStepper final : public Stepper {
   SpringPotentialForces m_f;
   std::vector<Index> m_link_start;  // per particle: its links in m_links
   std::vector<Link> m_links;
+  struct Incidence {  // an element seen from one of its vertices
+    int set;          // index in m_f.elements
+    int slot;         // the vertex's place in the element's stencil
+    size_t element;
+  };
+  std::vector<Index> m_incidence_start;  // per particle: its elements in m_incidence
+  std::vector<Incidence> m_incidence;
+  /// Calls visit(q) for every particle q that shares a spring, damper or element with p (q may
+  /// repeat, and is p itself for the elements).
+  template <typename Visit>
+  void for_each_neighbour(Index p, Visit&& visit) const;
   std::vector<int> m_colour_of;
   std::vector<Index> m_colour_start;  // colour c holds m_order[m_colour_start[c] .. [c + 1])
   std::vector<Index> m_order;         // free vertices by colour, ascending ids within a colour

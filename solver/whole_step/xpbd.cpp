@@ -1,6 +1,7 @@
 #include "hooke/whole_step/xpbd.hpp"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <sstream>
@@ -21,7 +22,8 @@ OptionError XpbdOptions::validate() const {
 std::string xpbd_unsupported(const MassSpringSystem& system) {
   return SpringPotentialForces::unsupported(
       system, "xpbd",
-      "springs become compliant distance constraints; spring dampers have no such form here");
+      "springs become compliant distance constraints; spring dampers have no such form here", false,
+      ElementNeed::Constraint);
 }
 
 XpbdStepper::XpbdStepper(const MassSpringSystem& system, XpbdOptions options)
@@ -36,6 +38,33 @@ XpbdStepper::XpbdStepper(const MassSpringSystem& system, XpbdOptions options)
     m_w[p] = system.pinned()[size_t(p)] ? 0.0 : 1.0 / system.masses()[p];
   m_p.setZero(3 * n);
   for (const SpringSet* s : m_f.springs) m_lambda.emplace_back(s->size(), 0.0);
+  for (const ElementSet* e : m_f.elements) m_element_lambda.emplace_back(e->size(), 0.0);
+}
+
+double XpbdStepper::element_sweep(double hs) {
+  double residual = 0.0;
+  std::array<double, kMaxElementDofs> dC;
+  for (size_t si = 0; si < m_f.elements.size(); ++si) {
+    const ElementSet& set = *m_f.elements[si];
+    const int K = set.stencil_size();
+    std::vector<double>& lambda = m_element_lambda[si];
+    for (size_t e = 0; e < set.size(); ++e) {
+      double C = 0.0, k = 0.0;
+      set.constraint(m_p, e, C, dC.data(), k);
+      if (!(k > 0.0)) continue;
+      const int* s = set.stencil(e);
+      double wsum = 0.0;
+      for (int a = 0; a < K; ++a)
+        wsum += m_w[s[a]] * Eigen::Map<const Vec3>(dC.data() + 3 * a).squaredNorm();
+      const double alpha = 1.0 / (k * hs * hs);
+      const double dl = (-C - alpha * lambda[e]) / (wsum + alpha);
+      for (int a = 0; a < K; ++a)
+        m_p.segment<3>(3 * s[a]) += (m_w[s[a]] * dl) * Eigen::Map<const Vec3>(dC.data() + 3 * a);
+      residual = std::max(residual, std::abs(C + alpha * lambda[e]));
+      lambda[e] += dl;
+    }
+  }
+  return residual;
 }
 
 StepSummary XpbdStepper::step(const State& s0, double h, State& s1) {
@@ -59,6 +88,7 @@ StepSummary XpbdStepper::step(const State& s0, double h, State& s1) {
       m_p.segment<3>(3 * p) = x.segment<3>(3 * p) + hs * v.segment<3>(3 * p);
     }
     for (auto& l : m_lambda) std::fill(l.begin(), l.end(), 0.0);
+    for (auto& l : m_element_lambda) std::fill(l.begin(), l.end(), 0.0);
     double residual = 0.0;
     for (int sweep = 0; sweep < m_opt.iterations; ++sweep) {
       residual = 0.0;
@@ -83,6 +113,7 @@ StepSummary XpbdStepper::step(const State& s0, double h, State& s1) {
           residual = std::max(residual, std::abs(C + alpha * (lambda[k] - dl)));
         }
       }
+      if (!m_f.elements.empty()) residual = std::max(residual, element_sweep(hs));
     }
     out.residual = residual;
     for (Index p = 0; p < n; ++p) {

@@ -33,6 +33,10 @@ std::string xpbd_unsupported(const MassSpringSystem& system);
 ///     p_i += w_i dlambda n,  p_j -= w_j dlambda n,  lambda += dlambda   (n = (p_i - p_j)/|p_i -
 ///     p_j|);
 ///   v = (p - x) / hs;  x = p.
+/// Element sets of the constraint form k/2 C^2 (ElementSet::has_constraint) join the sweep after
+/// the springs, each element a constraint C with its gradient dC over its K particles (the general
+/// form of eq. 18): dlambda = (-C - alpha~ lambda) / (sum_a w_a |dC_a|^2 + alpha~), p_a += w_a dC_a
+/// dlambda.
 /// Pinned particles have w = 0 and move with their velocity. Springs with k = 0 are skipped.
 /// The sweep is serial (Gauss-Seidel order is part of the method), hence deterministic.
 class XpbdStepper final : public Stepper {
@@ -56,6 +60,10 @@ class XpbdStepper final : public Stepper {
   Vec m_w;                                    // inverse mass per particle (0 if pinned)
   Vec m_p;                                    // 3n predicted positions
   std::vector<std::vector<double>> m_lambda;  // per set and spring
+  std::vector<std::vector<double>> m_element_lambda;  // per element set and element
+  /// One Gauss-Seidel pass over the elements of m_f.elements at positions m_p (compliance scale
+  /// 1 / hs^2); returns the largest |C + alpha~ lambda| met before the updates.
+  double element_sweep(double hs);
   long long m_steps = 0;
   double m_seconds = 0.0;
 };

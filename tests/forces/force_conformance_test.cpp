@@ -1,7 +1,8 @@
 // Conformance claims of every concrete hooke::Force in solver/forces/ (HookeSpring, SpringDamper,
-// Gravity, AirDrag, the last also with wind): one parameterised suite over force factories, each
-// claim at the same random configurations of four kinds (random; every spring compressed;
-// near-collinear chains; one spring of length 1e-3 of its rest length):
+// Gravity, AirDrag, the last also with wind, and ElementForce over the tests' angle elements): one
+// parameterised suite over force factories, each claim at the same random configurations of four
+// kinds (random; every spring compressed; near-collinear chains; one spring of length 1e-3 of its
+// rest length):
 //   - a conservative force (nonzero potential_energy) is minus the central-difference gradient of
 //     its energy; a dissipative force reports zero energy (counted, not compared);
 //   - K = df/dx and D = df/dv, assembled through declare_blocks / bind / add_jacobians with the
@@ -26,10 +27,12 @@
 #include <vector>
 
 #include "hooke/forces/air_drag.hpp"
+#include "hooke/forces/element_force.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/forces/spring_damper.hpp"
 #include "hooke/sparse/block_pattern.hpp"
+#include "support/angle_elements.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"
 #include "support/systems.hpp"
@@ -38,7 +41,7 @@ namespace {
 
 using hooke::Vec;
 using hooke::Vec3;
-using hooke::test::central_gradient;
+using hooke::test::central_gradient4;
 using hooke::test::central_jacobian;
 using hooke::test::near_entrywise;
 using hooke::test::random_unit;
@@ -51,12 +54,15 @@ constexpr double kFloorRel = 1e-8;  // absolute floor, as a fraction of the matr
 // hooke_spring_test.cpp (truncation ~(h/l)^2 / 6 and round-off eps |f| / h both far below
 // kRelTol, also at l = 1e-3 L). Velocity steps are kStepRel: every force is affine in v.
 constexpr double kStepRel = 1e-5;
-// The energy check steps 3x further: its central difference loses eps |E| / h to round-off, with E
-// the whole energy (hundreds of J here), not just the springs that moved. At h = 1e-5 l that came
-// to 1.6e-5 N against a floor of 1e-5 N at a near-zero-length sample of another seed; 3x balances
-// it against the truncation (h/l)^2 of the short spring (measured over seven seeds: at most 0.3 of
-// the tolerance, against up to 1.6 at 1x).
-constexpr double kEnergyStepFactor = 3.0;
+// The energy check takes the fourth-order difference (central_gradient4) 30x further: its
+// central difference loses eps |E| / h to round-off, with E the whole energy (hundreds of J here),
+// not just the elements that moved, and that loss decides where the gradient entries are small: a
+// near-collinear angle's gradient is the size of its angle (1e-5 here), and at 3x with second
+// order it missed by 2e-5 of itself from truncation, at 3x with fourth order by 8e-6 from
+// round-off. The fourth-order truncation (h/l)^4 stays below 1e-13 at 30x, also for the spring of
+// length 1e-3 of its rest length (at second order and 1x that spring's round-off had come to
+// 1.6e-5 N against a floor of 1e-5 N).
+constexpr double kEnergyStepFactor = 30.0;
 // Identities that hold exactly in real arithmetic (null spaces, the matrix-free product against
 // the matrices, adding into K and D): round-off relative to the largest magnitude involved.
 constexpr double kRoundoff = 1e-12;
@@ -218,6 +224,16 @@ std::unique_ptr<hooke::Force> make_air_drag_with_wind(const Configuration& c) {
   return std::make_unique<hooke::AirDrag>(c.n, c.drag, c.wind);
 }
 
+// An ElementForce over the tests' own element set (support/angle_elements.hpp): angles at every
+// particle q between q - 1 and q + 1, the rest cosine 0.8 c - 0.1 of the drawn one (so no element
+// rests), stiffness from the configuration's springs.
+std::unique_ptr<hooke::Force> make_angle_elements(const Configuration& c) {
+  auto set = std::make_unique<hooke::test::AngleCosineElements>();
+  for (int q = 1; q + 1 < c.n; ++q) set->add(q - 1, q, q + 1, c.pairs[size_t(q)].k, 0.0);
+  for (size_t e = 0; e < set->size(); ++e) set->set_rest(e, 0.8 * set->cosine(c.x, e) - 0.1);
+  return std::make_unique<hooke::ElementForce>(std::move(set));
+}
+
 // Gravity pulls every particle towards a fixed direction, not towards the others: the net force is
 // sum_i m_i g, not zero. It depends on neither x nor v, so K = D = 0 (translations are then in
 // K's null space only trivially).
@@ -253,6 +269,7 @@ const std::vector<ForceCase>& cases() {
       {"AirDrag", make_air_drag, false, false, true, false, true, true, drag_claims},
       {"AirDragWithWind", make_air_drag_with_wind, false, false, true, false, true, true,
        drag_claims},
+      {"AngleElements", make_angle_elements, true, true, false, true, false, true, nullptr},
   };
   return list;
 }
@@ -312,8 +329,8 @@ TEST_P(ForceConformance, ConservativeForceIsMinusEnergyGradient) {
         continue;
       }
       ASSERT_NE(E, 0.0);
-      const Vec grad = central_gradient([&](const Vec& y) { return s.force->potential_energy(y); },
-                                        s.c.x, Vec(kEnergyStepFactor * s.c.hx));
+      const Vec grad = central_gradient4([&](const Vec& y) { return s.force->potential_energy(y); },
+                                         s.c.x, Vec(kEnergyStepFactor * s.c.hx));
       const Vec f = force_at(*s.force, s.c.x, s.c.v);
       ASSERT_TRUE(near_entrywise(f, -grad, kRelTol, kFloorRel));
       EXPECT_EQ(f, force_at(*s.force, s.c.x, Vec::Zero(s.c.v.size())))
@@ -515,7 +532,8 @@ INSTANTIATE_TEST_SUITE_P(, ForceConformance, ::testing::ValuesIn(cases()),
 
 TEST(ForceConformanceCoverage, CasesCoverEveryForceAndTheExpectedProductProviders) {
   // Every concrete Force in solver/forces/, by name(): a new force must join cases().
-  const std::set<std::string> every_force = {"air-drag", "gravity", "hooke-spring",
+  // ElementForce is named after its element set: the tests' angle-cosine set stands for it.
+  const std::set<std::string> every_force = {"air-drag", "angle-cosine", "gravity", "hooke-spring",
                                              "spring-damper"};
   // All of them give the matrix-free product, so ImplicitOperator (which needs every force of a
   // system to) works on any system built from them.

@@ -51,6 +51,27 @@ inline Vec central_gradient(const std::function<double(const Vec&)>& E, const Ve
   return central_jacobian([&](const Vec& z) { return Vec::Constant(1, E(z)); }, y, h).transpose();
 }
 
+/// The fourth-order central difference (Richardson's extrapolation of two central differences,
+/// steps h[c] and 2 h[c]) of the scalar function E at y: truncation O(h^4) where the plain one has
+/// O(h^2), for gradients whose entries are small against the function's curvature (an angle energy
+/// near straight: its gradient is O(angle), its third derivative is not).
+inline Vec central_gradient4(const std::function<double(const Vec&)>& E, const Vec& y,
+                             const Vec& h) {
+  Vec grad(y.size()), z = y;
+  for (Eigen::Index c = 0; c < y.size(); ++c) {
+    const double hc = exact_step(y[c], h[c]), h2 = exact_step(y[c], 2.0 * hc);
+    auto at = [&](double d) {
+      z[c] = y[c] + d;
+      const double e = E(z);
+      z[c] = y[c];
+      return e;
+    };
+    const double d1 = (at(hc) - at(-hc)) / (2.0 * hc), d2 = (at(h2) - at(-h2)) / (2.0 * h2);
+    grad[c] = (4.0 * d1 - d2) / 3.0;
+  }
+  return grad;
+}
+
 /// Central-difference gradient of E at y with the same step h for every coordinate.
 inline Vec central_gradient(const std::function<double(const Vec&)>& E, const Vec& y, double h) {
   return central_gradient(E, y, Vec::Constant(y.size(), h));

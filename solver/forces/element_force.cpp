@@ -1,0 +1,107 @@
+#include "hooke/forces/element_force.hpp"
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+
+namespace hooke {
+
+ElementForce::ElementForce(std::unique_ptr<ElementSet> set) : m_set(std::move(set)) {
+  HOOKE_ASSERT(m_set, "ElementForce needs an element set");
+  m_k = m_set->stencil_size();
+  HOOKE_ASSERT(m_k >= 1 && m_k <= kMaxStencil,
+               m_set->name() << ": stencil size " << m_k << " outside 1.." << kMaxStencil);
+}
+
+void ElementForce::add_forces(ConstRef x, ConstRef /*v*/, VecRef f) const {
+  const size_t n = m_set->size(), dofs = size_t(3 * m_k);
+  std::array<double, kBatch * kMaxElementDofs> g;
+  for (size_t b = 0; b < n; b += kBatch) {
+    const size_t e_end = std::min(n, b + kBatch);
+    m_set->gradient_hessian(x, b, e_end, PsdProjection::None, g.data(), nullptr);
+    for (size_t e = b; e < e_end; ++e) {
+      const int* s = m_set->stencil(e);
+      const double* ge = g.data() + dofs * (e - b);
+      for (int a = 0; a < m_k; ++a)
+        for (int c = 0; c < 3; ++c) f[3 * s[a] + c] -= ge[3 * a + c];
+    }
+  }
+}
+
+void ElementForce::add_discrete_gradient(ConstRef x0, ConstRef x1, ConstRef xm, ConstRef /*vm*/,
+                                         VecRef f) const {
+  const size_t n = m_set->size();
+  std::array<double, kMaxElementDofs> g, d;
+  for (size_t e = 0; e < n; ++e) {
+    const int* s = m_set->stencil(e);
+    m_set->gradient_hessian(xm, e, e + 1, PsdProjection::None, g.data(), nullptr);
+    double dd = 0.0, gd = 0.0;
+    for (int a = 0; a < m_k; ++a)
+      for (int c = 0; c < 3; ++c) {
+        const int i = 3 * a + c;
+        d[size_t(i)] = x1[3 * s[a] + c] - x0[3 * s[a] + c];
+        dd += d[size_t(i)] * d[size_t(i)];
+        gd += g[size_t(i)] * d[size_t(i)];
+      }
+    double w = 0.0;  // the correction's weight along d
+    if (dd > 0.0) w = (m_set->energy(x1, e, e + 1) - m_set->energy(x0, e, e + 1) - gd) / dd;
+    for (int a = 0; a < m_k; ++a)
+      for (int c = 0; c < 3; ++c) {
+        const int i = 3 * a + c;
+        f[3 * s[a] + c] -= g[size_t(i)] + w * d[size_t(i)];
+      }
+  }
+}
+
+double ElementForce::potential_energy(ConstRef x) const {
+  return m_set->energy(x, 0, m_set->size());
+}
+
+void ElementForce::declare_blocks(BlockPattern& pattern) const {
+  for (size_t e = 0; e < m_set->size(); ++e) {
+    const int* s = m_set->stencil(e);
+    for (int a = 0; a < m_k; ++a)
+      for (int b = a + 1; b < m_k; ++b) pattern.add_pair(s[a], s[b]);
+  }
+}
+
+void ElementForce::bind(const BlockPattern& pattern) {
+  const size_t n = m_set->size(), kk = size_t(m_k * m_k);
+  m_slots.resize(n * kk);
+  for (size_t e = 0; e < n; ++e) {
+    const int* s = m_set->stencil(e);
+    for (int a = 0; a < m_k; ++a)
+      for (int b = 0; b < m_k; ++b)
+        m_slots[e * kk + size_t(a * m_k + b)] = pattern.slot(s[a], s[b]);
+  }
+}
+
+void ElementForce::add_jacobians(ConstRef x, ConstRef /*v*/, const JacobianOptions& options,
+                                 SparseMatrix& K, SparseMatrix& /*D*/) const {
+  HOOKE_ASSERT(m_slots.size() == m_set->size() * size_t(m_k * m_k),
+               m_set->name() << ": add_jacobians before bind");
+  const size_t n = m_set->size(), dofs = size_t(3 * m_k), kk = size_t(m_k * m_k);
+  const PsdProjection projection =
+      options.clamp_compressed ? PsdProjection::Clamp : PsdProjection::None;
+  std::array<double, kBatch * kMaxElementDofs> g;
+  std::array<double, kBatch * kMaxElementDofs * kMaxElementDofs> H;
+  double* values = K.valuePtr();
+  for (size_t b = 0; b < n; b += kBatch) {
+    const size_t e_end = std::min(n, b + kBatch);
+    m_set->gradient_hessian(x, b, e_end, projection, g.data(), H.data());
+    for (size_t e = b; e < e_end; ++e) {
+      const double* He = H.data() + dofs * dofs * (e - b);
+      for (int a = 0; a < m_k; ++a)
+        for (int c = 0; c < m_k; ++c) {
+          const BlockSlot& slot = m_slots[e * kk + size_t(a * m_k + c)];
+          double* p = values + slot.offset;
+          // Block (a, c): rows 3a.., columns 3c.. of the column-major 3K x 3K Hessian.
+          for (int cc = 0; cc < 3; ++cc)
+            for (int r = 0; r < 3; ++r)
+              p[cc * slot.stride + r] -= He[size_t(3 * c + cc) * dofs + size_t(3 * a + r)];
+        }
+    }
+  }
+}
+
+}  // namespace hooke

@@ -1,0 +1,25 @@
+#include "hooke/forces/element_set.hpp"
+
+#include <Eigen/Eigenvalues>
+#include <algorithm>
+#include <cmath>
+
+namespace hooke {
+
+void project_psd(double* H, int n, PsdProjection projection) {
+  if (projection == PsdProjection::None) return;
+  HOOKE_ASSERT(n >= 1 && n <= kMaxElementDofs, "project_psd of a " << n << " x " << n << " block");
+  using Block =
+      Eigen::Matrix<double, Eigen::Dynamic, Eigen::Dynamic, 0, kMaxElementDofs, kMaxElementDofs>;
+  Eigen::Map<Eigen::MatrixXd> A(H, n, n);
+  const Block S = A;
+  Eigen::SelfAdjointEigenSolver<Block> eig(S);
+  Eigen::Matrix<double, Eigen::Dynamic, 1, 0, kMaxElementDofs, 1> lambda = eig.eigenvalues();
+  if (lambda.minCoeff() >= 0.0) return;
+  for (int i = 0; i < n; ++i)
+    lambda[i] = projection == PsdProjection::Clamp ? std::max(lambda[i], 0.0) : std::abs(lambda[i]);
+  const Block P = eig.eigenvectors() * lambda.asDiagonal() * eig.eigenvectors().transpose();
+  A = 0.5 * (P + P.transpose());  // exactly symmetric, as the callers' blocks are
+}
+
+}  // namespace hooke

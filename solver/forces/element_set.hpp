@@ -1,0 +1,76 @@
+#pragma once
+#include <string>
+
+#include "hooke/core.hpp"
+
+namespace hooke {
+
+/// How a per-element Hessian block is made positive semi-definite before a method uses it
+/// (ipc-toolkit's PSDProjectionMethod): Newton on an indefinite energy (a bent hinge, a barrier)
+/// needs a descent direction; the projection is per element, so the assembled sum is PSD too.
+enum class PsdProjection {
+  None,   ///< the exact Hessian
+  Clamp,  ///< eigenvalues below 0 set to 0 (the nearest PSD matrix in the Frobenius norm)
+  Abs,    ///< eigenvalues replaced by their absolute values (Chen et al. 2024's choice for VBD)
+};
+
+/// The largest stencil an element may have (a hinge or a point-triangle pair: 4 particles).
+inline constexpr int kMaxStencil = 4;
+/// The most coordinates of one element (3 kMaxStencil).
+inline constexpr int kMaxElementDofs = 3 * kMaxStencil;
+
+/// A set of elements, each an energy E_e(x_e) over a stencil of K particles x_e (K the same for
+/// every element of the set, 1 <= K <= kMaxStencil): springs are K = 2, angle and hinge bending
+/// K = 3 and 4, contact pairs K = 4. This is the unit every method reads: the assembled implicit
+/// step (through ElementForce, element_force.hpp), vertex block descent (per-vertex sums over the
+/// incident elements), XPBD (the constraint form) and Ceres (the residual form). The design is
+/// ipc-toolkit's potentials (src/ipc/potentials/potential.hpp): one per-stencil API, and the
+/// cumulative sums built on it by the callers.
+///
+/// Calls are batched over elements [begin, end) so that a set dispatches once per batch, never
+/// once per element, and keeps its fixed-size kernels inside. Every call is const, must not
+/// allocate, and must be safe from several threads on different outputs. The stencils are fixed
+/// once the set is bound to a pattern (contact, whose pairs change every step, extends this in
+/// issue 55).
+///
+/// Must implement: name, stencil_size, size, stencil, energy, gradient_hessian.
+/// May implement: the constraint form (has_constraint / constraint) for XPBD and Ceres; a method
+/// that needs a form the set lacks refuses the scene at load time, naming the methods that can
+/// take it (element_set_unsupported in each method's file).
+class ElementSet {
+ public:
+  virtual ~ElementSet() = default;
+  /// Lowercase hyphenated name for logs and messages ("angle-bending", ...).
+  virtual const char* name() const = 0;
+  /// K, the particles per element.
+  virtual int stencil_size() const = 0;
+  /// Number of elements.
+  virtual size_t size() const = 0;
+  /// The K particle ids of element e (distinct, in the order of its gradient's blocks).
+  virtual const int* stencil(size_t e) const = 0;
+  /// The sum of the energies (J) of elements [begin, end) at positions x (3n).
+  virtual double energy(ConstRef x, size_t begin, size_t end) const = 0;
+  /// For each element e of [begin, end), its gradient dE_e/dx_e (3K values, particle-major) at
+  /// g + 3K (e - begin) and, when H is not null, its Hessian (3K x 3K, column-major, symmetric)
+  /// at H + 9K^2 (e - begin), projected as `projection` asks (the gradient is never projected).
+  virtual void gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection,
+                                double* g, double* H) const = 0;
+
+  /// True if every element's energy is k_e/2 C_e(x)^2 for a scalar constraint C_e and a
+  /// stiffness k_e > 0 (N/m for a length, N m for an angle): XPBD then takes C_e with compliance
+  /// 1/k_e, and Ceres the residual sqrt(k_e) C_e. The default: no such form.
+  virtual bool has_constraint() const { return false; }
+  /// Element e's constraint value C_e, its gradient dC_e/dx_e (3K values at dC) and its stiffness
+  /// k_e. Called only when has_constraint().
+  virtual void constraint(ConstRef /*x*/, size_t /*e*/, double& /*C*/, double* /*dC*/,
+                          double& /*stiffness*/) const {
+    HOOKE_ASSERT(false, name() << " has no constraint form");
+  }
+};
+
+/// Makes a symmetric n x n block (column-major, n <= 3 kMaxStencil) positive semi-definite as
+/// `projection` asks, in place (PsdProjection::None leaves it). Uses a fixed-size eigensolver on
+/// the stack: no allocation.
+void project_psd(double* H, int n, PsdProjection projection);
+
+}  // namespace hooke
