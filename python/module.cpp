@@ -561,10 +561,13 @@ PYBIND11_MODULE(_hooke, m) {
   m.def(
       "load_scene",
       [](const std::string& path, const py::dict& overrides) {
-        return std::make_shared<Scene>(load_scene(path, override_items(overrides)));
+        // A path, or the name of a shipped scene, as `hooke run` takes it.
+        return std::make_shared<Scene>(
+            load_scene(cli::resolve_scene(path), override_items(overrides)));
       },
       py::arg("path"), py::arg("overrides") = py::dict(),
-      "Loads a scene file; overrides maps 'section.key' to a value, as hooke run --set does.");
+      "Loads a scene file, or a shipped scene by name ('hanging_cloth_16', as `hooke scenes` "
+      "lists them); overrides maps 'section.key' to a value, as hooke run --set does.");
 
   py::class_<System>(m, "System")
       .def("forces", &System::forces, py::arg("x"), py::arg("v"),

@@ -27,17 +27,18 @@ class StepError(RuntimeError):
     stays at the last accepted step."""
 
 
-import csv  # noqa: E402
-import os  # noqa: E402
-import tempfile  # noqa: E402
+# The standard modules under private names: the package's namespace is its API (dir(hooke)).
+import csv as _csv  # noqa: E402
+import os as _os  # noqa: E402
+import tempfile as _tempfile  # noqa: E402
 
 # hooke's wait policies for libgomp's and OpenBLAS's idle threads (solver/thread_policy.hpp),
 # which the libraries read when they are loaded: set here, before the compiled module loads them,
 # unless the user chose them (or another module already loaded the library, when this has no
 # effect).
-if "GOMP_SPINCOUNT" not in os.environ and "OMP_WAIT_POLICY" not in os.environ:
-    os.environ["GOMP_SPINCOUNT"] = "10000"
-os.environ.setdefault("OPENBLAS_THREAD_TIMEOUT", "20")
+if "GOMP_SPINCOUNT" not in _os.environ and "OMP_WAIT_POLICY" not in _os.environ:
+    _os.environ["GOMP_SPINCOUNT"] = "10000"
+_os.environ.setdefault("OPENBLAS_THREAD_TIMEOUT", "20")
 
 from . import _hooke  # noqa: E402
 from ._hooke import (Scene, Simulation, System, linear_solvers, load_scene,  # noqa: E402,F401
@@ -58,18 +59,18 @@ def _value(text):
 
 def _table(path):
     with open(path, newline="") as f:
-        return [{k: _value(v) for k, v in row.items()} for row in csv.DictReader(f)]
+        return [{k: _value(v) for k, v in row.items()} for row in _csv.DictReader(f)]
 
 
 def _study(run, out, tables):
     """Runs a study driver into `out` (a temporary folder if None) and returns its CSV tables as
     lists of dicts (numbers as floats); raises StepError if the study reports a failed run."""
-    with tempfile.TemporaryDirectory() as tmp:
+    with _tempfile.TemporaryDirectory() as tmp:
         folder = out if out is not None else tmp
         code = run(folder)
         if code != 0:
             raise StepError(f"the study stopped with exit code {code} (see its messages above)")
-        result = [_table(os.path.join(folder, t)) for t in tables]
+        result = [_table(_os.path.join(folder, t)) for t in tables]
     return result[0] if len(result) == 1 else tuple(result)
 
 

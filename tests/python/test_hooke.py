@@ -120,6 +120,20 @@ def test_every_registered_method_steps():
     assert all(s["description"] for s in solvers)
 
 
+def test_a_shipped_scene_loads_by_name_as_hooke_run_finds_it():
+    by_name = hooke.load_scene("hanging_cloth_16", {"time.duration": 0.01})
+    by_path = hooke.load_scene(CLOTH, {"time.duration": 0.01})
+    assert np.array_equal(hooke.Simulation(by_name).x, hooke.Simulation(by_path).x)
+    with pytest.raises(hooke.InputError):
+        hooke.load_scene("no_such_scene")
+
+
+def test_the_namespace_is_the_api():
+    public = {name for name in dir(hooke) if not name.startswith("_")}
+    assert not {"os", "csv", "tempfile"} & public
+    assert set(hooke.__all__) <= public
+
+
 def test_bad_input_raises_input_error_with_hookes_message():
     with pytest.raises(hooke.InputError) as e:
         hooke.load_scene(CLOTH, {"mesh.nxx": 4})
