@@ -643,8 +643,9 @@ void add_implicit_keys(std::vector<SceneKey>& t) {
           .needs({"integrator.linear_solver=petsc"})
           .build("PETSc")
           .example("'-pc_type gamg'")
-          .meaning("PETSc options of the KSP and PC, over hooke's defaults (CG + GAMG) and under "
-                   "the environment's PETSC_OPTIONS"));
+          .meaning("PETSc options of the KSP and PC, over hooke's defaults (CG preconditioned by "
+                   "one hypre BoomerAMG per coordinate: an additive PCFIELDSPLIT of block size "
+                   "3) and under the environment's PETSC_OPTIONS"));
   add_newton_keys(t);
   add(K("integrator.linear_tolerance", T::Number)
           .in(kImplicit)
