@@ -11,6 +11,7 @@
 #include "hooke/helped_bins.hpp"
 #include "hooke/helper_thread.hpp"
 #include "hooke/linear/cholmod_solver.hpp"
+#include "hooke/whole_step/chebyshev.hpp"
 #include "hooke/whole_step/spring_potential_forces.hpp"
 
 namespace hooke {
@@ -683,11 +684,10 @@ bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
   double g_prev = 0.0, g = 0.0;
   bool converged = !test;
   int it = 0;
-  // Chebyshev state (Wang 2015, eq. 11 with gamma = 1): x_{k+1} = x_{k-1} + omega (xhat - x_{k-1}),
-  // with omega = 1 for the first S - 1 iterations after a (re)start, 2 / (2 - rho^2) at the S-th
-  // and 4 / (4 - rho^2 omega) after it. j counts the iterations since the last (re)start.
-  double omega = 1.0, rho = m_opt.chebyshev_rho, prev_update = 0.0;
-  int j = 0;
+  // Chebyshev (Wang 2015): x_{k+1} = x_{k-1} + omega (xhat - x_{k-1}), the weights of
+  // ChebyshevWeights; rho estimated from the updates when chebyshev_rho = 0.
+  ChebyshevWeights weights(m_opt.chebyshev_rho, m_opt.chebyshev_delay);
+  double prev_update = 0.0;
   for (int k = 0;; ++k) {
     // Local step at the current iterate x_k (its objective and gradient come with it).
     if (k == N && !test) break;
@@ -702,11 +702,10 @@ bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
     }
     if (chebyshev) {
       g = quadratic_terms(m_x) + E;
-      if (k > 0 && omega != 1.0 && g > g_prev) {
+      if (k > 0 && weights.omega() != 1.0 && g > g_prev) {
         // The semi-iteration overshot (rho too large for this stage of a nonlinear
         // iteration): restart it from x_k with plain iterations, as on entry.
-        j = 0;
-        omega = 1.0;
+        weights.restart();
         ++m_chebyshev_restarts;
       }
       g_prev = g;
@@ -729,15 +728,9 @@ bool FastMassSpringStepper::iterate_local_global(StepSummary& out) {
       m_xhat = m_x;
       scatter(m_X, m_xhat);
       const double update = (m_xhat - m_x).norm();
-      const int S = m_opt.chebyshev_delay;
-      ++j;
-      if (j == S) {
-        if (m_opt.chebyshev_rho == 0.0)
-          rho = prev_update > 0.0 ? std::min(update / prev_update, 0.9999) : 0.0;
-        omega = rho > 0.0 ? 2.0 / (2.0 - rho * rho) : 1.0;
-      } else if (j > S) {
-        omega = 4.0 / (4.0 - rho * rho * omega);
-      }
+      if (weights.next_starts_acceleration() && m_opt.chebyshev_rho == 0.0)
+        weights.set_rho(prev_update > 0.0 ? std::min(update / prev_update, 0.9999) : 0.0);
+      const double omega = weights.next();  // rho = 0: 1, plain iterations
       prev_update = update;
       if (omega != 1.0) {
         // x_{k+1} = x_{k-1} + omega (xhat - x_{k-1}); m_xprev holds x_{k-1}.

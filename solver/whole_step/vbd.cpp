@@ -8,6 +8,8 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "hooke/whole_step/chebyshev.hpp"
+
 namespace hooke {
 
 OptionError VbdOptions::validate() const {
@@ -380,11 +382,11 @@ StepSummary VbdStepper::step(const State& s0, double h, State& s1) {
   }
   bool done = converged && test;
   // Chebyshev (Chen et al. 2024, section 3.8): x_n = x_{n-2} + omega_n (xbar_n - x_{n-2}), with
-  // omega_1 = 1, omega_2 = 2 / (2 - rho^2), omega_n = 4 / (4 - rho^2 omega_{n-1}); j counts the
-  // iterations since the last (re)start.
-  const double rho2 = m_opt.chebyshev_rho * m_opt.chebyshev_rho;
-  double omega = 1.0, g_prev = 0.0;
-  int j = 0, it = 0;
+  // omega_1 = 1, omega_2 = 2 / (2 - rho^2), omega_n = 4 / (4 - rho^2 omega_{n-1}): the weights of
+  // ChebyshevWeights with delay 2.
+  ChebyshevWeights weights(m_opt.chebyshev_rho, 2);
+  double g_prev = 0.0;
+  int it = 0;
   if (chebyshev) {
     m_xprev = m_x;
     g_prev = objective(s0, h, m_x);
@@ -397,8 +399,7 @@ StepSummary VbdStepper::step(const State& s0, double h, State& s1) {
     const double gs_estimate = sweep();
     ++it;
     if (chebyshev) {
-      ++j;
-      omega = j == 1 ? 1.0 : j == 2 ? 2.0 / (2.0 - rho2) : 4.0 / (4.0 - rho2 * omega);
+      const double omega = weights.next();
       if (omega != 1.0) {
         m_xbar = m_x;
         for (const Index p : m_order)
@@ -407,8 +408,7 @@ StepSummary VbdStepper::step(const State& s0, double h, State& s1) {
         const double g = objective(s0, h, m_x);
         if (g > g_prev) {  // overshot: keep the plain iterate and restart the semi-iteration
           m_x = m_xbar;
-          j = 0;
-          omega = 1.0;
+          weights.restart();
           ++m_chebyshev_restarts;
           g_prev = objective(s0, h, m_x);
         } else {
