@@ -309,8 +309,7 @@ int run_scaling_processes(const ScalingOptions& options) {
           "hooke scaling --mpi: `" + cmd.str() + "` failed (" +
           (WIFEXITED(status) ? "exit " + std::to_string(WEXITSTATUS(status)) : "signal") +
           "): is Open MPI's mpirun on PATH (scripts/install-deps.sh), and, as root, are "
-          "OMPI_ALLOW_RUN_AS_ROOT=1 and OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 set (README, Across MPI "
-          "processes)?");
+          "OMPI_ALLOW_RUN_AS_ROOT=1 and OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1 set (docs/mpi.md)?");
     std::ifstream in(dir + "/scaling.csv");
     std::string line;
     std::getline(in, line);  // the header

@@ -3,7 +3,7 @@
 // step, no longer gains energy on the shipped falling_stiff_cloth (32 x 32, 1e4 N/m, no damping,
 // h = 5 ms), where its former default, one Newton step of the classical rule, gains 80 J by
 // t = 1.4 s and 1.9e4 J by t = 2 s. Newton does not converge at some of those 5 ms steps, so the
-// run allows step halvings (run.max_step_halvings), as the README tells users to.
+// run allows step halvings (run.max_step_halvings), as docs/methods.md tells users to.
 #include <gtest/gtest.h>
 
 #include <cmath>

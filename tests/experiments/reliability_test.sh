@@ -17,7 +17,7 @@
 #                cloth, so the OpenMP paths run). OMP_NUM_THREADS=1 against 2: identical for pcg;
 #                for cholmod (OpenBLAS threads change the order of floating-point sums) within
 #                1e-12 relative to the largest value (measured: 1e-19 for x, 3e-16 for v after 5
-#                steps); see README "Determinism".
+#                steps); see docs/long-runs.md "Determinism".
 #   faults       Numerical failures: pcg limited to 1 iteration stops with exit 3, naming the step,
 #                time, method, backend and residual, keeping log.csv (run.allow_not_converged =
 #                true accepts such steps and counts them); pcg limited to 20 iterations fails at h

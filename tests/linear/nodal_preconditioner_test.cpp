@@ -145,7 +145,8 @@ TEST(NodalPreconditioner, CutsJacobiPcgIterationsOnStiffClothToTheSameSolution) 
 
 TEST(NodalPreconditioner, FactorHasAboutANinthOfTheEntriesOfAsFactor) {
   // Every scalar entry of N stands for a 3x3 block of A, so with comparable orderings A's factor
-  // has about 9 times N's entries: the memory claim behind pcg-nodal (README, scaling study).
+  // has about 9 times N's entries: the memory claim behind pcg-nodal (docs/methods.md, scaling
+  // study).
   const auto step = make_step(48, 1.0, 1e-2);
   const SparseMatrix& A = step->reduced->matrix();
   const auto pre = factored(A);
