@@ -5,8 +5,9 @@
 # Cases:
 #   explicit   The explicit steppers on 1, 2 and 3 processes give the serial run's final.csv byte
 #              for byte and its log.csv (every column but wall_time), and its frames as .pvtu
-#              files of one .vtu piece per process: symplectic Euler, midpoint
-#              and RK4 on the 16 x 16 hanging cloth, RK4 on the cloth pulled by a scripted corner
+#              files of one .vtu piece per process: every explicit method (forward and
+#              symplectic Euler, midpoint, trapezoid, RK4, dopri5 and bs32 at fixed steps) on the
+#              16 x 16 hanging cloth, RK4 on the cloth pulled by a scripted corner
 #              and on the cloth falling on two spheres (colliders).
 #   failures   Bad input and refused scenes exit 2 with the serial run's message, printed once; a
 #              mesh above the memory budget is refused with half the serial budget on 2 processes
@@ -92,7 +93,7 @@ same_err() {
 case "$CASE" in
 explicit)
   cloth=$SCENES/hanging_cloth_16.toml
-  for m in symplectic-euler midpoint rk4; do
+  for m in forward-euler symplectic-euler midpoint trapezoid rk4 dopri5 bs32; do
     args=(run "$cloth" --set integrator.method=$m --set time.duration=0.05)
     run 0 "$OUT/$m" "${args[@]}" && expect_rc 0 "serial $m" "$OUT/$m"
     for p in 1 2 3; do

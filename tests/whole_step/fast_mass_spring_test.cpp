@@ -459,8 +459,8 @@ TEST(FastMassSpring, ToleranceStopsEarlyOrSaysItDidNot) {
 TEST(FastMassSpring, ToleranceOnTheGradientGivesTheExactStep) {
   // The soft 6x6 cloth (k 400 / 100 / 10 N/m, no dampers) converges slowly under plain
   // local/global: a stop on the change per iteration left it 1.0e-7 m from the exact step at
-  // tolerance 1e-12. The stop on the gradient (whole_step tolerance rule) must hold each step and
-  // a 20-step run within 1e-9 of Newton's, relative to the cloth's size (1 m).
+  // tolerance 1e-12. The stop on the gradient (whole_step tolerance rule) must hold each step
+  // within 2e-12 and a 20-step run within 1e-9 of Newton's, relative to the cloth's size (1 m).
   const Scene scene = hanging_cloth(6, 0.0, 1.0, test::ClothSprings{400.0, 100.0, 10.0, 0.0});
   const double h = 1e-2;
   auto newton = test::newton_backward_euler(*scene.system);
@@ -485,7 +485,10 @@ TEST(FastMassSpring, ToleranceOnTheGradientGivesTheExactStep) {
         "[ fms tol  ] %-9s tolerance 1e-12: worst step %.2e m, after 20 steps %.2e m "
         "(%lld iterations over 20 steps)\n",
         a, worst_step, drift, iterations);
-    EXPECT_LT(worst_step, 1e-9) << a;  // the cloth is 1 m wide: relative and in metres alike
+    // The cloth is 1 m wide: relative and in metres alike. One step from the exact state lands
+    // within about the tolerance of the exact step (docs/methods.md: measured 9.8e-13 .. 1.0e-12
+    // for the three accelerations), the error estimate being nearly tight on the slow modes.
+    EXPECT_LT(worst_step, 2e-12) << a;
     EXPECT_LT(drift, 1e-9) << a;
   }
 }
