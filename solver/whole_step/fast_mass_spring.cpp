@@ -198,6 +198,45 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
     }
   const Index nf = Index(m_free.size());
 
+  plan_global_matrix();
+
+  if (m_opt.global_solver == GlobalSolver::Jacobi) {
+    m_inv_diag.setZero(nf);
+  } else {
+    CholmodOptions chol_options;
+    chol_options.ordering = hooke::CholmodOrdering::Metis;  // nested dissection: the least fill on
+                                                            // cloth grids (measured)
+    chol_options.single_precision_solve = m_opt.factor_precision == FactorPrecision::Single;
+    m_chol = std::make_unique<CholmodSolver>(chol_options);
+  }
+  if (m_chol && nf > 0) {
+    const LinearSummary a = m_chol->analyze(m_A);
+    if (a.status != Status::Converged) throw SetupError("fast-mass-spring: " + a.message);
+    m_chol->set_solution_rows(m_free);  // global_solve_into
+  }
+
+  const Index dofs = 3 * n;
+  for (Vec* v : {&m_y, &m_acc, &m_x, &m_xprev, &m_xhat, &m_spring_grad}) v->setZero(dofs);
+  for (Rows3* M : {&m_const, &m_B, &m_X, &m_G, &m_Gnew, &m_D, &m_Xtrial}) M->setZero(nf, 3);
+  if (m_opt.factor_precision == FactorPrecision::Single) m_R.setZero(nf, 3);
+  if (m_opt.acceleration == Acceleration::Lbfgs) {
+    m_s.assign(size_t(m_opt.lbfgs_history), Rows3::Zero(nf, 3));
+    m_t = m_s;
+    m_rho_lbfgs.assign(size_t(m_opt.lbfgs_history), 0.0);
+    m_alpha.assign(size_t(m_opt.lbfgs_history), 0.0);
+  }
+  m_groups = 1;  // an ungrouped set's energy takes one slot
+  for (const SpringSet* s : m_f.springs) m_groups = std::max(m_groups, s->num_groups());
+  m_group_energy.assign(m_groups * m_f.springs.size(), 0.0);
+  m_uniform = !m_f.springs.empty();
+  for (const SpringSet* s : m_f.springs)
+    m_uniform = m_uniform && s->num_groups() > 0 && s->same_groups(*m_f.springs[0]);
+  m_ranges = m_uniform ? int(m_f.springs[0]->phase_start[1]) : 0;
+  set_up_helped_local();
+}
+
+void FastMassSpringStepper::plan_global_matrix() {
+  const Index nf = Index(m_free.size());
   // Pattern of the free x free global matrix: the diagonal plus both triangles of every spring
   // joining two free particles (set-up only; steps just rewrite values).
   std::vector<Eigen::Triplet<double, int>> t;
@@ -236,60 +275,30 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
       if (rj >= 0 && ri < 0) m_pin_links.push_back({rj, Index(s.i[k]), si, k});
     }
   }
+}
 
-  if (m_opt.global_solver == GlobalSolver::Jacobi) {
-    m_inv_diag.setZero(nf);
-  } else {
-    CholmodOptions chol_options;
-    chol_options.ordering = hooke::CholmodOrdering::Metis;  // nested dissection: the least fill on
-                                                            // cloth grids (measured)
-    chol_options.single_precision_solve = m_opt.factor_precision == FactorPrecision::Single;
-    m_chol = std::make_unique<CholmodSolver>(chol_options);
-  }
-  if (m_chol && nf > 0) {
-    const LinearSummary a = m_chol->analyze(m_A);
-    if (a.status != Status::Converged) throw SetupError("fast-mass-spring: " + a.message);
-    m_chol->set_solution_rows(m_free);  // global_solve_into
-  }
-
-  const Index dofs = 3 * n;
-  for (Vec* v : {&m_y, &m_acc, &m_x, &m_xprev, &m_xhat, &m_spring_grad}) v->setZero(dofs);
-  for (Rows3* M : {&m_const, &m_B, &m_X, &m_G, &m_Gnew, &m_D, &m_Xtrial}) M->setZero(nf, 3);
-  if (m_opt.factor_precision == FactorPrecision::Single) m_R.setZero(nf, 3);
-  if (m_opt.acceleration == Acceleration::Lbfgs) {
-    m_s.assign(size_t(m_opt.lbfgs_history), Rows3::Zero(nf, 3));
-    m_t = m_s;
-    m_rho_lbfgs.assign(size_t(m_opt.lbfgs_history), 0.0);
-    m_alpha.assign(size_t(m_opt.lbfgs_history), 0.0);
-  }
-  m_groups = 1;  // an ungrouped set's energy takes one slot
-  for (const SpringSet* s : m_f.springs) m_groups = std::max(m_groups, s->num_groups());
-  m_group_energy.assign(m_groups * m_f.springs.size(), 0.0);
-  m_uniform = !m_f.springs.empty();
-  for (const SpringSet* s : m_f.springs)
-    m_uniform = m_uniform && s->num_groups() > 0 && s->same_groups(*m_f.springs[0]);
-  m_ranges = m_uniform ? int(m_f.springs[0]->phase_start[1]) : 0;
-  if (m_uniform && m_ranges >= 2 && std::thread::hardware_concurrency() > 1) {
-    auto h = std::make_unique<HelpedLocal>();
-    h->springs = m_f.springs;
-    h->width = m_f.springs[0]->range_width;
-    h->particles = n;
-    h->ranges = m_ranges;
-    h->acc = m_acc.data();
-    h->grad_out = m_spring_grad.data();
-    h->hx.assign(size_t(3 * h->width), 0.0);
-    h->hacc = h->hx;
-    h->hgrad = h->hx;
-    h->energy.assign(size_t(m_ranges) * m_f.springs.size(), 0.0);
-    std::vector<double> work(size_t(m_ranges), 0.0);
-    for (int r = 0; r < m_ranges; ++r)
-      for (const SpringSet* s : m_f.springs)
-        work[size_t(r)] += double(s->group_start[size_t(r) + 1] - s->group_start[size_t(r)]);
-    for (double& w : work) w = std::max(w, 1.0);
-    h->bins.set_bins(work);
-    m_helped = std::move(h);
-    m_local_helper = std::make_unique<HelperThread>(&HelpedLocal::job, m_helped.get());
-  }
+void FastMassSpringStepper::set_up_helped_local() {
+  if (!(m_uniform && m_ranges >= 2 && std::thread::hardware_concurrency() > 1)) return;
+  const Index n = m_sys.num_particles();
+  auto h = std::make_unique<HelpedLocal>();
+  h->springs = m_f.springs;
+  h->width = m_f.springs[0]->range_width;
+  h->particles = n;
+  h->ranges = m_ranges;
+  h->acc = m_acc.data();
+  h->grad_out = m_spring_grad.data();
+  h->hx.assign(size_t(3 * h->width), 0.0);
+  h->hacc = h->hx;
+  h->hgrad = h->hx;
+  h->energy.assign(size_t(m_ranges) * m_f.springs.size(), 0.0);
+  std::vector<double> work(size_t(m_ranges), 0.0);
+  for (int r = 0; r < m_ranges; ++r)
+    for (const SpringSet* s : m_f.springs)
+      work[size_t(r)] += double(s->group_start[size_t(r) + 1] - s->group_start[size_t(r)]);
+  for (double& w : work) w = std::max(w, 1.0);
+  h->bins.set_bins(work);
+  m_helped = std::move(h);
+  m_local_helper = std::make_unique<HelperThread>(&HelpedLocal::job, m_helped.get());
 }
 
 FastMassSpringStepper::~FastMassSpringStepper() = default;

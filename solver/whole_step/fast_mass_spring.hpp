@@ -179,6 +179,13 @@ class FastMassSpringStepper final : public Stepper {
   void test_local_helper(int flags, bool always);
 
  private:
+  /// Set-up: the pattern of the free x free global matrix m_A (the diagonal and both triangles of
+  /// every spring joining two free particles), each row's diagonal slot, each spring's slots and
+  /// the springs to pinned particles (m_pin_links). Steps only rewrite its values.
+  void plan_global_matrix();
+  /// Set-up: the helper thread of the local step (m_helped, m_local_helper), when every spring
+  /// set is grouped alike into at least two ranges and there is a second CPU.
+  void set_up_helped_local();
   void prepare(double h);
   void begin_step(const State& s0, double h);
   /// b(d(x)) into m_B and the spring energy at x; with `gradient`, also the springs' part of
