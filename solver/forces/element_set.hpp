@@ -1,6 +1,4 @@
 #pragma once
-#include <string>
-
 #include "hooke/core.hpp"
 
 namespace hooke {
@@ -36,7 +34,7 @@ inline constexpr int kMaxElementDofs = 3 * kMaxStencil;
 /// Must implement: name, stencil_size, size, stencil, energy, gradient_hessian.
 /// May implement: the constraint form (has_constraint / constraint) for XPBD and Ceres; a method
 /// that needs a form the set lacks refuses the scene at load time, naming the methods that can
-/// take it (element_set_unsupported in each method's file).
+/// take it (its *_unsupported function, through SpringPotentialForces::unsupported).
 class ElementSet {
  public:
   virtual ~ElementSet() = default;

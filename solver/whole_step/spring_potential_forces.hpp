@@ -24,8 +24,8 @@ struct SpringPotentialForces {
   std::vector<const SpringSet*> springs;  ///< the springs of every HookeSpring force
   std::vector<const SpringSet*> dampers;  ///< the dampers of every SpringDamper force (only vbd
                                           ///< takes them; unsupported() refuses them otherwise)
-  /// The element sets of every force that has one (Force::element_set), in force order; only
-  /// the methods that say so in unsupported() take them.
+  /// The element sets of every force that has one (Force::terms, ForceForm::Elements), in force
+  /// order; only the methods that say so in unsupported() take them.
   std::vector<const ElementSet*> elements;
   Vec3 gravity = Vec3::Zero();  ///< total gravity acceleration (m/s^2)
   double drag = 0.0;            ///< total air-drag coefficient c (kg/s per particle)
