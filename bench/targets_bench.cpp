@@ -16,6 +16,8 @@
 //    factorizations and their seconds, solve and assembly seconds per step, and team_all, the
 //    share of the linear iterations run on all threads (CG's adaptive team). The target is 0.64 s
 //    per step (10x a classic Jacobi-PCG's 6.4 s).
+//  - BackwardEuler256/Bending/model:{0,1,2}: that step with no, dihedral or quadratic bending
+//    (issue 54: the dihedral's step should cost at most 1.5x the step without it).
 // Busy-core mode (issue 18): LocalGlobal411 and BackwardEuler256/pcg-nodal also run as
 // .../threads:T/busy:1 with T = 1 and 2 while a competing process spins on the last core
 // (bench/busy_core.hpp), one-thread and two-thread cases in one invocation: the two-thread run
@@ -29,6 +31,7 @@
 #include <chrono>
 #include <cstdlib>
 #include <string>
+#include <vector>
 
 #include "bench/bench_main.hpp"
 #include "bench/busy_core.hpp"
@@ -157,6 +160,51 @@ void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int
       team_one + team_all > 0 ? double(team_all) / double(team_one + team_all) : 0.0;
 }
 
+/// Issue 54, acceptance 4: the same target's step with cloth bending added across its interior
+/// edges ([bending] model = none | dihedral | quadratic, D = 1e-4 N m: a light fabric), on
+/// pcg-nodal over 20 steps from rest, so that the cost of the hinge elements (their Hessians, the
+/// PSD projection and the denser pattern) reads against the step without them in one run.
+void BM_BackwardEuler256Bending(benchmark::State& state) {
+  static const char* const kModels[] = {"none", "dihedral", "quadratic"};
+  const char* model = kModels[state.range(0)];
+  std::vector<std::string> sets = {"integrator.linear_solver=pcg-nodal"};
+  if (state.range(0) > 0) {
+    sets.push_back(std::string("bending.model=") + model);
+    sets.push_back("bending.stiffness=1e-4");
+  }
+  const hooke::Scene scene = hooke::load_scene(scene_path("target_backward_euler_256.toml"), sets);
+  const double h = scene.time.dt;
+  const int steps = 20;
+  double assembly = 0.0, factor = 0.0, solve = 0.0;
+  long long iterations = 0;
+  for (auto _ : state) {
+    hooke::Simulation sim(
+        *scene.system,
+        hooke::make_stepper(scene.integrator.method, *scene.system, scene.integrator.options),
+        scene.initial);
+    const auto t0 = Clock::now();
+    for (int k = 0; k < steps; ++k) {
+      const hooke::StepSummary s = sim.advance(h);
+      if (s.status != hooke::Status::Converged) {
+        state.SkipWithError(s.message.c_str());
+        return;
+      }
+      iterations += s.iterations;
+    }
+    state.SetIterationTime(seconds_since(t0) / steps);
+    const hooke::StepperStats st = sim.stepper().stats();
+    assembly += st.assembly_seconds / steps;
+    factor += st.factor_seconds / steps;
+    solve += st.solve_seconds / steps;
+  }
+  const double runs = double(std::max<int64_t>(1, state.iterations()));
+  state.counters["assembly_s"] = assembly / runs;
+  state.counters["factor_s"] = factor / runs;
+  state.counters["solve_s"] = solve / runs;
+  state.counters["lin_iters"] = double(iterations) / (runs * steps);
+  state.SetLabel(model);
+}
+
 const int registered = [] {
   for (const char* v : {"OPENBLAS_CORETYPE", "OPENBLAS_NUM_THREADS", "OPENBLAS_THREAD_TIMEOUT",
                         "OMP_NUM_THREADS", "GOMP_SPINCOUNT"}) {
@@ -190,6 +238,12 @@ const int registered = [] {
     if (std::string(solver) == "pcg-nodal") b->Args({1, 1})->Args({2, 1});
     b->ArgNames({"threads", "busy"})->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
   }
+  benchmark::RegisterBenchmark("Target/BackwardEuler256/Bending", BM_BackwardEuler256Bending)
+      ->DenseRange(0, 2)
+      ->ArgNames({"model"})
+      ->UseManualTime()
+      ->Iterations(1)
+      ->Unit(benchmark::kMillisecond);
   return 0;
 }();
 

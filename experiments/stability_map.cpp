@@ -17,6 +17,8 @@
 // of the scene linearised at its initial state (experiments/natural_frequency.hpp, eigenvalues of
 // M^-1/2 K M^-1/2 by Lanczos); both are computed, not assumed.
 // Run:    hooke stability [--full] [--cases two_particle,...] [--methods rk4,...] [--out DIR]
+// Bending: the strand cantilever (strand_cantilever) with rod bending at 41 and 81 particles
+// (and 161 with --full) over EI, so the explicit limit's slope in the spacing can be read (2).
 // Fluids: the 2D dam break (dam_break_2d) by WCSPH without CFL substeps over its speed of sound
 // c0 (the map's k for that case), against Monaghan's CFL step 0.4 dx / (c0 + sqrt(2 g H)); a run
 // fails when the stepper stops it (a particle moving more than the kernel support in a step, or a
@@ -95,6 +97,24 @@ std::vector<StabilityCase> stability_cases(bool full, const std::string& scenes_
       full ? std::vector<double>{10, 20, 40, 80, 160, 320, 640} : std::vector<double>{10, 40, 160};
   dam.parameter = "c0 (m/s)";
   cases.push_back(dam);
+  // Bending (issue 54): the straight strand cantilever with rod bending at two spacings, over its
+  // rigidity EI. Soft stretch springs (1e3 N/m) leave the largest frequency to the bending, whose
+  // frequencies grow as 1/s^2 (the stretch springs' as 1/s^(1/2) here): the explicit limit
+  // shrinks with the spacing squared.
+  for (int n : full ? std::vector<int>{41, 81, 161} : std::vector<int>{41, 81}) {
+    StabilityCase b;
+    b.name = "bending_strand_" + std::to_string(n);
+    b.scene = scenes_dir + "/strand_cantilever.toml";
+    b.sets = {"mesh.n=" + std::to_string(n), "springs.stiffness=1e3"};
+    b.stiffness = {{"bending.stiffness", 1.0}};
+    b.duration = 0.2;
+    b.description = "a 0.2 m, 2 g strand of " + std::to_string(n) +
+                    " particles clamped by two, rod bending EI, stretch springs 1e3 N/m, "
+                    "gravity; k is EI (N m^2)";
+    b.k_values = {1e-5, 1e-4, 1e-3};
+    b.parameter = "EI (N m^2)";
+    cases.push_back(b);
+  }
   return cases;
 }
 

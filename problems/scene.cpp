@@ -114,6 +114,7 @@ std::string apply_override(toml::table& root, const std::string& item) {
 MeshBuild build_mesh(TableReader& mesh, TableReader& springs, const std::string& base_dir) {
   MeshBuild b;
   const std::string type = mesh.choice("type", std::nullopt, mesh_types());
+  b.type = type;
   mesh.set_variant(type);
   springs.set_variant(type);
   for (const auto& t : mesh_table())
@@ -288,6 +289,11 @@ void add_forces_and_constraints(TableReader& root, const MeshBuild& b, Scene& sc
   }
   if (springs->size()) sys.add_force(std::move(springs));
   if (dampers->size()) sys.add_force(std::move(dampers));
+
+  if (auto bending = root.table("bending")) {
+    add_bending(*bending, b, sys);
+    bending->finish();
+  }
 
   if (auto f = root.table("forces")) {
     if (f->has("gravity")) sys.add_force(std::make_unique<Gravity>(b.masses, f->vec3("gravity")));
@@ -490,14 +496,14 @@ Scene load_parsed(toml::table tbl, const std::string& file,
   TableReader root(tbl, scene.resolved, file, "", context);
 
   if (is_ode) {
-    for (const char* sec :
-         {"mesh", "springs", "forces", "collision", "strain_limit", "pin_motion", "fluid"})
+    for (const char* sec : {"mesh", "springs", "bending", "forces", "collision", "strain_limit",
+                            "pin_motion", "fluid"})
       root.reject_if_present(sec, "an [ode] scene has no particles; remove this section");
     auto ode = root.table("ode");
     read_ode(*ode, scene);
     ode->finish();
   } else if (is_fluid) {
-    for (const char* sec : {"mesh", "springs", "strain_limit", "pin_motion"})
+    for (const char* sec : {"mesh", "springs", "bending", "strain_limit", "pin_motion"})
       root.reject_if_present(sec,
                              "a [fluid] scene has fluid particles only (no mesh or springs); "
                              "remove this section");
@@ -531,9 +537,9 @@ Scene load_parsed(toml::table tbl, const std::string& file,
       if (b.pinned[size_t(i)]) scene.initial.v.segment<3>(3 * i).setZero();
     scene.initial.t = 0.0;
     scene.exact = b.exact;
-    scene.triangles = std::move(b.triangles);
     std::vector<SceneCollider> colliders;
     add_forces_and_constraints(root, b, scene, colliders);
+    scene.triangles = std::move(b.triangles);
     read_pin_motion(root, scene);
     scene.system->finalize();
     check_particles_outside(colliders, scene);
@@ -543,9 +549,11 @@ Scene load_parsed(toml::table tbl, const std::string& file,
     std::string why = method_unsupported(scene.integrator.method, *scene.system);
     if (!why.empty()) {
       const auto& forces = scene.system->forces();
-      const bool dampers = std::any_of(forces.begin(), forces.end(), [](const auto& f) {
-        return std::string(f->name()) == "spring-damper";
-      });
+      // Only when the dampers are what the method refuses (the refusal names the others first).
+      const bool dampers = why.find("spring-damper") != std::string::npos &&
+                           std::any_of(forces.begin(), forces.end(), [](const auto& f) {
+                             return std::string(f->name()) == "spring-damper";
+                           });
       // Say how to run the scene anyway: the one switch (per damping key) that drops the dampers.
       if (dampers) {
         const std::string sets = damper_overrides(tbl);

@@ -481,6 +481,50 @@ void add_scene_part_keys(std::vector<SceneKey>& t) {
           .meaning("Coulomb friction coefficient of the contact"));
 }
 
+/// Adds [bending]: angle-based bending as element sets (solver/forces/bending.hpp); its keys'
+/// variants are the model.
+void add_bending_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
+  add(K("bending.model", T::String)
+          .choices({"rod", "dihedral", "quadratic"})
+          .example("'dihedral'")
+          .meaning("rod: discrete elastic rods' curvature at every interior particle of a chain "
+                   "or hair; dihedral: the hinge angle of discrete shells across every interior "
+                   "edge of a grid or obj cloth; quadratic: the isometric quadratic model there "
+                   "(constant Hessian, flat rest); beside the spring meshes' own bending springs"));
+  add(K("bending.stiffness", T::Number)
+          .in({"rod"})
+          .unit("N m^2")
+          .positive()
+          .example("1e-3")
+          .meaning("the strand's bending rigidity EI: a bend of curvature kappa stores 1/2 EI "
+                   "kappa^2 per unit length"));
+  add(K("bending.stiffness", T::Number)
+          .in({"dihedral", "quadratic"})
+          .unit("N m")
+          .positive()
+          .example("1e-3")
+          .meaning("the sheet's bending rigidity D: a cylindrical bend of curvature kappa about "
+                   "a grid axis stores 1/2 D kappa^2 per unit area"));
+  add(K("bending.rest", T::String)
+          .in({"rod"})
+          .def("'initial'")
+          .choices({"initial", "straight"})
+          .meaning("the rest curvature: the initial shape's (a curly hair keeps its curl) or "
+                   "none"));
+  add(K("bending.rest", T::String)
+          .in({"dihedral"})
+          .def("'initial'")
+          .choices({"initial", "flat"})
+          .meaning("the rest angles: the initial shape's or flat"));
+  add(K("bending.rest", T::String)
+          .in({"quadratic"})
+          .def("'initial'")
+          .choices({"initial", "flat"})
+          .meaning("flat either way (the model's rest is flat): 'initial' refuses a mesh whose "
+                   "initial shape is bent at some edge, 'flat' takes its flat development"));
+}
+
 /// Adds [[pin_motion]], [strain_limit] and [ode].
 void add_pin_strain_ode_keys(std::vector<SceneKey>& t) {
   auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
@@ -1110,9 +1154,9 @@ std::vector<SceneKey> make_table() {
   std::vector<SceneKey> t;
   for (auto section :
        {add_mesh_lattice_keys, add_mesh_line_keys, add_mesh_other_keys, add_springs_keys,
-        add_scene_part_keys, add_pin_strain_ode_keys, add_implicit_keys, add_sundials_keys,
-        add_ceres_keys, add_local_global_keys, add_vbd_keys, add_xpbd_keys, add_sph_method_keys,
-        add_fluid_keys, add_run_keys})
+        add_scene_part_keys, add_bending_keys, add_pin_strain_ode_keys, add_implicit_keys,
+        add_sundials_keys, add_ceres_keys, add_local_global_keys, add_vbd_keys, add_xpbd_keys,
+        add_sph_method_keys, add_fluid_keys, add_run_keys})
     section(t);
   return t;
 }
@@ -1135,6 +1179,7 @@ std::string applies_text(const SceneKey& k) {
   if (k.when.empty()) return "";
   const std::string selector = k.name.rfind("integrator.", 0) == 0 ? "integrator.method"
                                : k.name.rfind("ode.", 0) == 0      ? "ode.problem"
+                               : k.name.rfind("bending.", 0) == 0  ? "bending.model"
                                                                    : "mesh.type";
   return selector + " = " + join(k.when, ", ");
 }

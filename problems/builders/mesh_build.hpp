@@ -1,5 +1,6 @@
 #pragma once
 #include <array>
+#include <string>
 #include <vector>
 
 #include "hooke/core.hpp"
@@ -19,6 +20,7 @@ struct SpringSpec {
 
 /// What a mesh builder produces: particles, pins, springs and optionally an exact solution.
 struct MeshBuild {
+  std::string type;          ///< the [mesh] type that built it ("grid", "chain", ...)
   Vec x, v;                  ///< 3n initial positions and velocities
   Vec masses;                ///< n masses
   std::vector<char> pinned;  ///< n flags
@@ -58,6 +60,11 @@ void build_particles(TableReader& mesh, TableReader& springs, MeshBuild& out);
 /// the key: boxes thinner than the spacing, water outside the tank or inside an obstacle or
 /// another block, and a fluid above the memory budget (before sampling it).
 void build_fluid(TableReader& fluid, const Vec3& gravity, Scene& scene);
+/// [bending] (bending.hpp's element sets) over the mesh b: rod on chain and hair strands,
+/// dihedral and quadratic across the interior edges of grid and obj cloth; adds the force to sys.
+/// Refuses, naming the key: a model the mesh type cannot carry, a mesh with no hinge, degenerate
+/// rest triangles, and a quadratic model on a mesh bent at rest.
+void add_bending(TableReader& bending, const MeshBuild& b, MassSpringSystem& sys);
 /// base_dir: directory of the scene file, against which a relative OBJ path is resolved.
 void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_dir,
                MeshBuild& out);

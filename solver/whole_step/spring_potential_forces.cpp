@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <vector>
 
 namespace hooke {
 
@@ -13,7 +14,15 @@ std::string element_set_takers(const ElementSet& set) {
 std::string SpringPotentialForces::unsupported(const MassSpringSystem& system,
                                                const std::string& method, const std::string& why,
                                                bool takes_dampers, ElementNeed elements) {
-  for (const auto& f : system.forces()) {
+  // Every other obstacle is named before the dampers, which a scene can drop with --set (the
+  // loader then says how): the damper message must mean that dropping them is enough.
+  const auto& forces = system.forces();
+  std::vector<const Force*> order;
+  for (const auto& f : forces)
+    if (f->terms().form != ForceForm::Dampers) order.push_back(f.get());
+  for (const auto& f : forces)
+    if (f->terms().form == ForceForm::Dampers) order.push_back(f.get());
+  for (const Force* f : order) {
     const ForceTerms t = f->terms();
     if (t.form == ForceForm::Springs || t.form == ForceForm::Gravity || t.form == ForceForm::Drag ||
         (takes_dampers && t.form == ForceForm::Dampers))

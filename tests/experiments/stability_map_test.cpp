@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "experiments/natural_frequency.hpp"
 #include "hooke/integrators/stability.hpp"
@@ -39,6 +40,42 @@ Measured measure(const std::string& method, double k) {
       << "two 1 kg particles: omega = sqrt(2k/m)";
   out.theory = imaginary_axis_limit(*make_explicit_stepper(method)) / omega;
   return out;
+}
+
+/// The symplectic Euler boundary of a bending case at EI = 1e-4 N m^2 and its theory 2 / omega_max.
+Measured bending_boundary(const std::string& name) {
+  StabilityCase c;
+  for (const auto& candidate : stability_cases(false, HOOKE_TEST_SCENES_DIR))
+    if (candidate.name == name) c = candidate;
+  EXPECT_EQ(c.name, name);
+  const StudyMethod m{"symplectic-euler", "symplectic-euler", {}};
+  StabilitySettings s;
+  s.bisections = 8;
+  Measured out;
+  out.boundary =
+      find_stability_boundary([&](double h) { return classify_run(c, m, 1e-4, h, s); }, s);
+  const Scene scene = load_stability_scene(c, m, 1e-4, 1e-5, 0.2);
+  out.theory = 2.0 / largest_natural_frequency(*scene.system, scene.initial);
+  return out;
+}
+
+TEST(StabilityMap, BendingStrandsExplicitLimitMeetsTheoryAndShrinksWithTheSpacingSquared) {
+  // Issue 54, acceptance 3: rod bending's frequencies grow as 1/s^2, so halving the spacing
+  // quarters symplectic Euler's largest stable step; the measured boundary meets 2 / omega_max,
+  // omega_max by Lanczos on the assembled K with the bending's Hessian in it.
+  const Measured m41 = bending_boundary("bending_strand_41");
+  const Measured m81 = bending_boundary("bending_strand_81");
+  for (const Measured* m : {&m41, &m81}) {
+    EXPECT_NEAR(m->boundary.h_stable / m->theory, 1.0, 0.05);
+    EXPECT_NEAR(m->boundary.h_unstable / m->theory, 1.0, 0.05);
+  }
+  // s(41) / s(81) = 2: the slope of log h against log s.
+  const double slope = std::log(m41.boundary.h_stable / m81.boundary.h_stable) / std::log(2.0);
+  std::printf(
+      "bending strand, symplectic Euler: h %.3e s (41), %.3e s (81), theory %.3e, %.3e; "
+      "slope in the spacing %.2f\n",
+      m41.boundary.h_stable, m81.boundary.h_stable, m41.theory, m81.theory, slope);
+  EXPECT_NEAR(slope, 2.0, 0.15);
 }
 
 TEST(StabilityMap, SymplecticEulerBoundaryWithinTwoPercentOfTheoryOnTwoParticleSpring) {

@@ -85,6 +85,12 @@ std::pair<std::string, std::vector<std::string>> setting(const SceneKey& k,
             std::find(r.when.begin(), r.when.end(), variant) != r.when.end())
           sets.push_back(r.name + "=" + r.example);
     }
+  } else if (starts_with(k.name, "bending.")) {
+    // The bending models' meshes: strands for rod, cloth otherwise; the rigidity is required.
+    text = variant == "rod" ? "[mesh]\ntype = 'chain'\nn = 5\n"
+                            : "[mesh]\ntype = 'grid'\nnx = 4\nny = 4\n";
+    if (!variant.empty()) sets.push_back("bending.model=" + variant);
+    if (k.name != "bending.stiffness") sets.push_back("bending.stiffness=1e-3");
   } else if (starts_with(k.name, "ode.")) {
     if (!variant.empty()) sets.push_back("ode.problem=" + variant);
   } else if (starts_with(k.name, "fluid.") || fluid_method(variant)) {

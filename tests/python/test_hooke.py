@@ -98,6 +98,33 @@ def test_jacobians_match_central_differences_of_the_forces():
     assert np.allclose(-g, system.forces(x, zero).ravel(), rtol=1e-5, atol=1e-6)
 
 
+@pytest.mark.parametrize("scene_name, sets", [
+    ("curly_hair_rod", {"mesh.n": 8}),
+    ("cloth_dihedral", {"mesh.nx": 4, "mesh.ny": 4}),
+    ("cloth_dihedral", {"mesh.nx": 4, "mesh.ny": 4, "bending.model": "quadratic"}),
+])
+def test_bending_energy_gradient_and_hessian_match_central_differences(scene_name, sets):
+    # [bending] reaches Python as part of the system: its energy, -gradient (forces at v = 0, no
+    # drag) and stiffness K = -Hessian (exact: clamp_compressed off), bent away from rest.
+    sets = dict(sets, **{"forces.drag": 0.0, "springs.damping": 0.0})
+    scene = hooke.load_scene(scene_name, sets)
+    sim = hooke.Simulation(scene)
+    system = sim.system
+    n = sim.x.shape[0]
+    rng = np.random.default_rng(54)
+    x = sim.x + 0.02 * rng.standard_normal((n, 3))
+    zero = np.zeros((n, 3))
+    K = system.stiffness(x, zero).toarray()
+    eps = 1e-6
+    for j in range(3 * n):
+        dx = np.eye(3 * n)[j].reshape(n, 3) * eps
+        fd = (system.forces(x + dx, zero) - system.forces(x - dx, zero)).ravel() / (2 * eps)
+        assert np.allclose(K[:, j], fd, rtol=1e-6, atol=1e-6 * np.abs(K).max()), j
+        g = (system.energy(x + dx) - system.energy(x - dx)) / (2 * eps)
+        f = system.forces(x, zero).ravel()
+        assert abs(-g - f[j]) <= 1e-6 * max(1.0, np.abs(f).max()), j
+
+
 def test_every_registered_method_steps():
     names = [m["name"] for m in hooke.methods()]
     assert {"rk4", "implicit", "symplectic-euler"} <= set(names)

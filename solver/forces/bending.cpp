@@ -1,0 +1,409 @@
+#include "hooke/forces/bending.hpp"
+
+#include <Eigen/Dense>
+#include <algorithm>
+#include <cmath>
+
+namespace hooke {
+
+namespace {
+
+using Vec9 = Eigen::Matrix<double, 9, 1>;
+using Mat9 = Eigen::Matrix<double, 9, 9>;
+using Mat6 = Eigen::Matrix<double, 6, 6>;
+using Vec6 = Eigen::Matrix<double, 6, 1>;
+
+/// The skew matrix S(v) with S(v) w = v x w.
+Mat3 skew(const Vec3& v) {
+  Mat3 S;
+  S << 0.0, -v.z(), v.y(), v.z(), 0.0, -v.x(), -v.y(), v.x(), 0.0;
+  return S;
+}
+
+/// Maps a gradient and Hessian over NV difference vectors (each a signed sum of the stencil's NX
+/// positions, coef[v][p]) to the stencil's positions: g = J^T gv, H = J^T Hv J, written at g and
+/// (column-major, 3 NX x 3 NX) at H when not null.
+template <int NV, int NX>
+void to_positions(const Eigen::Matrix<double, 3 * NV, 1>& gv,
+                  const Eigen::Matrix<double, 3 * NV, 3 * NV>* Hv, const int (&coef)[NV][NX],
+                  double* g, double* H) {
+  Eigen::Matrix<double, 3 * NV, 3 * NX> J = Eigen::Matrix<double, 3 * NV, 3 * NX>::Zero();
+  for (int v = 0; v < NV; ++v)
+    for (int p = 0; p < NX; ++p)
+      if (coef[v][p] != 0)
+        J.template block<3, 3>(3 * v, 3 * p) = double(coef[v][p]) * Mat3::Identity();
+  Eigen::Map<Eigen::Matrix<double, 3 * NX, 1>> gm(g);
+  gm.noalias() = J.transpose() * gv;
+  if (H && Hv) {
+    Eigen::Map<Eigen::Matrix<double, 3 * NX, 3 * NX>> Hm(H);
+    Hm.noalias() = J.transpose() * (*Hv) * J;
+    Hm = (0.5 * (Hm + Hm.transpose())).eval();  // exactly symmetric
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rod: c = cos(phi) over the edges (e0, e1), and kappa(c) = 2 s / (1 + c), s = sin(phi).
+
+constexpr int kRodCoef[2][3] = {{-1, 1, 0}, {0, -1, 1}};  // e0 = x_q - x_p, e1 = x_r - x_q
+
+struct RodGeometry {
+  bool ok = false;  // both edges have a length
+  Vec3 u, w;        // unit edges
+  double l0 = 0.0, l1 = 0.0, c = 1.0, s = 0.0;
+};
+
+RodGeometry rod_geometry(ConstRef x, const int* id) {
+  RodGeometry r;
+  const Vec3 e0 = x.segment<3>(3 * id[1]) - x.segment<3>(3 * id[0]);
+  const Vec3 e1 = x.segment<3>(3 * id[2]) - x.segment<3>(3 * id[1]);
+  r.l0 = e0.norm();
+  r.l1 = e1.norm();
+  if (!(r.l0 > 0.0 && r.l1 > 0.0)) return r;
+  r.ok = true;
+  r.u = e0 / r.l0;
+  r.w = e1 / r.l1;
+  r.c = r.u.dot(r.w);
+  r.s = r.u.cross(r.w).norm();
+  return r;
+}
+
+/// 1 + c, kept positive at a strand folded back onto itself (c = -1, kappa infinite).
+double one_plus_c(const RodGeometry& r) { return std::max(1.0 + r.c, 1e-300); }
+
+double rod_kappa(const RodGeometry& r) { return r.ok ? 2.0 * r.s / one_plus_c(r) : 0.0; }
+
+/// grad c over (e0, e1) and, if Hc, its Hessian.
+void rod_cosine_derivatives(const RodGeometry& r, Vec6& G, Mat6* Hc) {
+  const Vec3 g0 = (r.w - r.c * r.u) / r.l0, g1 = (r.u - r.c * r.w) / r.l1;
+  G << g0, g1;
+  if (!Hc) return;
+  const Mat3 I = Mat3::Identity();
+  const Mat3 P0 = I - r.u * r.u.transpose(), P1 = I - r.w * r.w.transpose();
+  Mat6& M = *Hc;
+  M.block<3, 3>(0, 0) =
+      -(r.c / (r.l0 * r.l0)) * P0 - (r.u * g0.transpose() + g0 * r.u.transpose()) / r.l0;
+  M.block<3, 3>(3, 3) =
+      -(r.c / (r.l1 * r.l1)) * P1 - (r.w * g1.transpose() + g1 * r.w.transpose()) / r.l1;
+  M.block<3, 3>(0, 3) = P0 * P1 / (r.l0 * r.l1);
+  M.block<3, 3>(3, 0) = M.block<3, 3>(0, 3).transpose();
+}
+
+// ---------------------------------------------------------------------------------------------
+// Dihedral: theta = atan2(Y, X) over the vectors (e, a, b).
+
+constexpr int kHingeCoef[3][4] = {{0, -1, 1, 0}, {1, -1, 0, 0}, {0, -1, 0, 1}};  // e, a, b
+
+struct HingeVectors {
+  Vec3 e, a, b;
+};
+
+HingeVectors hinge_vectors(ConstRef x, const int* id) {
+  const Vec3 x1 = x.segment<3>(3 * id[1]);
+  return {x.segment<3>(3 * id[2]) - x1, x.segment<3>(3 * id[0]) - x1, x.segment<3>(3 * id[3]) - x1};
+}
+
+bool hinge_degenerate(const HingeVectors& v) {
+  const double l = v.e.norm();
+  if (!(l > 0.0)) return true;
+  const double t = DihedralBending::kDegenerate;
+  return !(v.e.cross(v.a).norm() > t * l * v.a.norm()) ||
+         !(v.e.cross(v.b).norm() > t * l * v.b.norm());
+}
+
+double hinge_angle(const HingeVectors& v) {
+  const double l = v.e.norm();
+  const double D = v.e.dot(v.a.cross(v.b));
+  const double X = v.e.dot(v.a) * v.e.dot(v.b) - v.e.squaredNorm() * v.a.dot(v.b);
+  return std::atan2(-l * D, X);
+}
+
+/// theta's gradient over (e, a, b) and, if Ht, its Hessian; false (and nothing written) at a
+/// degenerate hinge.
+bool hinge_angle_derivatives(const HingeVectors& v, Vec9& G, Mat9* Ht) {
+  if (hinge_degenerate(v)) return false;
+  const Vec3 &e = v.e, &a = v.a, &b = v.b;
+  const double l = e.norm();
+  const Vec3 eh = e / l;
+  const double ea = e.dot(a), eb = e.dot(b), ab = a.dot(b), ee = e.squaredNorm();
+  const double D = e.dot(a.cross(b));
+  const double X = ea * eb - ee * ab, Y = -l * D;
+  const double R = X * X + Y * Y;
+  Vec9 gD, gX, gL = Vec9::Zero();
+  gD << a.cross(b), b.cross(e), e.cross(a);
+  gX << a * eb + b * ea - 2.0 * ab * e, eb * e - ee * b, ea * e - ee * a;
+  gL.head<3>() = eh;
+  const Vec9 gY = -(l * gD + D * gL);
+  G = (X * gY - Y * gX) / R;
+  if (!Ht) return true;
+  const Mat3 I = Mat3::Identity();
+  Mat9 HD = Mat9::Zero(), HX = Mat9::Zero();
+  HD.block<3, 3>(0, 3) = -skew(b);
+  HD.block<3, 3>(3, 0) = skew(b);
+  HD.block<3, 3>(3, 6) = -skew(e);
+  HD.block<3, 3>(6, 3) = skew(e);
+  HD.block<3, 3>(6, 0) = -skew(a);
+  HD.block<3, 3>(0, 6) = skew(a);
+  HX.block<3, 3>(0, 0) = a * b.transpose() + b * a.transpose() - 2.0 * ab * I;
+  HX.block<3, 3>(0, 3) = eb * I + b * e.transpose() - 2.0 * e * b.transpose();
+  HX.block<3, 3>(0, 6) = ea * I + a * e.transpose() - 2.0 * e * a.transpose();
+  HX.block<3, 3>(3, 6) = e * e.transpose() - ee * I;
+  HX.block<3, 3>(3, 0) = HX.block<3, 3>(0, 3).transpose();
+  HX.block<3, 3>(6, 0) = HX.block<3, 3>(0, 6).transpose();
+  HX.block<3, 3>(6, 3) = HX.block<3, 3>(3, 6).transpose();
+  Mat9 HY = -(l * HD + gL * gD.transpose() + gD * gL.transpose());
+  HY.block<3, 3>(0, 0) -= (D / l) * (I - eh * eh.transpose());
+  *Ht = (X * HY - Y * HX + gY * gX.transpose() - gX * gY.transpose()) / R -
+        G * (2.0 * X * gX + 2.0 * Y * gY).transpose() / R;
+  return true;
+}
+
+/// theta - theta0 in (-pi, pi].
+double wrap_angle(double d) {
+  if (d > M_PI) d -= 2.0 * M_PI;
+  if (d <= -M_PI) d += 2.0 * M_PI;
+  return d;
+}
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------------
+
+void RodBending::add(int p, int q, int r, double EI, ConstRef x_rest, bool straight_rest) {
+  const std::array<int, 3> ids{p, q, r};
+  const RodGeometry g = rod_geometry(x_rest, ids.data());
+  HOOKE_ASSERT(g.ok, "rod-bending: hinge (" << p << ", " << q << ", " << r
+                                            << ") has an edge of zero rest length");
+  const double l = 0.5 * (g.l0 + g.l1);
+  m_hinges.push_back({ids, EI / l, straight_rest ? 0.0 : rod_kappa(g)});
+}
+
+double RodBending::curvature(ConstRef x, int p, int q, int r) {
+  const int ids[3] = {p, q, r};
+  return rod_kappa(rod_geometry(x, ids));
+}
+
+double RodBending::energy(ConstRef x, size_t begin, size_t end) const {
+  double E = 0.0;
+  for (size_t e = begin; e < end; ++e) {
+    const Hinge& h = m_hinges[e];
+    const double d = rod_kappa(rod_geometry(x, h.ids.data())) - h.kappa0;
+    E += 0.5 * h.k * d * d;
+  }
+  return E;
+}
+
+void RodBending::gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection,
+                                  double* g, double* H) const {
+  for (size_t e = begin; e < end; ++e) {
+    const Hinge& h = m_hinges[e];
+    double* ge = g + 9 * (e - begin);
+    double* He = H ? H + 81 * (e - begin) : nullptr;
+    const RodGeometry r = rod_geometry(x, h.ids.data());
+    if (!r.ok) {  // an edge of zero length: no defined angle
+      std::fill(ge, ge + 9, 0.0);
+      if (He) std::fill(He, He + 81, 0.0);
+      continue;
+    }
+    // E(c) = 2k (1 - c)/(1 + c) [the smooth part, 1/2 k kappa^2] - k kappa0 kappa(c) + const.
+    const double opc = one_plus_c(r);
+    double dE = -4.0 * h.k / (opc * opc), d2E = 8.0 * h.k / (opc * opc * opc);
+    if (h.kappa0 > 0.0 && r.s >= kStraight) {
+      const double kappa = 2.0 * r.s / opc;
+      const double dk = -2.0 / (opc * r.s);
+      const double d2k = kappa * (1.0 - 2.0 * r.c) / (r.s * r.s * r.s * r.s);
+      dE -= h.k * h.kappa0 * dk;
+      d2E -= h.k * h.kappa0 * d2k;
+    }
+    Vec6 G;
+    Mat6 Hc;
+    rod_cosine_derivatives(r, G, He ? &Hc : nullptr);
+    const Vec6 gv = dE * G;
+    Mat6 Hv;
+    if (He) {
+      Hv = d2E * G * G.transpose() + dE * Hc;
+      project_psd(Hv.data(), 6, projection);  // in the edges' coordinates (see bending.hpp)
+    }
+    to_positions<2, 3>(gv, He ? &Hv : nullptr, kRodCoef, ge, He);
+  }
+}
+
+void RodBending::constraint(ConstRef x, size_t e, double& C, double* dC, double& stiffness) const {
+  const Hinge& h = m_hinges[e];
+  const RodGeometry r = rod_geometry(x, h.ids.data());
+  C = rod_kappa(r) - h.kappa0;
+  stiffness = h.k;
+  if (!r.ok || r.s < kStraight) {  // kappa's cone apex (or no angle): the subgradient 0
+    std::fill(dC, dC + 9, 0.0);
+    return;
+  }
+  Vec6 G;
+  rod_cosine_derivatives(r, G, nullptr);
+  const Vec6 gv = (-2.0 / (one_plus_c(r) * r.s)) * G;
+  to_positions<2, 3>(gv, nullptr, kRodCoef, dC, nullptr);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+std::vector<std::array<int, 4>> interior_hinges(const std::vector<std::array<int, 3>>& triangles,
+                                                size_t* non_manifold) {
+  struct EdgeSide {
+    int i, j, opposite;
+  };
+  std::vector<EdgeSide> sides;
+  sides.reserve(3 * triangles.size());
+  for (const auto& t : triangles)
+    for (int k = 0; k < 3; ++k) {
+      const int a = t[size_t(k)], b = t[size_t((k + 1) % 3)], o = t[size_t((k + 2) % 3)];
+      sides.push_back({std::min(a, b), std::max(a, b), o});
+    }
+  std::sort(sides.begin(), sides.end(), [](const EdgeSide& l, const EdgeSide& r) {
+    return l.i != r.i ? l.i < r.i : l.j != r.j ? l.j < r.j : l.opposite < r.opposite;
+  });
+  std::vector<std::array<int, 4>> hinges;
+  size_t bad = 0;
+  for (size_t s = 0; s < sides.size();) {
+    size_t t = s + 1;
+    while (t < sides.size() && sides[t].i == sides[s].i && sides[t].j == sides[s].j) ++t;
+    if (t - s == 2) {
+      hinges.push_back({sides[s].opposite, sides[s].i, sides[s].j, sides[s + 1].opposite});
+    } else if (t - s > 2) {
+      ++bad;
+    }
+    s = t;
+  }
+  if (non_manifold) *non_manifold = bad;
+  return hinges;
+}
+
+// ---------------------------------------------------------------------------------------------
+
+bool DihedralBending::rest_ok(const std::array<int, 4>& hinge, ConstRef x_rest) {
+  return !hinge_degenerate(hinge_vectors(x_rest, hinge.data()));
+}
+
+double DihedralBending::angle(ConstRef x, const std::array<int, 4>& hinge) {
+  return hinge_angle(hinge_vectors(x, hinge.data()));
+}
+
+namespace {
+/// D |e|^2 / (A0 + A1) at the rest hinge.
+double hinge_stiffness(const HingeVectors& v, double D) {
+  const double areas = 0.5 * (v.e.cross(v.a).norm() + v.e.cross(v.b).norm());
+  return D * v.e.squaredNorm() / areas;
+}
+}  // namespace
+
+void DihedralBending::add(const std::array<int, 4>& hinge, double D, ConstRef x_rest,
+                          bool flat_rest) {
+  const HingeVectors v = hinge_vectors(x_rest, hinge.data());
+  HOOKE_ASSERT(!hinge_degenerate(v), "dihedral-bending: a degenerate rest hinge");
+  m_hinges.push_back({hinge, hinge_stiffness(v, D), flat_rest ? 0.0 : hinge_angle(v)});
+}
+
+double DihedralBending::energy(ConstRef x, size_t begin, size_t end) const {
+  double E = 0.0;
+  for (size_t e = begin; e < end; ++e) {
+    const Hinge& h = m_hinges[e];
+    const double d = wrap_angle(hinge_angle(hinge_vectors(x, h.ids.data())) - h.theta0);
+    E += 0.5 * h.k * d * d;
+  }
+  return E;
+}
+
+void DihedralBending::gradient_hessian(ConstRef x, size_t begin, size_t end,
+                                       PsdProjection projection, double* g, double* H) const {
+  for (size_t e = begin; e < end; ++e) {
+    const Hinge& h = m_hinges[e];
+    double* ge = g + 12 * (e - begin);
+    double* He = H ? H + 144 * (e - begin) : nullptr;
+    const HingeVectors v = hinge_vectors(x, h.ids.data());
+    Vec9 G;
+    Mat9 Ht;
+    if (!hinge_angle_derivatives(v, G, He ? &Ht : nullptr)) {
+      std::fill(ge, ge + 12, 0.0);
+      if (He) std::fill(He, He + 144, 0.0);
+      continue;
+    }
+    const double d = wrap_angle(hinge_angle(v) - h.theta0);
+    const Vec9 gv = h.k * d * G;
+    Mat9 Hv;
+    if (He) {
+      Hv = h.k * (G * G.transpose() + d * Ht);
+      Hv = (0.5 * (Hv + Hv.transpose())).eval();
+      project_psd(Hv.data(), 9, projection);  // in the coordinates (e, a, b) (see bending.hpp)
+    }
+    to_positions<3, 4>(gv, He ? &Hv : nullptr, kHingeCoef, ge, He);
+  }
+}
+
+void DihedralBending::constraint(ConstRef x, size_t e, double& C, double* dC,
+                                 double& stiffness) const {
+  const Hinge& h = m_hinges[e];
+  const HingeVectors v = hinge_vectors(x, h.ids.data());
+  C = wrap_angle(hinge_angle(v) - h.theta0);
+  stiffness = h.k;
+  Vec9 G;
+  if (!hinge_angle_derivatives(v, G, nullptr)) {
+    std::fill(dC, dC + 12, 0.0);
+    return;
+  }
+  to_positions<3, 4>(G, nullptr, kHingeCoef, dC, nullptr);
+}
+
+// ---------------------------------------------------------------------------------------------
+
+void QuadraticBending::add(const std::array<int, 4>& hinge, double D, ConstRef x_rest) {
+  const HingeVectors v = hinge_vectors(x_rest, hinge.data());
+  HOOKE_ASSERT(!hinge_degenerate(v), "quadratic-bending: a degenerate rest hinge");
+  const double l = v.e.norm();
+  const Vec3 eh = v.e / l;
+  const double h0 = v.e.cross(v.a).norm() / l, h1 = v.e.cross(v.b).norm() / l;
+  Hinge q;
+  q.ids = hinge;
+  q.w[0] = 1.0 / h0;
+  q.w[3] = 1.0 / h1;
+  q.w[2] = -(q.w[0] * v.a.dot(eh) + q.w[3] * v.b.dot(eh)) / l;
+  q.w[1] = -(q.w[0] + q.w[2] + q.w[3]);
+  q.k = hinge_stiffness(v, D);
+  m_hinges.push_back(q);
+}
+
+namespace {
+/// v = sum_i K_i x_i of a quadratic hinge, as K_0 a + K_2 e + K_3 b (differences from x_1, so that
+/// the sum is free of the positions' offset).
+Vec3 quadratic_vector(ConstRef x, const int* id, const std::array<double, 4>& w) {
+  const HingeVectors v = hinge_vectors(x, id);
+  return w[0] * v.a + w[2] * v.e + w[3] * v.b;
+}
+}  // namespace
+
+double QuadraticBending::energy(ConstRef x, size_t begin, size_t end) const {
+  double E = 0.0;
+  for (size_t e = begin; e < end; ++e) {
+    const Hinge& h = m_hinges[e];
+    E += 0.5 * h.k * quadratic_vector(x, h.ids.data(), h.w).squaredNorm();
+  }
+  return E;
+}
+
+void QuadraticBending::gradient_hessian(ConstRef x, size_t begin, size_t end,
+                                        PsdProjection /*projection: the Hessian is PSD*/, double* g,
+                                        double* H) const {
+  for (size_t e = begin; e < end; ++e) {
+    const Hinge& h = m_hinges[e];
+    const Vec3 v = quadratic_vector(x, h.ids.data(), h.w);
+    double* ge = g + 12 * (e - begin);
+    for (int i = 0; i < 4; ++i)
+      for (int c = 0; c < 3; ++c) ge[3 * i + c] = h.k * h.w[size_t(i)] * v[c];
+    if (!H) continue;
+    double* He = H + 144 * (e - begin);
+    std::fill(He, He + 144, 0.0);
+    for (int j = 0; j < 4; ++j)
+      for (int i = 0; i < 4; ++i) {
+        const double kij = h.k * h.w[size_t(i)] * h.w[size_t(j)];
+        for (int c = 0; c < 3; ++c) He[(3 * j + c) * 12 + 3 * i + c] = kij;
+      }
+  }
+}
+
+}  // namespace hooke

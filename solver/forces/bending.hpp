@@ -1,0 +1,171 @@
+#pragma once
+// Bending with a linear stiffness at straight and flat (issue 54): element sets (element_set.hpp)
+// for strands (rod: 3-particle hinges at interior vertices) and cloth (dihedral and quadratic:
+// 4-particle hinges across interior edges). Each is calibrated to a continuum rigidity: a uniform
+// bend of curvature kappa stores 1/2 EI kappa^2 per unit length of a strand (rod) and
+// 1/2 D kappa^2 per unit area of a sheet bent about a grid axis (dihedral, quadratic).
+//
+// PSD projection (PsdProjection::Clamp and Abs, for Newton and VBD): the energies depend on a
+// stencil only through its difference vectors ((e0, e1) for a rod hinge, (e, a, b) for a cloth
+// hinge), H = J^T H_d J with J the fixed map from positions to them. The projection is applied to
+// H_d (6 x 6 or 9 x 9 rather than 9 x 9 or 12 x 12, 2-3x cheaper): J^T P(H_d) J is PSD, and equals
+// the exact Hessian wherever that is PSD (H is PSD exactly when H_d is, J being onto); it is the
+// nearest PSD matrix in the difference coordinates' norm rather than the positions'.
+#include <array>
+#include <vector>
+
+#include "hooke/forces/element_set.hpp"
+
+namespace hooke {
+
+/// Strand bending of discrete elastic rods (Bergou et al. 2008), bending only (no twist). Per
+/// interior vertex q between p and r, with edges e0 = x_q - x_p and e1 = x_r - x_q, the curvature
+/// kappa = |kappa b| = 2 |e0 x e1| / (|e0| |e1| + e0 . e1) = 2 tan(phi / 2), phi the turning angle,
+/// and the energy
+///   E = EI / (2 l) (kappa - kappa0)^2,   l = (|e0-bar| + |e1-bar|) / 2 (the rest Voronoi length),
+/// so that a uniform bend kappa/l per unit length stores 1/2 EI (kappa/l)^2 l. kappa0 is the rest
+/// curvature's magnitude (a helix keeps its curvature; its torsion is free, as in any
+/// bending-only rod). Against a straight rest (kappa0 = 0) the energy is
+/// 2 EI/l (1 - c)/(1 + c) in c = cos(phi): smooth at straight with the linear stiffness a flexion
+/// spring lacks. Against a bent rest it is (kappa - kappa0)^2, whose gradient is undefined at
+/// exactly straight (kappa is a cone there): within sin(phi) < kStraight the cone's term is left
+/// out of the gradient and Hessian (the subgradient 0), and only there.
+///
+/// The exact Hessian is E''(c) grad c grad c^T + E'(c) Hess c: indefinite away from rest, so a
+/// Newton step asks for PsdProjection::Clamp per element (the implicit family's default,
+/// integrator.clamp_compressed). Constraint form (XPBD, Ceres): C = kappa - kappa0 with stiffness
+/// EI / l.
+class RodBending final : public ElementSet {
+ public:
+  /// Below this sin(phi) a hinge of a bent rest is treated as exactly straight (see above).
+  static constexpr double kStraight = 1e-8;
+
+  /// Adds the hinge at q between p and r with rigidity EI (N m^2), its rest length from x_rest
+  /// (3n) and its rest curvature from x_rest too, or 0 if straight_rest. Rest edges of zero
+  /// length are refused (HOOKE_ASSERT): the caller checks them first.
+  void add(int p, int q, int r, double EI, ConstRef x_rest, bool straight_rest);
+  /// kappa = 2 tan(phi / 2) of the hinge (p, q, r) at x (0 if an edge has zero length).
+  static double curvature(ConstRef x, int p, int q, int r);
+
+  const char* name() const override { return "rod-bending"; }
+  int stencil_size() const override { return 3; }
+  size_t size() const override { return m_hinges.size(); }
+  const int* stencil(size_t e) const override { return m_hinges[e].ids.data(); }
+  double energy(ConstRef x, size_t begin, size_t end) const override;
+  void gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection, double* g,
+                        double* H) const override;
+  bool has_constraint() const override { return true; }
+  void constraint(ConstRef x, size_t e, double& C, double* dC, double& stiffness) const override;
+
+  /// Element e's stiffness EI / l (N m) and rest curvature kappa0.
+  double stiffness(size_t e) const { return m_hinges[e].k; }
+  double rest_curvature(size_t e) const { return m_hinges[e].kappa0; }
+
+ private:
+  struct Hinge {
+    std::array<int, 3> ids;
+    double k;       // EI / l
+    double kappa0;  // rest |kappa b|
+  };
+  std::vector<Hinge> m_hinges;
+};
+
+/// The hinges of a triangle mesh: for every edge shared by exactly two triangles, the stencil
+/// (o0, i, j, o1) with (i, j) the edge (i < j) and o0, o1 the vertices opposite it. Edges on the
+/// boundary (one triangle) have no hinge; an edge of three or more triangles (non-manifold) has
+/// none either and is counted in *non_manifold when given. Sorted by edge; no orientation needed.
+std::vector<std::array<int, 4>> interior_hinges(const std::vector<std::array<int, 3>>& triangles,
+                                                size_t* non_manifold = nullptr);
+
+/// Cloth bending of discrete shells (Grinspun et al. 2003): per hinge (x0, x1, x2, x3), edge
+/// (x1, x2) shared by the triangles (x0, x1, x2) and (x3, x1, x2), the bending angle theta (0 when
+/// flat, +-pi when folded shut) and
+///   E = 1/2 k (theta - theta0)^2,   k = D |e-bar|^2 / (A0-bar + A1-bar),
+/// the triangles' rest areas A. On a grid of square cells bent (every vertex placed) onto a
+/// cylinder about either grid axis this sums to 1/2 D kappa^2 per unit area as the mesh is refined
+/// (measured: 1 - 1/(n - 1) of it on an n x n grid, the boundary's missing hinges), with either
+/// diagonal pattern. The model is mesh dependent, as discrete shells are known to be, and on
+/// right-triangle grids it is softer than that calibration once the vertices may relax: with the
+/// grid builder's alternating diagonals a cell-scale (2 x 2 periodic) fluctuation lowers a uniform
+/// bend's energy to 0.835 of it, with diagonals all one way a twist does so in a free strip
+/// (0.836), and a strip clamped at one end sags 1.2x the Euler-Bernoulli beam of rigidity D times
+/// its width (tests/problems/bending_scene_test.cpp). A bend along a diagonal stores 1.5x
+/// (alternating) to 3x (one way) the calibrated energy.
+///
+/// theta = atan2(Y, X) with X = (e.a)(e.b) - |e|^2 (a.b) and Y = -|e| e.(a x b), e = x2 - x1,
+/// a = x0 - x1, b = x3 - x1 (X = n0-hat.n1-hat and Y = the sine, both times |e|^2 h0 h1): defined
+/// up to +-pi and free of the normals' square roots, so the exact gradient and Hessian are those
+/// of atan2 of two polynomials (and of |e|). theta - theta0 is taken in (-pi, pi]. A hinge with a
+/// degenerate triangle (|n0| or |n1| below kDegenerate of |e| |a| or |e| |b|) has no defined
+/// angle: its gradient and Hessian are 0 there. Constraint form: C = theta - theta0, stiffness k.
+class DihedralBending final : public ElementSet {
+ public:
+  static constexpr double kDegenerate = 1e-12;
+
+  /// Adds the hinge (x0, x1, x2, x3) with rigidity D (N m); rest lengths, areas and the rest
+  /// angle from x_rest (theta0 = 0 if flat_rest). Degenerate rest triangles are refused
+  /// (HOOKE_ASSERT): the caller checks them first (rest_ok).
+  void add(const std::array<int, 4>& hinge, double D, ConstRef x_rest, bool flat_rest);
+  /// False if the hinge's rest triangles or edge are degenerate at x_rest.
+  static bool rest_ok(const std::array<int, 4>& hinge, ConstRef x_rest);
+  /// theta of the hinge at x.
+  static double angle(ConstRef x, const std::array<int, 4>& hinge);
+
+  const char* name() const override { return "dihedral-bending"; }
+  int stencil_size() const override { return 4; }
+  size_t size() const override { return m_hinges.size(); }
+  const int* stencil(size_t e) const override { return m_hinges[e].ids.data(); }
+  double energy(ConstRef x, size_t begin, size_t end) const override;
+  void gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection, double* g,
+                        double* H) const override;
+  bool has_constraint() const override { return true; }
+  void constraint(ConstRef x, size_t e, double& C, double* dC, double& stiffness) const override;
+
+  double stiffness(size_t e) const { return m_hinges[e].k; }
+  double rest_angle(size_t e) const { return m_hinges[e].theta0; }
+
+ private:
+  struct Hinge {
+    std::array<int, 4> ids;
+    double k;
+    double theta0;
+  };
+  std::vector<Hinge> m_hinges;
+};
+
+/// The isometric quadratic bending of Bergou et al. 2006 (Wardetzky et al. 2007): per hinge
+/// (x0, x1, x2, x3) as DihedralBending's, v = sum_i K_i x_i with the weights K of the rest hinge
+/// developed flat (the affine dependence of its four points, K_0 = 1/h0 and K_3 = 1/h1 by the
+/// heights over the edge, sum K_i = 0 and sum K_i x_i = 0 when flat), so that rotating one
+/// triangle about the edge by theta gives |v| = 2 sin(theta / 2), and
+///   E = 1/2 k |v|^2,   k = D |e-bar|^2 / (A0-bar + A1-bar) (as DihedralBending's),
+/// which agrees with the dihedral energy to second order about flat. The Hessian is constant
+/// (k K_i K_j I per block, PSD); the rest shape is flat (a sheet bent at rest needs `dihedral`).
+/// No constraint form: XPBD and the residual form of Ceres refuse it.
+class QuadraticBending final : public ElementSet {
+ public:
+  /// Adds the hinge with rigidity D (N m), K from x_rest's lengths (see rest_ok).
+  void add(const std::array<int, 4>& hinge, double D, ConstRef x_rest);
+
+  const char* name() const override { return "quadratic-bending"; }
+  int stencil_size() const override { return 4; }
+  size_t size() const override { return m_hinges.size(); }
+  const int* stencil(size_t e) const override { return m_hinges[e].ids.data(); }
+  double energy(ConstRef x, size_t begin, size_t end) const override;
+  void gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection, double* g,
+                        double* H) const override;
+
+  /// Element e's weights K (1/m) and stiffness k (N m).
+  const std::array<double, 4>& weights(size_t e) const { return m_hinges[e].w; }
+  double stiffness(size_t e) const { return m_hinges[e].k; }
+
+ private:
+  struct Hinge {
+    std::array<int, 4> ids;
+    std::array<double, 4> w;
+    double k;
+  };
+  std::vector<Hinge> m_hinges;
+};
+
+}  // namespace hooke

@@ -1,0 +1,385 @@
+// Claims of the bending element sets (solver/forces/bending.hpp, issue 54, acceptance 1): exact
+// gradients and Hessians by central differences at random, near-straight, near-flat, folded and
+// bent-rest configurations; zero derivatives (no NaN) at degenerate stencils; an energy that is
+// C^1 at straight and flat with the linear stiffness the closed forms give; and the calibration to
+// the continuum rigidity on a circle (strand) and a cylinder (sheet), converging as refined.
+#include "hooke/forces/bending.hpp"
+
+#include <gtest/gtest.h>
+
+#include <Eigen/Eigenvalues>
+#include <cmath>
+#include <cstdio>
+#include <random>
+#include <vector>
+
+namespace hooke {
+namespace {
+
+/// The largest differences between the set's gradient and Hessian of element 0 and the central
+/// differences of its energy and gradient (step h), and the largest magnitudes.
+struct FdCheck {
+  double grad_err = 0.0, hess_err = 0.0, grad_max = 0.0, hess_max = 0.0;
+};
+
+FdCheck check_element(const ElementSet& set, const Vec& x, double h) {
+  const int n = 3 * set.stencil_size();
+  std::vector<double> g(static_cast<size_t>(n)), H(static_cast<size_t>(n * n)),
+      gp(static_cast<size_t>(n)), gm(static_cast<size_t>(n));
+  set.gradient_hessian(x, 0, 1, PsdProjection::None, g.data(), H.data());
+  const int* s = set.stencil(0);
+  FdCheck r;
+  for (int i = 0; i < n; ++i) {
+    const Index dof = 3 * s[i / 3] + i % 3;
+    Vec xp = x, xm = x;
+    xp[dof] += h;
+    xm[dof] -= h;
+    const double fd = (set.energy(xp, 0, 1) - set.energy(xm, 0, 1)) / (2.0 * h);
+    r.grad_err = std::max(r.grad_err, std::abs(fd - g[size_t(i)]));
+    r.grad_max = std::max(r.grad_max, std::abs(g[size_t(i)]));
+    set.gradient_hessian(xp, 0, 1, PsdProjection::None, gp.data(), nullptr);
+    set.gradient_hessian(xm, 0, 1, PsdProjection::None, gm.data(), nullptr);
+    for (int j = 0; j < n; ++j) {
+      const double fdh = (gp[size_t(j)] - gm[size_t(j)]) / (2.0 * h);
+      r.hess_err = std::max(r.hess_err, std::abs(fdh - H[size_t(i * n + j)]));
+      r.hess_max = std::max(r.hess_max, std::abs(H[size_t(i * n + j)]));
+    }
+  }
+  return r;
+}
+
+// Central differences at step 1e-5 of the unit-sized stencils below: truncation (h^2 times the
+// third derivative) and round-off (1e-16 |E| / h) both stay below 1e-9 of the largest entry;
+// a wrong term is of the size of the entries themselves.
+constexpr double kFdStep = 1e-5;
+constexpr double kFdRel = 1e-7;
+
+void expect_exact(const ElementSet& set, const Vec& x, const std::string& what) {
+  const FdCheck r = check_element(set, x, kFdStep);
+  // At rest the gradient is 0: its natural size is then the Hessian's times the stencil's (1 m).
+  EXPECT_LE(r.grad_err, kFdRel * std::max(r.grad_max, r.hess_max)) << what;
+  EXPECT_LE(r.hess_err, kFdRel * r.hess_max) << what;
+  EXPECT_GT(r.hess_max, 0.0) << what;
+}
+
+Vec random_positions(int n, std::mt19937& rng, double spread = 1.0) {
+  std::uniform_real_distribution<double> U(-spread, spread);
+  Vec x(3 * n);
+  for (Index i = 0; i < x.size(); ++i) x[i] = U(rng);
+  return x;
+}
+
+/// A hinge (0, 1, 2, 3) with edge 1-2 along x, x0 on the +y side, and x3 the flat partner of x0
+/// rotated by theta about the edge (theta = 0: flat).
+Vec hinge_at(double theta) {
+  Vec x(12);
+  x << 0.1, 1.0, 0.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0;
+  x.segment<3>(9) = Vec3(0.3, -0.8 * std::cos(theta), 0.8 * std::sin(theta));
+  return x;
+}
+
+TEST(Bending, GradientsAndHessiansMatchCentralDifferences) {
+  std::mt19937 rng(54);
+  for (int t = 0; t < 10; ++t) {
+    const Vec x = random_positions(4, rng);
+    const Vec rest = x + 0.3 * random_positions(4, rng);
+    Vec flat_rest = rest;
+    for (int p = 0; p < 4; ++p) flat_rest[3 * p + 2] = 0.0;
+    for (bool straight : {false, true}) {
+      RodBending rod;
+      rod.add(0, 1, 2, 0.3, rest, straight);
+      expect_exact(rod, x, std::string("rod, random, straight rest ") + (straight ? "yes" : "no"));
+    }
+    for (bool flat : {false, true}) {
+      DihedralBending d;
+      d.add({0, 1, 2, 3}, 0.7, rest, flat);
+      expect_exact(d, x, std::string("dihedral, random, flat rest ") + (flat ? "yes" : "no"));
+    }
+    QuadraticBending q;
+    q.add({0, 1, 2, 3}, 0.7, flat_rest);
+    expect_exact(q, x, "quadratic, random");
+  }
+  // Near flat, folded to within 0.02 rad of shut on either side, and (for the signed angle)
+  // through +-pi's neighbourhood.
+  for (double theta : {1e-6, 1e-3, 0.5, -0.5, M_PI - 0.02, -(M_PI - 0.02)}) {
+    const Vec x = hinge_at(theta);
+    DihedralBending d;
+    d.add({0, 1, 2, 3}, 1.0, hinge_at(0.0), true);
+    // The sign is the model's convention (x3 towards +z is negative here); the size is theta.
+    EXPECT_NEAR(DihedralBending::angle(x, {0, 1, 2, 3}), -theta, 1e-12);
+    expect_exact(d, x, "dihedral at theta " + std::to_string(theta));
+    DihedralBending bent_rest;
+    bent_rest.add({0, 1, 2, 3}, 1.0, hinge_at(0.3), false);
+    expect_exact(bent_rest, x, "dihedral, rest 0.3, at theta " + std::to_string(theta));
+    QuadraticBending q;
+    q.add({0, 1, 2, 3}, 1.0, hinge_at(0.0));
+    expect_exact(q, x, "quadratic at theta " + std::to_string(theta));
+  }
+  // Strands: near straight against a straight rest, a sharp turn (170 degrees), and a bent rest.
+  Vec straight(9);
+  straight << 0, 0, 0, 1, 0, 0, 2, 0, 0;
+  for (double eps : {1e-7, 1e-4, 1e-2}) {
+    Vec x = straight;
+    x[7] = eps;
+    x[8] = 0.3 * eps;
+    RodBending rod;
+    rod.add(0, 1, 2, 1.0, straight, true);
+    expect_exact(rod, x, "rod near straight " + std::to_string(eps));
+  }
+  Vec sharp(9);
+  sharp << 0, 0, 0, 1, 0, 0, 1.0 - std::cos(0.17), std::sin(0.17), 0.0;  // turned by 170 degrees
+  Vec arc(9);
+  arc << 0, 0, 0, 1, 0, 0, 1.8, 0.5, 0.2;
+  for (const Vec* x : {&sharp, &arc}) {
+    RodBending a, b;
+    a.add(0, 1, 2, 1.0, straight, true);
+    b.add(0, 1, 2, 1.0, arc, false);
+    expect_exact(a, *x, "rod, straight rest, bent strand");
+    expect_exact(b, *x, "rod, bent rest");
+  }
+}
+
+/// The smallest eigenvalue of a symmetric n x n block and its largest magnitude.
+std::pair<double, double> spectrum(const std::vector<double>& H, int n) {
+  const Eigen::Map<const Eigen::MatrixXd> A(H.data(), n, n);
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(A);
+  return {eig.eigenvalues().minCoeff(), eig.eigenvalues().cwiseAbs().maxCoeff()};
+}
+
+/// A rod hinge (0, 1, 2) and a cloth hinge (0, 1, 2, 3) resting at `rest`.
+struct RestingHinges {
+  RodBending rod;
+  DihedralBending dihedral;
+  explicit RestingHinges(const Vec& rest) {
+    rod.add(0, 1, 2, 0.3, rest, false);
+    dihedral.add({0, 1, 2, 3}, 0.7, rest, false);
+  }
+  std::vector<const ElementSet*> sets() const { return {&rod, &dihedral}; }
+};
+
+TEST(Bending, ProjectedHessiansArePsdAndExactWhereTheHessianIsPsd) {
+  std::mt19937 rng(11);
+  int indefinite = 0, definite = 0;
+  for (int t = 0; t < 40; ++t) {
+    const Vec x = random_positions(4, rng), rest = random_positions(4, rng);
+    const RestingHinges hinges(rest);
+    // Away from rest (indefinite as a rule) and at rest, where H = k grad C grad C^T is PSD.
+    for (const Vec* at : {&x, &rest})
+      for (const ElementSet* set : hinges.sets()) {
+        const Vec& x = *at;
+        const int n = 3 * set->stencil_size();
+        for (PsdProjection p : {PsdProjection::Clamp, PsdProjection::Abs}) {
+          std::vector<double> g(static_cast<size_t>(n)), exact(static_cast<size_t>(n * n)),
+              projected(static_cast<size_t>(n * n));
+          set->gradient_hessian(x, 0, 1, PsdProjection::None, g.data(), exact.data());
+          set->gradient_hessian(x, 0, 1, p, g.data(), projected.data());
+          const auto [lo, hi] = spectrum(exact, n);
+          const auto [plo, phi] = spectrum(projected, n);
+          EXPECT_GE(plo, -1e-12 * phi) << set->name();
+          if (lo >= -1e-13 * hi) {  // semi-definite up to round-off: the projection leaves it
+            ++definite;
+            for (size_t i = 0; i < exact.size(); ++i)
+              EXPECT_NEAR(projected[i], exact[i], 1e-11 * hi) << set->name();
+          } else if (lo < -1e-9 * hi) {
+            ++indefinite;
+            const Eigen::Map<const Eigen::MatrixXd> P(projected.data(), n, n),
+                E(exact.data(), n, n);
+            EXPECT_GT((P - E).norm(), 0.0) << set->name();
+          }
+        }
+      }
+  }
+  EXPECT_GT(indefinite, 10);  // the projection was exercised
+  EXPECT_GT(definite, 10);    // and so was the claim that it leaves a PSD Hessian
+  std::printf("%d indefinite and %d semi-definite exact Hessians\n", indefinite, definite);
+}
+
+TEST(Bending, ConstraintFormsAreTheEnergysRootWithItsGradient) {
+  std::mt19937 rng(7);
+  for (int t = 0; t < 5; ++t) {
+    const Vec x = random_positions(4, rng), rest = random_positions(4, rng);
+    const RestingHinges hinges(rest);
+    for (const ElementSet* set : hinges.sets()) {
+      ASSERT_TRUE(set->has_constraint());
+      const int n = 3 * set->stencil_size();
+      std::vector<double> dC(static_cast<size_t>(n)), g(static_cast<size_t>(n));
+      double C = 0.0, k = 0.0;
+      set->constraint(x, 0, C, dC.data(), k);
+      EXPECT_NEAR(0.5 * k * C * C, set->energy(x, 0, 1), 1e-14 * set->energy(x, 0, 1));
+      set->gradient_hessian(x, 0, 1, PsdProjection::None, g.data(), nullptr);
+      for (int i = 0; i < n; ++i)
+        EXPECT_NEAR(k * C * dC[size_t(i)], g[size_t(i)], 1e-12 * (1.0 + std::abs(g[size_t(i)])))
+            << set->name();
+    }
+  }
+  QuadraticBending q;
+  q.add({0, 1, 2, 3}, 1.0, hinge_at(0.0));
+  EXPECT_FALSE(q.has_constraint());
+}
+
+TEST(Bending, DegenerateStencilsHaveZeroDerivativesAndNoNaN) {
+  // A hinge whose triangle (x0, x1, x2) has no area (x0 on the edge's line), and a strand edge of
+  // zero length.
+  Vec x = hinge_at(0.4);
+  x.segment<3>(0) = Vec3(0.5, 0.0, 0.0);
+  DihedralBending d;
+  d.add({0, 1, 2, 3}, 1.0, hinge_at(0.0), true);
+  std::vector<double> g(12), H(144);
+  d.gradient_hessian(x, 0, 1, PsdProjection::Clamp, g.data(), H.data());
+  for (double v : g) EXPECT_EQ(v, 0.0);
+  for (double v : H) EXPECT_EQ(v, 0.0);
+  EXPECT_TRUE(std::isfinite(d.energy(x, 0, 1)));
+  Vec s(9);
+  s << 0, 0, 0, 1, 0, 0, 1, 0, 0;
+  Vec rest(9);
+  rest << 0, 0, 0, 1, 0, 0, 2, 0.1, 0;
+  RodBending rod;
+  rod.add(0, 1, 2, 1.0, rest, false);
+  std::vector<double> gr(9), Hr(81);
+  rod.gradient_hessian(s, 0, 1, PsdProjection::Clamp, gr.data(), Hr.data());
+  for (double v : gr) EXPECT_EQ(v, 0.0);
+  for (double v : Hr) EXPECT_EQ(v, 0.0);
+  EXPECT_TRUE(std::isfinite(rod.energy(s, 0, 1)));
+}
+
+/// E(t) and the Hessian's curvature v^T H v along the unit direction v of a path x(t) = x + t v
+/// through straight (or flat) at t = 0.
+TEST(Bending, EnergyIsC1AtStraightAndFlatWithTheLinearStiffnessOfTheClosedForm) {
+  // Strand: three particles 0.1 m apart, the middle one moved by t across: phi = 2 atan(t / s),
+  // E = EI / (2 s) (2 tan(phi / 2))^2 = 2 EI t^2 / s^3 exactly.
+  const double s = 0.1, EI = 0.02;
+  Vec x(9);
+  x << 0, 0, 0, s, 0, 0, 2 * s, 0, 0;
+  RodBending rod;
+  rod.add(0, 1, 2, EI, x, true);
+  Vec v = Vec::Zero(9);
+  v[4] = 1.0;
+  for (double t : {1e-2, 1e-4, 1e-6}) {
+    const double E = rod.energy(x + t * v, 0, 1);
+    EXPECT_NEAR(E, 2.0 * EI * t * t / (s * s * s), 1e-12 * E) << t;
+    EXPECT_NEAR(rod.energy(x - t * v, 0, 1), E, 1e-12 * E);  // even: C^1 with E'(0) = 0
+  }
+  std::vector<double> g(9), H(81);
+  rod.gradient_hessian(x, 0, 1, PsdProjection::None, g.data(), H.data());
+  for (double gi : g) EXPECT_EQ(gi, 0.0);
+  const double vHv = Eigen::Map<const Eigen::Matrix<double, 9, 9>>(H.data())(4, 4);
+  EXPECT_NEAR(vHv, 4.0 * EI / (s * s * s), 1e-12 * vHv);  // E'' = 4 EI / s^3: linear stiffness
+
+  // Sheet: the hinge of hinge_at() flat, x3 lifted by t off the plane: theta = atan(t / 0.8),
+  // E = 1/2 k theta^2 with k = D |e|^2 / (A0 + A1) = D / (0.5 + 0.4).
+  const double D = 0.3, k = D / 0.9;
+  const Vec flat = hinge_at(0.0);
+  Vec w = Vec::Zero(12);
+  w[11] = 1.0;
+  DihedralBending d;
+  d.add({0, 1, 2, 3}, D, flat, false);
+  QuadraticBending q;
+  q.add({0, 1, 2, 3}, D, flat);
+  EXPECT_NEAR(d.stiffness(0), k, 1e-15);
+  for (double t : {1e-2, 1e-4}) {
+    const double theta = std::atan(t / 0.8);
+    EXPECT_NEAR(d.energy(flat + t * w, 0, 1), 0.5 * k * theta * theta, 1e-12 * theta * theta);
+    EXPECT_NEAR(d.energy(flat - t * w, 0, 1), d.energy(flat + t * w, 0, 1), 1e-13 * theta * theta);
+    // The quadratic model: |v| = K_3 t = t / 0.8 exactly.
+    EXPECT_NEAR(q.energy(flat + t * w, 0, 1), 0.5 * k * t * t / 0.64, 1e-12 * t * t);
+  }
+  std::vector<double> gd(12), Hd(144);
+  d.gradient_hessian(flat, 0, 1, PsdProjection::None, gd.data(), Hd.data());
+  for (double gi : gd) EXPECT_EQ(gi, 0.0);
+  EXPECT_NEAR(Hd[11 * 12 + 11], k / 0.64, 1e-12 * k);
+}
+
+/// The energy of a closed polygon of N particles on a circle of radius R against a straight rest,
+/// over the continuum's pi EI / R.
+double circle_ratio(int N) {
+  const double R = 0.3, EI = 0.05;
+  Vec x(3 * N);
+  for (int i = 0; i < N; ++i)
+    x.segment<3>(3 * i) = R * Vec3(std::cos(2 * M_PI * i / N), std::sin(2 * M_PI * i / N), 0.0);
+  RodBending rod;
+  for (int q = 0; q < N; ++q) rod.add((q + N - 1) % N, q, (q + 1) % N, EI, x, true);
+  return rod.energy(x, 0, rod.size()) / (M_PI * EI / R);
+}
+
+/// The energy of an n x n grid (side 1 m) bent onto a cylinder of radius 2 m about one grid axis,
+/// over 1/2 D kappa^2 times the area. Cells are split (a, b, d), (a, d, c) or, where alternating
+/// and i + j is odd, (a, b, c), (b, d, c) (the grid builder's checkerboard).
+double cylinder_ratio(int n, int axis, bool quadratic, bool alternating) {
+  const double side = 1.0, R = 2.0, D = 0.01, cell = side / (n - 1);
+  Vec flat(3 * n * n), bent(3 * n * n);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const Vec3 p(i * cell, j * cell, 0.0);
+      Vec3 q = p;
+      const double u = p[axis];
+      q[axis] = R * std::sin(u / R);
+      q[2] = R * (1.0 - std::cos(u / R));
+      flat.segment<3>(3 * (j * n + i)) = p;
+      bent.segment<3>(3 * (j * n + i)) = q;
+    }
+  std::vector<std::array<int, 3>> triangles;
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int a = j * n + i, b = a + 1, c = a + n, d = c + 1;
+      if (!alternating || (i + j) % 2 == 0) {
+        triangles.push_back({a, b, d});
+        triangles.push_back({a, d, c});
+      } else {
+        triangles.push_back({a, b, c});
+        triangles.push_back({b, d, c});
+      }
+    }
+  const auto hinges = interior_hinges(triangles);
+  double E = 0.0;
+  if (quadratic) {
+    QuadraticBending set;
+    for (const auto& h : hinges) set.add(h, D, flat);
+    E = set.energy(bent, 0, set.size());
+  } else {
+    DihedralBending set;
+    for (const auto& h : hinges) set.add(h, D, flat, true);
+    E = set.energy(bent, 0, set.size());
+  }
+  return E / (0.5 * D * side * side / (R * R));
+}
+
+TEST(Bending, CalibratedToTheContinuumRigidityAndConvergingUnderRefinement) {
+  // Strand: second order in the spacing (the discrete curvature 2 tan(phi/2) / s against 1/R;
+  // in closed form the ratio is N tan^2(pi/N) / (pi sin(pi/N)) = 1 + 5/6 (pi/N)^2 + ...).
+  const double e64 = std::abs(circle_ratio(64) - 1.0), e128 = std::abs(circle_ratio(128) - 1.0);
+  std::printf("circle: energy / (pi EI / R) - 1 = %.3e (N = 64), %.3e (N = 128)\n", e64, e128);
+  EXPECT_LT(e128, 1e-3);
+  EXPECT_NEAR(e64 / e128, 4.0, 0.1);
+  // Sheet: first order, from the boundary's missing hinges.
+  for (bool alternating : {false, true})
+    for (bool quadratic : {false, true})
+      for (int axis : {0, 1}) {
+        const double e21 = std::abs(cylinder_ratio(21, axis, quadratic, alternating) - 1.0);
+        const double e41 = std::abs(cylinder_ratio(41, axis, quadratic, alternating) - 1.0);
+        std::printf(
+            "%s, %s diagonals, bent about axis %d: energy / (D kappa^2 A / 2) - 1 = "
+            "%.3e (21), %.3e (41)\n",
+            quadratic ? "quadratic" : "dihedral", alternating ? "alternating" : "one-way", axis,
+            e21, e41);
+        EXPECT_LT(e41, 0.03);
+        EXPECT_NEAR(e21 / e41, 2.0, 0.15);
+      }
+}
+
+TEST(Bending, InteriorHingesAreTheEdgesOfTwoTriangles) {
+  // Two triangles sharing edge (1, 2), and a third on edge (1, 2) too in the second mesh.
+  std::vector<std::array<int, 3>> two = {{0, 1, 2}, {3, 2, 1}};
+  const auto h = interior_hinges(two);
+  ASSERT_EQ(h.size(), 1u);
+  EXPECT_EQ(h[0][1], 1);
+  EXPECT_EQ(h[0][2], 2);
+  EXPECT_EQ(std::min(h[0][0], h[0][3]), 0);
+  EXPECT_EQ(std::max(h[0][0], h[0][3]), 3);
+  std::vector<std::array<int, 3>> three = {{0, 1, 2}, {3, 2, 1}, {1, 2, 4}};
+  size_t bad = 0;
+  EXPECT_TRUE(interior_hinges(three, &bad).empty());
+  EXPECT_EQ(bad, 1u);
+}
+
+}  // namespace
+}  // namespace hooke

@@ -1,0 +1,242 @@
+// Beam theory for the [bending] section (issue 54, acceptance 2), through the scene loader: the
+// static equilibrium of a strand (rod) clamped by its first two particles and sagging under
+// gravity, found by Newton on the exact Hessian, against the Euler-Bernoulli cantilever under the
+// same point loads; the sag is linear in the load; a clamped strand buckles under an end load at
+// pi^2 EI / (4 L^2). A sheet strip (dihedral, quadratic) clamped by two columns: see below. The
+// discrete clamp (two pinned particles fix the tangent of the edge between them) is the beam's
+// built-in end at that edge's midpoint, which makes the agreement second order in the spacing.
+#include <gtest/gtest.h>
+
+#include <Eigen/Dense>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include "hooke/model/mass_spring_system.hpp"
+#include "problems/input_error.hpp"
+#include "problems/scene.hpp"
+
+namespace hooke {
+namespace {
+
+/// The free coordinates of a system.
+std::vector<Index> free_dofs(const MassSpringSystem& sys) {
+  std::vector<Index> f;
+  for (Index p = 0; p < sys.num_particles(); ++p)
+    if (!sys.pinned()[size_t(p)])
+      for (int c = 0; c < 3; ++c) f.push_back(3 * p + c);
+  return f;
+}
+
+/// -K (the exact Hessian of the potential) on the free coordinates at x, dense.
+Eigen::MatrixXd free_hessian(const MassSpringSystem& sys, const Vec& x,
+                             const std::vector<Index>& dofs) {
+  Jacobians J = sys.make_jacobians();
+  JacobianOptions exact;
+  exact.clamp_compressed = false;
+  sys.assemble_jacobians(x, Vec::Zero(x.size()), J, exact);
+  const Eigen::MatrixXd K = Eigen::MatrixXd(J.K);
+  Eigen::MatrixXd H(dofs.size(), dofs.size());
+  for (size_t i = 0; i < dofs.size(); ++i)
+    for (size_t j = 0; j < dofs.size(); ++j) H(Index(i), Index(j)) = -K(dofs[i], dofs[j]);
+  return H;
+}
+
+/// The static equilibrium from the scene's initial shape: Newton on the exact Hessian until the
+/// free forces are 1e-8 of the total weight (the stiff springs' round-off, a few k 1e-16 |x|, is
+/// about 1e-9 of it; Newton converges quadratically down to it).
+Vec static_equilibrium(const Scene& scene) {
+  const MassSpringSystem& sys = *scene.system;
+  const std::vector<Index> dofs = free_dofs(sys);
+  Vec x = scene.initial.x, f(x.size());
+  const Vec v = Vec::Zero(x.size());
+  sys.compute_forces(x, v, f);
+  const double weight = f.cwiseAbs().sum();
+  for (int it = 0; it < 50; ++it) {
+    sys.compute_forces(x, v, f);
+    Eigen::VectorXd r(dofs.size());
+    for (size_t i = 0; i < dofs.size(); ++i) r[Index(i)] = f[dofs[i]];
+    if (r.cwiseAbs().maxCoeff() <= 1e-8 * weight) return x;
+    const Eigen::VectorXd dx = free_hessian(sys, x, dofs).ldlt().solve(r);
+    for (size_t i = 0; i < dofs.size(); ++i) x[dofs[i]] += dx[Index(i)];
+  }
+  ADD_FAILURE() << "Newton did not reach the static equilibrium";
+  return x;
+}
+
+/// The Euler-Bernoulli cantilever built in at x = clamp with rigidity EI under point loads P_i at
+/// x_i: the deflection at x_tip, sum_i P_i a_i^2 (3 L - a_i) / (6 EI), a_i = x_i - clamp.
+double cantilever_tip(const std::vector<double>& xs, const std::vector<double>& loads, double clamp,
+                      double x_tip, double EI) {
+  const double L = x_tip - clamp;
+  double d = 0.0;
+  for (size_t i = 0; i < xs.size(); ++i) {
+    const double a = xs[i] - clamp;
+    d += loads[i] * a * a * (3.0 * L - a) / (6.0 * EI);
+  }
+  return d;
+}
+
+/// A strand of n particles 1 m long along x, clamped by its first two, rod bending EI, stiff
+/// stretch springs, under gravity g along -y.
+std::string strand_scene(int n, double EI, double g, double k = 1e5) {
+  return "[mesh]\ntype = 'chain'\nn = " + std::to_string(n) +
+         "\nlength = 1.0\npins = [0, 1]\nmass = " + std::to_string(0.04 / (n - 1)) +
+         "\n[springs]\nstiffness = " + std::to_string(k) +
+         "\n[bending]\nmodel = 'rod'\nstiffness = " + std::to_string(EI) +
+         "\n[forces]\ngravity = [0.0, " + std::to_string(-g) +
+         ", 0.0]\n[integrator]\nmethod = 'implicit'\n";
+}
+
+/// Sag of the strand's tip (m, downwards) and the beam's, for n particles.
+std::pair<double, double> strand_sag(int n, double g) {
+  const double EI = 20.0;
+  const Scene scene = load_scene_from_string(strand_scene(n, EI, g), "strand.toml");
+  const Vec x = static_equilibrium(scene);
+  const double s = 1.0 / (n - 1), m = 0.04 / (n - 1);
+  std::vector<double> xs, loads;
+  for (int i = 2; i < n; ++i) {
+    xs.push_back(i * s);
+    loads.push_back(m * g);
+  }
+  return {-x[3 * (n - 1) + 1], cantilever_tip(xs, loads, 0.5 * s, 1.0, EI)};
+}
+
+TEST(BendingScene, StrandCantileverSagsAsEulerBernoulliAndLinearlyInTheLoad) {
+  const auto [sag41, beam41] = strand_sag(41, 9.81);
+  const auto [sag81, beam81] = strand_sag(81, 9.81);
+  const double e41 = sag41 / beam41 - 1.0, e81 = sag81 / beam81 - 1.0;
+  std::printf(
+      "strand cantilever: tip sag %.6e m vs beam %.6e m (%+.3e) at 41 particles, "
+      "%+.3e at 81\n",
+      sag41, beam41, e41, e81);
+  EXPECT_LT(sag41 / 1.0, 3e-3);  // small: the beam's regime
+  EXPECT_LT(std::abs(e41), 0.01);
+  EXPECT_NEAR(e41 / e81, 4.0, 0.5);  // second order in the spacing
+  const double sag_double = strand_sag(41, 2.0 * 9.81).first;
+  std::printf("strand cantilever: sag(2 g) / sag(g) = %.8f\n", sag_double / sag41);
+  EXPECT_NEAR(sag_double / sag41, 2.0, 1e-3);
+}
+
+/// A sheet strip 1 m x 0.1 m in the horizontal plane (x along its length, nx particles, square
+/// cells), clamped by its first two columns, bending D, under gravity along -y: the tip
+/// column's mean sag and the beam's (EI = D times the width, each column's weight at its x).
+std::pair<double, double> sheet_sag(const std::string& model, int nx) {
+  const int ny = (nx - 1) / 10 + 1;
+  const double D = 20.0, width = 0.1, g = 9.81, s = 1.0 / (nx - 1);
+  std::string pins = "[";
+  for (int j = 0; j < ny; ++j)
+    pins += "[0, " + std::to_string(j) + "], [1, " + std::to_string(j) + "], ";
+  pins += "]";
+  const double m = 0.004 / ((nx - 1) * ny);
+  const std::string text =
+      "[mesh]\ntype = 'grid'\nnx = " + std::to_string(nx) + "\nny = " + std::to_string(ny) +
+      "\nwidth = 1.0\nheight = " + std::to_string(width) +
+      "\nflexion = false\nmass = " + std::to_string(m) + "\npins = " + pins +
+      "\n[springs]\nstiffness = 1e5\n[bending]\nmodel = '" + model +
+      "'\nstiffness = " + std::to_string(D) +
+      "\n[forces]\ngravity = [0.0, -9.81, 0.0]\n[integrator]\nmethod = 'implicit'\n";
+  const Scene scene = load_scene_from_string(text, "sheet.toml");
+  const Vec x = static_equilibrium(scene);
+  double tip = 0.0;
+  for (int j = 0; j < ny; ++j) tip -= x[3 * (j * nx + nx - 1) + 1] / ny;
+  std::vector<double> xs, loads;
+  for (int i = 2; i < nx; ++i) {
+    xs.push_back(i * s);
+    loads.push_back(ny * m * g);
+  }
+  return {tip, cantilever_tip(xs, loads, 0.5 * s, 1.0, D * width)};
+}
+
+// The sheet strip is NOT yet the beam (issue 54, acceptance 2, open): both hinge models sag
+// 1.20-1.23x the Euler-Bernoulli cantilever of rigidity D times the width, at 21 to 81 particles
+// along and with either diagonal pattern. A deflection constant across the width has exactly the
+// strand's energy (the vertical hinges carry the second difference of w along x, the others
+// nothing), but the strip lowers its energy further by a cell-scale fluctuation across the width:
+// the cylinder calibration, which prescribes every vertex, does not let that relax. What holds and
+// is checked here: the two independent models agree on the strip, and the deviation is printed.
+TEST(BendingScene, SheetStripSagsAlikeUnderBothHingeModels) {
+  const auto [dihedral, beam] = sheet_sag("dihedral", 41);
+  const double quadratic = sheet_sag("quadratic", 41).first;
+  std::printf(
+      "sheet strip cantilever at 41 along: dihedral %.6e m, quadratic %.6e m, beam %.6e m "
+      "(dihedral / beam - 1 = %+.3e)\n",
+      dihedral, quadratic, beam, dihedral / beam - 1.0);
+  EXPECT_LT(dihedral, 3e-3);  // small: both models' linear regime, where they agree
+  EXPECT_NEAR(quadratic / dihedral, 1.0, 1e-3);
+}
+
+/// The end load (N, along -x at the tip) at which the clamped strand of n particles (EI = 1)
+/// loses stability: the smallest eigenvalue of the free Hessian at the straight, compressed
+/// equilibrium crosses zero (bisection).
+double buckling_load(int n) {
+  // Stiff springs: the strand's axial give P / k shortens the edges, which stiffens the bending
+  // by about 2 P / (k s) (2e-4 at 81 particles).
+  const double k = 1e7, s = 1.0 / (n - 1);
+  const Scene scene = load_scene_from_string(strand_scene(n, 1.0, 0.0, k), "strand.toml");
+  const MassSpringSystem& sys = *scene.system;
+  const std::vector<Index> dofs = free_dofs(sys);
+  auto lowest = [&](double P) {
+    Vec x = scene.initial.x;
+    for (int i = 2; i < n; ++i) x[3 * i] = s + (i - 1) * (s - P / k);  // each spring carries P
+    const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(free_hessian(sys, x, dofs));
+    return eig.eigenvalues()[0];
+  };
+  double lo = 0.0, hi = 10.0;
+  EXPECT_GT(lowest(lo), 0.0);
+  EXPECT_LT(lowest(hi), 0.0);
+  for (int it = 0; it < 60; ++it) {
+    const double mid = 0.5 * (lo + hi);
+    (lowest(mid) > 0.0 ? lo : hi) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+TEST(BendingScene, ClampedStrandBucklesAtEulersLoad) {
+  for (int n : {41, 81}) {
+    const double L = 1.0 - 0.5 / (n - 1);  // from the built-in end at the clamp's midpoint
+    const double euler = M_PI * M_PI / (4.0 * L * L);
+    const double P = buckling_load(n);
+    std::printf(
+        "clamped strand, %d particles: buckles at %.6f N, Euler pi^2 EI / (4 L^2) = "
+        "%.6f N (%+.3e)\n",
+        n, P, euler, P / euler - 1.0);
+    EXPECT_NEAR(P / euler, 1.0, n == 41 ? 0.01 : 0.003);
+  }
+}
+
+TEST(BendingScene, RefusesWhatTheMeshCannotCarry) {
+  auto refused = [](const std::string& text, const std::string& key) {
+    try {
+      load_scene_from_string(text, "bad.toml");
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(key), std::string::npos) << e.what();
+      return true;
+    }
+    return false;
+  };
+  const std::string grid = "[mesh]\ntype = 'grid'\nnx = 4\nny = 4\n";
+  const std::string hair = "[mesh]\ntype = 'hair'\nn = 12\ncurl_radius = 0.05\ncurl_turns = 2\n";
+  EXPECT_TRUE(refused(grid + "[bending]\nmodel = 'rod'\nstiffness = 1\n", "bending.model"));
+  EXPECT_TRUE(refused(hair + "[bending]\nmodel = 'dihedral'\nstiffness = 1\n", "bending.model"));
+  EXPECT_TRUE(refused(grid + "[bending]\nmodel = 'dihedral'\n", "bending.stiffness"));
+  EXPECT_TRUE(refused(grid + "[bending]\nmodel = 'dihedral'\nstiffness = 1\nrest = 'straight'\n",
+                      "bending.rest"));
+  EXPECT_TRUE(refused(grid + "[bending]\nmodel = 'rod'\nstiffness = 1\ndamping = 1\n", "bending"));
+  EXPECT_FALSE(refused(grid + "[bending]\nmodel = 'quadratic'\nstiffness = 1\n", "bending"));
+  // fast-mass-spring takes no element sets yet; xpbd takes the dihedral's constraint form but not
+  // the quadratic model, which has none.
+  EXPECT_TRUE(refused(grid + "[bending]\nmodel = 'dihedral'\nstiffness = 1\n[integrator]\n"
+                             "method = 'fast-mass-spring'\n",
+                      "integrator.method"));
+  EXPECT_FALSE(refused(grid + "[bending]\nmodel = 'dihedral'\nstiffness = 1\n[integrator]\n"
+                              "method = 'xpbd'\n",
+                       "integrator.method"));
+  EXPECT_TRUE(refused(grid + "[bending]\nmodel = 'quadratic'\nstiffness = 1\n[integrator]\n"
+                             "method = 'xpbd'\n",
+                      "integrator.method"));
+}
+
+}  // namespace
+}  // namespace hooke
