@@ -48,7 +48,9 @@ std::unique_ptr<ElementSet> cloth_bending(TableReader& bending, const std::strin
       bending.fail("model", os.str());
     }
   if (model == "dihedral") {
-    auto set = std::make_unique<DihedralBending>();
+    const bool gauss_newton = bending.choice("projection", std::string("eigenvalues"),
+                                             {"eigenvalues", "gauss-newton"}) == "gauss-newton";
+    auto set = std::make_unique<DihedralBending>(gauss_newton);
     for (const auto& h : hinges) set->add(h, D, b.x, flat);
     return set;
   }

@@ -21,24 +21,32 @@ Mat3 skew(const Vec3& v) {
 }
 
 /// Maps a gradient and Hessian over NV difference vectors (each a signed sum of the stencil's NX
-/// positions, coef[v][p]) to the stencil's positions: g = J^T gv, H = J^T Hv J, written at g and
-/// (column-major, 3 NX x 3 NX) at H when not null.
+/// positions, coef[v][p] in {-1, 0, 1}) to the stencil's positions: g = J^T gv, H = J^T Hv J,
+/// written at g and (column-major, 3 NX x 3 NX) at H when not null. Summed 3 x 3 block by block
+/// over the nonzero coefficients (J is mostly zeros): exactly symmetric when Hv is.
 template <int NV, int NX>
 void to_positions(const Eigen::Matrix<double, 3 * NV, 1>& gv,
                   const Eigen::Matrix<double, 3 * NV, 3 * NV>* Hv, const int (&coef)[NV][NX],
                   double* g, double* H) {
-  Eigen::Matrix<double, 3 * NV, 3 * NX> J = Eigen::Matrix<double, 3 * NV, 3 * NX>::Zero();
-  for (int v = 0; v < NV; ++v)
-    for (int p = 0; p < NX; ++p)
-      if (coef[v][p] != 0)
-        J.template block<3, 3>(3 * v, 3 * p) = double(coef[v][p]) * Mat3::Identity();
   Eigen::Map<Eigen::Matrix<double, 3 * NX, 1>> gm(g);
-  gm.noalias() = J.transpose() * gv;
-  if (H && Hv) {
-    Eigen::Map<Eigen::Matrix<double, 3 * NX, 3 * NX>> Hm(H);
-    Hm.noalias() = J.transpose() * (*Hv) * J;
-    Hm = (0.5 * (Hm + Hm.transpose())).eval();  // exactly symmetric
-  }
+  gm.setZero();
+  for (int p = 0; p < NX; ++p)
+    for (int v = 0; v < NV; ++v)
+      if (coef[v][p] != 0)
+        gm.template segment<3>(3 * p) += double(coef[v][p]) * gv.template segment<3>(3 * v);
+  if (!H || !Hv) return;
+  // T = J^T Hv (3 NX x 3 NV), then H = T J.
+  Eigen::Matrix<double, 3 * NX, 3 * NV> T = Eigen::Matrix<double, 3 * NX, 3 * NV>::Zero();
+  for (int p = 0; p < NX; ++p)
+    for (int v = 0; v < NV; ++v)
+      if (coef[v][p] != 0)
+        T.template middleRows<3>(3 * p) += double(coef[v][p]) * Hv->template middleRows<3>(3 * v);
+  Eigen::Map<Eigen::Matrix<double, 3 * NX, 3 * NX>> Hm(H);
+  Hm.setZero();
+  for (int q = 0; q < NX; ++q)
+    for (int w = 0; w < NV; ++w)
+      if (coef[w][q] != 0)
+        Hm.template middleCols<3>(3 * q) += double(coef[w][q]) * T.template middleCols<3>(3 * w);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -155,6 +163,26 @@ bool hinge_angle_derivatives(const HingeVectors& v, Vec9& G, Mat9* Ht) {
   *Ht = (X * HY - Y * HX + gY * gX.transpose() - gX * gY.transpose()) / R -
         G * (2.0 * X * gX + 2.0 * Y * gY).transpose() / R;
   return true;
+}
+
+/// Projects a hinge's Hessian over (e, a, b) to PSD (see bending.hpp). theta does not change when
+/// a or b slides along e, so (0, e, 0) and (0, 0, e) are exact null vectors of the Hessian and of
+/// theta's gradient: with Q = diag(I, [u w], [u w]) (u, w orthonormal, both orthogonal to e) the
+/// Hessian is Q (Q^T H Q) Q^T, and projecting the 7 x 7 middle is projecting H, at half the cost.
+void project_hinge(const HingeVectors& v, Mat9& H, PsdProjection projection) {
+  const Vec3 eh = v.e.normalized();
+  const Vec3 u = eh.unitOrthogonal(), w = eh.cross(u);
+  Eigen::Matrix<double, 9, 7> Q = Eigen::Matrix<double, 9, 7>::Zero();
+  Q.block<3, 3>(0, 0).setIdentity();
+  Q.block<3, 1>(3, 3) = u;
+  Q.block<3, 1>(3, 4) = w;
+  Q.block<3, 1>(6, 5) = u;
+  Q.block<3, 1>(6, 6) = w;
+  Eigen::Matrix<double, 7, 7> H7 = Q.transpose() * H * Q;
+  H7 = (0.5 * (H7 + H7.transpose())).eval();
+  project_psd(H7.data(), 7, projection);
+  H.noalias() = Q * H7 * Q.transpose();
+  H = (0.5 * (H + H.transpose())).eval();
 }
 
 /// theta - theta0 in (-pi, pi].
@@ -317,9 +345,10 @@ void DihedralBending::gradient_hessian(ConstRef x, size_t begin, size_t end,
     double* ge = g + 12 * (e - begin);
     double* He = H ? H + 144 * (e - begin) : nullptr;
     const HingeVectors v = hinge_vectors(x, h.ids.data());
+    const bool gauss_newton = m_gauss_newton && projection != PsdProjection::None;
     Vec9 G;
     Mat9 Ht;
-    if (!hinge_angle_derivatives(v, G, He ? &Ht : nullptr)) {
+    if (!hinge_angle_derivatives(v, G, He && !gauss_newton ? &Ht : nullptr)) {
       std::fill(ge, ge + 12, 0.0);
       if (He) std::fill(He, He + 144, 0.0);
       continue;
@@ -327,10 +356,12 @@ void DihedralBending::gradient_hessian(ConstRef x, size_t begin, size_t end,
     const double d = wrap_angle(hinge_angle(v) - h.theta0);
     const Vec9 gv = h.k * d * G;
     Mat9 Hv;
-    if (He) {
+    if (He && gauss_newton) {
+      Hv.noalias() = h.k * G * G.transpose();
+    } else if (He) {
       Hv = h.k * (G * G.transpose() + d * Ht);
       Hv = (0.5 * (Hv + Hv.transpose())).eval();
-      project_psd(Hv.data(), 9, projection);  // in the coordinates (e, a, b) (see bending.hpp)
+      if (projection != PsdProjection::None) project_hinge(v, Hv, projection);
     }
     to_positions<3, 4>(gv, He ? &Hv : nullptr, kHingeCoef, ge, He);
   }

@@ -13,18 +13,39 @@ ElementForce::ElementForce(std::unique_ptr<ElementSet> set) : m_set(std::move(se
                m_set->name() << ": stencil size " << m_k << " outside 1.." << kMaxStencil);
 }
 
+void ElementForce::scatter_forces(size_t begin, size_t end, const double* g, VecRef f) const {
+  const size_t dofs = size_t(3 * m_k);
+  for (size_t e = begin; e < end; ++e) {
+    const int* s = m_set->stencil(e);
+    const double* ge = g + dofs * (e - begin);
+    for (int a = 0; a < m_k; ++a)
+      for (int c = 0; c < 3; ++c) f[3 * s[a] + c] -= ge[3 * a + c];
+  }
+}
+
 void ElementForce::add_forces(ConstRef x, ConstRef /*v*/, VecRef f) const {
   const size_t n = m_set->size(), dofs = size_t(3 * m_k);
+  std::unique_lock<std::mutex> lock(m_chunk_mutex, std::defer_lock);
+  if (run_parallel(static_cast<long long>(n), kParallelElements) && !m_chunk_g.empty() &&
+      lock.try_lock()) {
+    for (size_t c0 = 0; c0 < n; c0 += kChunk) {
+      const size_t c1 = std::min(n, c0 + kChunk);
+      const long long batches = static_cast<long long>((c1 - c0 + kBatch - 1) / kBatch);
+#pragma omp parallel for schedule(dynamic, 4)
+      for (long long b = 0; b < batches; ++b) {
+        const size_t e0 = c0 + size_t(b) * kBatch, e1 = std::min(c1, e0 + kBatch);
+        m_set->gradient_hessian(x, e0, e1, PsdProjection::None, m_chunk_g.data() + dofs * (e0 - c0),
+                                nullptr);
+      }
+      scatter_forces(c0, c1, m_chunk_g.data(), f);
+    }
+    return;
+  }
   std::array<double, kBatch * kMaxElementDofs> g;
   for (size_t b = 0; b < n; b += kBatch) {
     const size_t e_end = std::min(n, b + kBatch);
     m_set->gradient_hessian(x, b, e_end, PsdProjection::None, g.data(), nullptr);
-    for (size_t e = b; e < e_end; ++e) {
-      const int* s = m_set->stencil(e);
-      const double* ge = g.data() + dofs * (e - b);
-      for (int a = 0; a < m_k; ++a)
-        for (int c = 0; c < 3; ++c) f[3 * s[a] + c] -= ge[3 * a + c];
-    }
+    scatter_forces(b, e_end, g.data(), f);
   }
 }
 
@@ -66,7 +87,7 @@ void ElementForce::declare_blocks(BlockPattern& pattern) const {
 }
 
 void ElementForce::bind(const BlockPattern& pattern) {
-  const size_t n = m_set->size(), kk = size_t(m_k * m_k);
+  const size_t n = m_set->size(), kk = size_t(m_k * m_k), dofs = size_t(3 * m_k);
   m_slots.resize(n * kk);
   for (size_t e = 0; e < n; ++e) {
     const int* s = m_set->stencil(e);
@@ -74,33 +95,59 @@ void ElementForce::bind(const BlockPattern& pattern) {
       for (int b = 0; b < m_k; ++b)
         m_slots[e * kk + size_t(a * m_k + b)] = pattern.slot(s[a], s[b]);
   }
+  if (static_cast<long long>(n) >= kParallelElements) {
+    m_chunk_g.assign(kChunk * dofs, 0.0);
+    m_chunk_H.assign(kChunk * dofs * dofs, 0.0);
+  }
+}
+
+void ElementForce::scatter_hessians(size_t begin, size_t end, const double* H,
+                                    SparseMatrix& K) const {
+  const size_t dofs = size_t(3 * m_k), kk = size_t(m_k * m_k);
+  double* values = K.valuePtr();
+  for (size_t e = begin; e < end; ++e) {
+    const double* He = H + dofs * dofs * (e - begin);
+    for (int a = 0; a < m_k; ++a)
+      for (int c = 0; c < m_k; ++c) {
+        const BlockSlot& slot = m_slots[e * kk + size_t(a * m_k + c)];
+        double* p = values + slot.offset;
+        // Block (a, c): rows 3a.., columns 3c.. of the column-major 3K x 3K Hessian.
+        for (int cc = 0; cc < 3; ++cc)
+          for (int r = 0; r < 3; ++r)
+            p[cc * slot.stride + r] -= He[size_t(3 * c + cc) * dofs + size_t(3 * a + r)];
+      }
+  }
 }
 
 void ElementForce::add_jacobians(ConstRef x, ConstRef /*v*/, const JacobianOptions& options,
                                  SparseMatrix& K, SparseMatrix& /*D*/) const {
   HOOKE_ASSERT(m_slots.size() == m_set->size() * size_t(m_k * m_k),
                m_set->name() << ": add_jacobians before bind");
-  const size_t n = m_set->size(), dofs = size_t(3 * m_k), kk = size_t(m_k * m_k);
+  const size_t n = m_set->size(), dofs = size_t(3 * m_k);
   const PsdProjection projection =
       options.clamp_compressed ? PsdProjection::Clamp : PsdProjection::None;
+  std::unique_lock<std::mutex> lock(m_chunk_mutex, std::defer_lock);
+  if (run_parallel(static_cast<long long>(n), kParallelElements) && !m_chunk_H.empty() &&
+      lock.try_lock()) {
+    for (size_t c0 = 0; c0 < n; c0 += kChunk) {
+      const size_t c1 = std::min(n, c0 + kChunk);
+      const long long batches = static_cast<long long>((c1 - c0 + kBatch - 1) / kBatch);
+#pragma omp parallel for schedule(dynamic, 4)
+      for (long long b = 0; b < batches; ++b) {
+        const size_t e0 = c0 + size_t(b) * kBatch, e1 = std::min(c1, e0 + kBatch);
+        m_set->gradient_hessian(x, e0, e1, projection, m_chunk_g.data() + dofs * (e0 - c0),
+                                m_chunk_H.data() + dofs * dofs * (e0 - c0));
+      }
+      scatter_hessians(c0, c1, m_chunk_H.data(), K);
+    }
+    return;
+  }
   std::array<double, kBatch * kMaxElementDofs> g;
   std::array<double, kBatch * kMaxElementDofs * kMaxElementDofs> H;
-  double* values = K.valuePtr();
   for (size_t b = 0; b < n; b += kBatch) {
     const size_t e_end = std::min(n, b + kBatch);
     m_set->gradient_hessian(x, b, e_end, projection, g.data(), H.data());
-    for (size_t e = b; e < e_end; ++e) {
-      const double* He = H.data() + dofs * dofs * (e - b);
-      for (int a = 0; a < m_k; ++a)
-        for (int c = 0; c < m_k; ++c) {
-          const BlockSlot& slot = m_slots[e * kk + size_t(a * m_k + c)];
-          double* p = values + slot.offset;
-          // Block (a, c): rows 3a.., columns 3c.. of the column-major 3K x 3K Hessian.
-          for (int cc = 0; cc < 3; ++cc)
-            for (int r = 0; r < 3; ++r)
-              p[cc * slot.stride + r] -= He[size_t(3 * c + cc) * dofs + size_t(3 * a + r)];
-        }
-    }
+    scatter_hessians(b, e_end, H.data(), K);
   }
 }
 

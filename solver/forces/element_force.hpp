@@ -1,5 +1,6 @@
 #pragma once
 #include <memory>
+#include <mutex>
 #include <vector>
 
 #include "hooke/forces/element_set.hpp"
@@ -15,8 +16,12 @@ namespace hooke {
 /// add_jacobians projects each element's Hessian to PSD (PsdProjection::Clamp) when
 /// options.clamp_compressed is set (the option that makes -K positive semi-definite for springs),
 /// and uses the exact Hessian otherwise. The discrete gradient is Gonzalez's midpoint form per
-/// element (add_discrete_gradient). Evaluation is serial over elements in batches of kBatch, with
-/// scratch on the stack: no allocation.
+/// element (add_discrete_gradient). Evaluation is in batches of kBatch elements. For sets of at
+/// least kParallelElements, add_forces and add_jacobians run the batches of each chunk of kChunk
+/// elements on the threads into a buffer made at bind(), then add them into f or K in element
+/// order: the result has the same bits on any number of threads. A call that finds the buffer in
+/// use (another thread's call on the same force) runs serially with scratch on the stack. No
+/// allocation either way.
 class ElementForce final : public Force {
  public:
   explicit ElementForce(std::unique_ptr<ElementSet> set);
@@ -47,11 +52,21 @@ class ElementForce final : public Force {
 
   /// Elements per batched call of the set.
   static constexpr size_t kBatch = 8;
+  /// Elements per chunk of the threaded path, and the smallest set that takes it.
+  static constexpr size_t kChunk = 1024;
+  static constexpr long long kParallelElements = 2048;
 
  private:
+  /// f -= the gradients g (3K per element) of elements [begin, end).
+  void scatter_forces(size_t begin, size_t end, const double* g, VecRef f) const;
+  /// K -= the Hessians H (9K^2 per element) of elements [begin, end).
+  void scatter_hessians(size_t begin, size_t end, const double* H, SparseMatrix& K) const;
+
   std::unique_ptr<ElementSet> m_set;
-  int m_k = 0;                     // stencil size K
-  std::vector<BlockSlot> m_slots;  // per element, K x K slots (row a, column b at a K + b)
+  int m_k = 0;                       // stencil size K
+  std::vector<BlockSlot> m_slots;    // per element, K x K slots (row a, column b at a K + b)
+  mutable std::mutex m_chunk_mutex;  // guards the chunk buffers
+  mutable std::vector<double> m_chunk_g, m_chunk_H;  // kChunk gradients and Hessians
 };
 
 }  // namespace hooke

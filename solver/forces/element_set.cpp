@@ -8,8 +8,8 @@ namespace hooke {
 
 namespace {
 
-/// project_psd at a fixed size: the eigensolver unrolled for the stencils' common sizes (6, 9 and
-/// 12 coordinates), about twice as fast as the general size.
+/// project_psd at a fixed size: the eigensolver unrolled for the stencils' common sizes (6, 7, 9
+/// and 12 coordinates), about twice as fast as the general size.
 template <int N>
 void project_psd_fixed(double* H, PsdProjection projection) {
   using Block = Eigen::Matrix<double, N, N>;
@@ -30,6 +30,7 @@ void project_psd(double* H, int n, PsdProjection projection) {
   if (projection == PsdProjection::None) return;
   HOOKE_ASSERT(n >= 1 && n <= kMaxElementDofs, "project_psd of a " << n << " x " << n << " block");
   if (n == 6) return project_psd_fixed<6>(H, projection);
+  if (n == 7) return project_psd_fixed<7>(H, projection);
   if (n == 9) return project_psd_fixed<9>(H, projection);
   if (n == 12) return project_psd_fixed<12>(H, projection);
   using Block =

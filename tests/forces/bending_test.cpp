@@ -194,6 +194,32 @@ TEST(Bending, ProjectedHessiansArePsdAndExactWhereTheHessianIsPsd) {
   std::printf("%d indefinite and %d semi-definite exact Hessians\n", indefinite, definite);
 }
 
+TEST(Bending, GaussNewtonHingeHessianIsTheGradientsOuterProductExactAtRest) {
+  std::mt19937 rng(13);
+  for (int t = 0; t < 10; ++t) {
+    const Vec x = random_positions(4, rng), rest = random_positions(4, rng);
+    DihedralBending d(true);
+    d.add({0, 1, 2, 3}, 0.7, rest, false);
+    std::vector<double> g(12), gn(144), exact(144), dC(12);
+    double C = 0.0, k = 0.0;
+    for (const Vec* at : {&x, &rest}) {
+      d.gradient_hessian(*at, 0, 1, PsdProjection::Clamp, g.data(), gn.data());
+      d.gradient_hessian(*at, 0, 1, PsdProjection::None, g.data(), exact.data());
+      d.constraint(*at, 0, C, dC.data(), k);
+      const double scale = spectrum(exact, 12).second;
+      for (int i = 0; i < 12; ++i)
+        for (int j = 0; j < 12; ++j) {
+          const size_t ij = size_t(12 * j + i);
+          EXPECT_NEAR(gn[ij], k * dC[size_t(i)] * dC[size_t(j)], 1e-13 * scale);
+          if (at == &rest) {
+            EXPECT_NEAR(gn[ij], exact[ij], 1e-12 * scale);  // d = 0: exact
+          }
+        }
+      EXPECT_GE(spectrum(gn, 12).first, -1e-12 * scale);
+    }
+  }
+}
+
 TEST(Bending, ConstraintFormsAreTheEnergysRootWithItsGradient) {
   std::mt19937 rng(7);
   for (int t = 0; t < 5; ++t) {
