@@ -437,4 +437,24 @@ void QuadraticBending::gradient_hessian(ConstRef x, size_t begin, size_t end,
   }
 }
 
+// ---------------------------------------------------------------------------------------------
+
+std::unique_ptr<ElementSet> RodBending::localize(const LocalIndex& index) const {
+  auto local = std::make_unique<RodBending>();
+  local->m_hinges = localize_elements(m_hinges, index, name());
+  return local;
+}
+
+std::unique_ptr<ElementSet> DihedralBending::localize(const LocalIndex& index) const {
+  auto local = std::make_unique<DihedralBending>(m_gauss_newton);
+  local->m_hinges = localize_elements(m_hinges, index, name());
+  return local;
+}
+
+std::unique_ptr<ElementSet> QuadraticBending::localize(const LocalIndex& index) const {
+  auto local = std::make_unique<QuadraticBending>();
+  local->m_hinges = localize_elements(m_hinges, index, name());
+  return local;
+}
+
 }  // namespace hooke

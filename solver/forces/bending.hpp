@@ -56,6 +56,7 @@ class RodBending final : public ElementSet {
                         double* H) const override;
   bool has_constraint() const override { return true; }
   void constraint(ConstRef x, size_t e, double& C, double* dC, double& stiffness) const override;
+  std::unique_ptr<ElementSet> localize(const LocalIndex& index) const override;
 
   /// Element e's stiffness EI / l (N m) and rest curvature kappa0.
   double stiffness(size_t e) const { return m_hinges[e].k; }
@@ -131,6 +132,7 @@ class DihedralBending final : public ElementSet {
                         double* H) const override;
   bool has_constraint() const override { return true; }
   void constraint(ConstRef x, size_t e, double& C, double* dC, double& stiffness) const override;
+  std::unique_ptr<ElementSet> localize(const LocalIndex& index) const override;
 
   double stiffness(size_t e) const { return m_hinges[e].k; }
   double rest_angle(size_t e) const { return m_hinges[e].theta0; }
@@ -166,6 +168,7 @@ class QuadraticBending final : public ElementSet {
   double energy(ConstRef x, size_t begin, size_t end) const override;
   void gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection, double* g,
                         double* H) const override;
+  std::unique_ptr<ElementSet> localize(const LocalIndex& index) const override;
 
   /// Element e's weights K (1/m) and stiffness k (N m).
   const std::array<double, 4>& weights(size_t e) const { return m_hinges[e].w; }

@@ -13,6 +13,32 @@ ElementForce::ElementForce(std::unique_ptr<ElementSet> set) : m_set(std::move(se
                m_set->name() << ": stencil size " << m_k << " outside 1.." << kMaxStencil);
 }
 
+template <class Evaluate, class Scatter>
+bool ElementForce::in_chunks(Evaluate&& evaluate, Scatter&& scatter) const {
+  const size_t n = m_set->size();
+  if (!run_parallel(static_cast<long long>(n), kParallelElements) || m_chunk_H.empty())
+    return false;
+  std::unique_lock<std::mutex> lock(m_chunk_mutex, std::try_to_lock);
+  if (!lock.owns_lock()) return false;
+  for (size_t c0 = 0; c0 < n; c0 += kChunk) {
+    const size_t c1 = std::min(n, c0 + kChunk);
+    const long long batches = static_cast<long long>((c1 - c0 + kBatch - 1) / kBatch);
+#pragma omp parallel for schedule(dynamic, 4)
+    for (long long b = 0; b < batches; ++b) {
+      const size_t e0 = c0 + size_t(b) * kBatch;
+      evaluate(e0, std::min(c1, e0 + kBatch), c0);
+    }
+    scatter(c0, c1);
+  }
+  return true;
+}
+
+std::unique_ptr<Force> ElementForce::localize(const LocalIndex& index) const {
+  std::unique_ptr<ElementSet> set = m_set->localize(index);
+  if (!set) return nullptr;
+  return std::make_unique<ElementForce>(std::move(set));
+}
+
 void ElementForce::scatter_forces(size_t begin, size_t end, const double* g, VecRef f) const {
   const size_t dofs = size_t(3 * m_k);
   for (size_t e = begin; e < end; ++e) {
@@ -25,22 +51,13 @@ void ElementForce::scatter_forces(size_t begin, size_t end, const double* g, Vec
 
 void ElementForce::add_forces(ConstRef x, ConstRef /*v*/, VecRef f) const {
   const size_t n = m_set->size(), dofs = size_t(3 * m_k);
-  std::unique_lock<std::mutex> lock(m_chunk_mutex, std::defer_lock);
-  if (run_parallel(static_cast<long long>(n), kParallelElements) && !m_chunk_g.empty() &&
-      lock.try_lock()) {
-    for (size_t c0 = 0; c0 < n; c0 += kChunk) {
-      const size_t c1 = std::min(n, c0 + kChunk);
-      const long long batches = static_cast<long long>((c1 - c0 + kBatch - 1) / kBatch);
-#pragma omp parallel for schedule(dynamic, 4)
-      for (long long b = 0; b < batches; ++b) {
-        const size_t e0 = c0 + size_t(b) * kBatch, e1 = std::min(c1, e0 + kBatch);
-        m_set->gradient_hessian(x, e0, e1, PsdProjection::None, m_chunk_g.data() + dofs * (e0 - c0),
-                                nullptr);
-      }
-      scatter_forces(c0, c1, m_chunk_g.data(), f);
-    }
+  if (in_chunks(
+          [&](size_t e0, size_t e1, size_t c0) {
+            m_set->gradient_hessian(x, e0, e1, PsdProjection::None,
+                                    m_chunk_g.data() + dofs * (e0 - c0), nullptr);
+          },
+          [&](size_t c0, size_t c1) { scatter_forces(c0, c1, m_chunk_g.data(), f); }))
     return;
-  }
   std::array<double, kBatch * kMaxElementDofs> g;
   for (size_t b = 0; b < n; b += kBatch) {
     const size_t e_end = std::min(n, b + kBatch);
@@ -126,22 +143,13 @@ void ElementForce::add_jacobians(ConstRef x, ConstRef /*v*/, const JacobianOptio
   const size_t n = m_set->size(), dofs = size_t(3 * m_k);
   const PsdProjection projection =
       options.clamp_compressed ? PsdProjection::Clamp : PsdProjection::None;
-  std::unique_lock<std::mutex> lock(m_chunk_mutex, std::defer_lock);
-  if (run_parallel(static_cast<long long>(n), kParallelElements) && !m_chunk_H.empty() &&
-      lock.try_lock()) {
-    for (size_t c0 = 0; c0 < n; c0 += kChunk) {
-      const size_t c1 = std::min(n, c0 + kChunk);
-      const long long batches = static_cast<long long>((c1 - c0 + kBatch - 1) / kBatch);
-#pragma omp parallel for schedule(dynamic, 4)
-      for (long long b = 0; b < batches; ++b) {
-        const size_t e0 = c0 + size_t(b) * kBatch, e1 = std::min(c1, e0 + kBatch);
-        m_set->gradient_hessian(x, e0, e1, projection, m_chunk_g.data() + dofs * (e0 - c0),
-                                m_chunk_H.data() + dofs * dofs * (e0 - c0));
-      }
-      scatter_hessians(c0, c1, m_chunk_H.data(), K);
-    }
+  if (in_chunks(
+          [&](size_t e0, size_t e1, size_t c0) {
+            m_set->gradient_hessian(x, e0, e1, projection, m_chunk_g.data() + dofs * (e0 - c0),
+                                    m_chunk_H.data() + dofs * dofs * (e0 - c0));
+          },
+          [&](size_t c0, size_t c1) { scatter_hessians(c0, c1, m_chunk_H.data(), K); }))
     return;
-  }
   std::array<double, kBatch * kMaxElementDofs> g;
   std::array<double, kBatch * kMaxElementDofs * kMaxElementDofs> H;
   for (size_t b = 0; b < n; b += kBatch) {

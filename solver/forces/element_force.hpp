@@ -42,6 +42,8 @@ class ElementForce final : public Force {
   void add_discrete_gradient(ConstRef x0, ConstRef x1, ConstRef xm, ConstRef vm,
                              VecRef f) const override;
   double potential_energy(ConstRef x) const override;
+  /// The set's own localize (ElementSet::localize) as a force; nullptr if the set cannot split.
+  std::unique_ptr<Force> localize(const LocalIndex& index) const override;
   /// All K^2 blocks of every stencil.
   void declare_blocks(BlockPattern& pattern) const override;
   void bind(const BlockPattern& pattern) override;
@@ -57,6 +59,11 @@ class ElementForce final : public Force {
   static constexpr long long kParallelElements = 2048;
 
  private:
+  /// The threaded path: for each chunk [c0, c1) of kChunk elements, the batches' evaluate(e0, e1,
+  /// c0) on the threads, then scatter(c0, c1). False (nothing done) if the set is too small, one
+  /// thread is available, or the buffers are in use.
+  template <class Evaluate, class Scatter>
+  bool in_chunks(Evaluate&& evaluate, Scatter&& scatter) const;
   /// f -= the gradients g (3K per element) of elements [begin, end).
   void scatter_forces(size_t begin, size_t end, const double* g, VecRef f) const;
   /// K -= the Hessians H (9K^2 per element) of elements [begin, end).

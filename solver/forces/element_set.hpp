@@ -1,5 +1,9 @@
 #pragma once
+#include <memory>
+#include <vector>
+
 #include "hooke/core.hpp"
+#include "hooke/model/local_index.hpp"
 
 namespace hooke {
 
@@ -64,7 +68,37 @@ class ElementSet {
                           double& /*stiffness*/) const {
     HOOKE_ASSERT(false, name() << " has no constraint form");
   }
+
+  /// The set as one process of a distributed run holds it (Force::localize): the elements with at
+  /// least one particle `index` owns, in their order, over local particle ids (a stencil's other
+  /// particles are the owner's ghosts, its pattern neighbours). nullptr (the default) if the set
+  /// cannot be split, which makes a distributed run refuse the scene.
+  virtual std::unique_ptr<ElementSet> localize(const LocalIndex& /*index*/) const {
+    return nullptr;
+  }
 };
+
+/// The elements of `elements` (each with an `ids` array of K global particle ids) that touch a
+/// particle `index` owns, in order, with their ids made local: ElementSet::localize's body for sets
+/// that hold their elements as such structs.
+template <class Element>
+std::vector<Element> localize_elements(const std::vector<Element>& elements,
+                                       const LocalIndex& index, const char* set_name) {
+  std::vector<Element> local;
+  for (const Element& e : elements) {
+    bool owned = false;
+    for (const int g : e.ids) owned = owned || index.owns_global(g);
+    if (!owned) continue;
+    Element l = e;
+    for (int& id : l.ids) {
+      const int g = id;
+      id = index.local_of[size_t(g)];
+      HOOKE_ASSERT(id >= 0, set_name << ": localize: particle " << g << " not held locally");
+    }
+    local.push_back(l);
+  }
+  return local;
+}
 
 /// Makes a symmetric n x n block (column-major, n <= 3 kMaxStencil) positive semi-definite as
 /// `projection` asks, in place (PsdProjection::None leaves it). Uses a fixed-size eigensolver on

@@ -183,6 +183,32 @@ TEST_P(BendingMethods, FastMassSpringRefusesNamingTheMethodsThatTakeIt) {
   }
 }
 
+TEST_P(BendingMethods, SplitBetweenProcessesEachPieceGivesItsParticlesTheWholeForceBitForBit) {
+  // MPI runs (issue 54, item 4): each process holds the elements touching its particles.
+  const BendingSystem s(GetParam());
+  const MassSpringSystem& whole = *s.system;
+  const Index n = whole.num_particles();
+  Vec f(whole.dofs());
+  whole.compute_forces(s.state.x, s.state.v, f);
+  long long compared = 0;
+  for (const int P : {2, 3}) {
+    for (int r = 0; r < P; ++r) {
+      const LocalIndex index = whole.local_index(n * r / P, n * (r + 1) / P);
+      const auto piece = whole.localize(index);
+      Vec x(piece->dofs()), v(piece->dofs()), fl(piece->dofs());
+      for (Index l = 0; l < index.num_local(); ++l) {
+        x.segment<3>(3 * l) = s.state.x.segment<3>(3 * index.global[size_t(l)]);
+        v.segment<3>(3 * l) = s.state.v.segment<3>(3 * index.global[size_t(l)]);
+      }
+      piece->compute_forces(x, v, fl);
+      for (Index l = 0; l < index.num_owned; ++l, ++compared)
+        for (int c = 0; c < 3; ++c)
+          ASSERT_EQ(fl[3 * l + c], f[3 * index.global[size_t(l)] + c]) << P << " pieces";
+    }
+  }
+  EXPECT_EQ(compared, 2 * n);
+}
+
 INSTANTIATE_TEST_SUITE_P(Models, BendingMethods,
                          ::testing::Values(Model::Rod, Model::Dihedral, Model::Quadratic),
                          [](const auto& info) { return std::string(model_name(info.param)); });
