@@ -2,16 +2,20 @@
 // gradients and Hessians by central differences at random, near-straight, near-flat, folded and
 // bent-rest configurations; zero derivatives (no NaN) at degenerate stencils; an energy that is
 // C^1 at straight and flat with the linear stiffness the closed forms give; and the calibration to
-// the continuum rigidity on a circle (strand) and a cylinder (sheet), converging as refined.
+// the continuum rigidity on a circle (strand) and a cylinder (sheet), converging as refined; and
+// the threaded assembly's bits equal to the serial one's.
 #include "hooke/forces/bending.hpp"
 
 #include <gtest/gtest.h>
+#include <omp.h>
 
 #include <Eigen/Eigenvalues>
 #include <cmath>
 #include <cstdio>
 #include <random>
 #include <vector>
+
+#include "hooke/forces/element_force.hpp"
 
 namespace hooke {
 namespace {
@@ -390,6 +394,56 @@ TEST(Bending, CalibratedToTheContinuumRigidityAndConvergingUnderRefinement) {
         EXPECT_LT(e41, 0.03);
         EXPECT_NEAR(e21 / e41, 2.0, 0.15);
       }
+}
+
+TEST(Bending, ThreadedAssemblyHasTheSerialBits) {
+  // ElementForce's chunked threaded path (sets of ElementForce::kParallelElements or more) adds
+  // the elements in their order, so forces and K have the same bits on one thread and on all.
+  const int n = 40;
+  std::vector<std::array<int, 3>> triangles;
+  Vec x(3 * n * n), rest(3 * n * n);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      rest.segment<3>(3 * (j * n + i)) = Vec3(0.01 * i, 0.0, 0.01 * j);
+      x.segment<3>(3 * (j * n + i)) = Vec3(0.01 * i, 0.002 * U(rng), 0.01 * j);
+    }
+  for (int j = 0; j + 1 < n; ++j)
+    for (int i = 0; i + 1 < n; ++i) {
+      const int a = j * n + i, b = a + 1, c = a + n, d = c + 1;
+      triangles.push_back({a, b, d});
+      triangles.push_back({a, d, c});
+    }
+  auto set = std::make_unique<DihedralBending>();
+  for (const auto& h : interior_hinges(triangles)) set->add(h, 1e-3, rest, true);
+  ASSERT_GE(static_cast<long long>(set->size()), ElementForce::kParallelElements);
+  ElementForce force(std::move(set));
+  BlockPattern pattern(n * n);
+  force.declare_blocks(pattern);
+  pattern.finalize();
+  force.bind(pattern);
+  struct Result {
+    Vec f;
+    SparseMatrix K;
+  };
+  auto evaluate = [&](int threads) {
+    const int previous = omp_get_max_threads();
+    omp_set_num_threads(threads);
+    Result r{Vec::Zero(x.size()), pattern.make_matrix()};
+    SparseMatrix D = r.K;
+    std::fill(r.K.valuePtr(), r.K.valuePtr() + r.K.nonZeros(), 0.0);
+    force.add_forces(x, Vec::Zero(x.size()), r.f);
+    JacobianOptions clamp;
+    clamp.clamp_compressed = true;
+    force.add_jacobians(x, Vec::Zero(x.size()), clamp, r.K, D);
+    omp_set_num_threads(previous);
+    return r;
+  };
+  const Result one = evaluate(1), two = evaluate(2);
+  for (Index i = 0; i < x.size(); ++i) ASSERT_EQ(one.f[i], two.f[i]);
+  for (Index k = 0; k < one.K.nonZeros(); ++k) ASSERT_EQ(one.K.valuePtr()[k], two.K.valuePtr()[k]);
+  EXPECT_GT(one.f.cwiseAbs().maxCoeff(), 0.0);
 }
 
 TEST(Bending, InteriorHingesAreTheEdgesOfTwoTriangles) {
