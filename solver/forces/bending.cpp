@@ -75,8 +75,9 @@ RodGeometry rod_geometry(ConstRef x, const int* id) {
   return r;
 }
 
-/// 1 + c, kept positive at a strand folded back onto itself (c = -1, kappa infinite).
-double one_plus_c(const RodGeometry& r) { return std::max(1.0 + r.c, 1e-300); }
+/// 1 + c, kept at 1e-12 or more (a turn within 1.4e-6 rad of folding back) so that a strand folded
+/// back onto itself (c = -1, kappa infinite) has a large but finite energy and derivatives.
+double one_plus_c(const RodGeometry& r) { return std::max(1.0 + r.c, 1e-12); }
 
 double rod_kappa(const RodGeometry& r) { return r.ok ? 2.0 * r.s / one_plus_c(r) : 0.0; }
 
@@ -292,9 +293,13 @@ std::vector<std::array<int, 4>> interior_hinges(const std::vector<std::array<int
   for (size_t s = 0; s < sides.size();) {
     size_t t = s + 1;
     while (t < sides.size() && sides[t].i == sides[s].i && sides[t].j == sides[s].j) ++t;
-    if (t - s == 2) {
+    // Two triangles on one edge make a hinge, unless they are the same triangle twice (or the
+    // edge has repeated ends): such faces, like edges of three or more, carry none.
+    const bool distinct =
+        sides[s].i != sides[s].j && (t - s != 2 || sides[s].opposite != sides[s + 1].opposite);
+    if (t - s == 2 && distinct) {
       hinges.push_back({sides[s].opposite, sides[s].i, sides[s].j, sides[s + 1].opposite});
-    } else if (t - s > 2) {
+    } else if (t - s >= 2) {
       ++bad;
     }
     s = t;

@@ -73,8 +73,9 @@ class RodBending final : public ElementSet {
 
 /// The hinges of a triangle mesh: for every edge shared by exactly two triangles, the stencil
 /// (o0, i, j, o1) with (i, j) the edge (i < j) and o0, o1 the vertices opposite it. Edges on the
-/// boundary (one triangle) have no hinge; an edge of three or more triangles (non-manifold) has
-/// none either and is counted in *non_manifold when given. Sorted by edge; no orientation needed.
+/// boundary (one triangle) have no hinge; an edge of three or more triangles (non-manifold), of a
+/// triangle given twice or with a repeated vertex has none either and is counted in *non_manifold
+/// when given. Sorted by edge; no orientation needed.
 std::vector<std::array<int, 4>> interior_hinges(const std::vector<std::array<int, 3>>& triangles,
                                                 size_t* non_manifold = nullptr);
 

@@ -270,6 +270,13 @@ TEST(Bending, DegenerateStencilsHaveZeroDerivativesAndNoNaN) {
   for (double v : gr) EXPECT_EQ(v, 0.0);
   for (double v : Hr) EXPECT_EQ(v, 0.0);
   EXPECT_TRUE(std::isfinite(rod.energy(s, 0, 1)));
+  // A strand folded back onto itself (c = -1): large, finite.
+  Vec folded(9);
+  folded << 0, 0, 0, 1, 0, 0, 0, 0, 0;
+  rod.gradient_hessian(folded, 0, 1, PsdProjection::Clamp, gr.data(), Hr.data());
+  EXPECT_TRUE(std::isfinite(rod.energy(folded, 0, 1)));
+  for (double v : Hr) EXPECT_TRUE(std::isfinite(v));
+  for (double v : gr) EXPECT_TRUE(std::isfinite(v));
 }
 
 /// E(t) and the Hessian's curvature v^T H v along the unit direction v of a path x(t) = x + t v
@@ -459,6 +466,11 @@ TEST(Bending, InteriorHingesAreTheEdgesOfTwoTriangles) {
   size_t bad = 0;
   EXPECT_TRUE(interior_hinges(three, &bad).empty());
   EXPECT_EQ(bad, 1u);
+  // A triangle given twice and one with a repeated vertex: no hinge, no stencil with a particle
+  // twice. Counted: (1, 2) and (0, 2), each the same triangle twice, and (0, 1), on four faces.
+  std::vector<std::array<int, 3>> twice = {{0, 1, 2}, {2, 1, 0}, {0, 0, 1}};
+  EXPECT_TRUE(interior_hinges(twice, &bad).empty());
+  EXPECT_EQ(bad, 3u);
 }
 
 }  // namespace
