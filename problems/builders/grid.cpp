@@ -115,8 +115,9 @@ void build_grid(TableReader& mesh, TableReader& springs, MeshBuild& out) {
   lattice(nx, ny, du, dw, mass, structural, shear, flexion, flexion_stride, out);
   // The cloth's surface: two triangles per grid cell, for frames and [bending]'s hinges, the
   // diagonals alternating from cell to cell (a checkerboard). Diagonals all one way couple bending
-  // to twist in the hinge models (a strip clamped at one end twists as it sags, 2.6% of its sag
-  // across its width); alternating ones do not (solver/forces/bending.hpp has the measurements).
+  // to twist in the hinge models (a strip clamped at one end twists as it sags, by 2.6% of its
+  // sag across its width in a linearised study); alternating ones do not
+  // (solver/forces/bending.hpp).
   out.triangles.reserve(size_t(2 * (nx - 1) * (ny - 1)));
   for (long long j = 0; j + 1 < ny; ++j)
     for (long long i = 0; i + 1 < nx; ++i) {

@@ -203,7 +203,7 @@ void RodBending::add(int p, int q, int r, double EI, ConstRef x_rest, bool strai
   HOOKE_ASSERT(g.ok, "rod-bending: hinge (" << p << ", " << q << ", " << r
                                             << ") has an edge of zero rest length");
   const double l = 0.5 * (g.l0 + g.l1);
-  m_hinges.push_back({ids, EI / l, straight_rest ? 0.0 : rod_kappa(g)});
+  m_elements.push_back({ids, EI / l, straight_rest ? 0.0 : rod_kappa(g)});
 }
 
 double RodBending::curvature(ConstRef x, int p, int q, int r) {
@@ -214,7 +214,7 @@ double RodBending::curvature(ConstRef x, int p, int q, int r) {
 double RodBending::energy(ConstRef x, size_t begin, size_t end) const {
   double E = 0.0;
   for (size_t e = begin; e < end; ++e) {
-    const Hinge& h = m_hinges[e];
+    const Hinge& h = m_elements[e];
     const double d = rod_kappa(rod_geometry(x, h.ids.data())) - h.kappa0;
     E += 0.5 * h.k * d * d;
   }
@@ -224,7 +224,7 @@ double RodBending::energy(ConstRef x, size_t begin, size_t end) const {
 void RodBending::gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection,
                                   double* g, double* H) const {
   for (size_t e = begin; e < end; ++e) {
-    const Hinge& h = m_hinges[e];
+    const Hinge& h = m_elements[e];
     double* ge = g + 9 * (e - begin);
     double* He = H ? H + 81 * (e - begin) : nullptr;
     const RodGeometry r = rod_geometry(x, h.ids.data());
@@ -257,7 +257,7 @@ void RodBending::gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProje
 }
 
 void RodBending::constraint(ConstRef x, size_t e, double& C, double* dC, double& stiffness) const {
-  const Hinge& h = m_hinges[e];
+  const Hinge& h = m_elements[e];
   const RodGeometry r = rod_geometry(x, h.ids.data());
   C = rod_kappa(r) - h.kappa0;
   stiffness = h.k;
@@ -330,13 +330,13 @@ void DihedralBending::add(const std::array<int, 4>& hinge, double D, ConstRef x_
                           bool flat_rest) {
   const HingeVectors v = hinge_vectors(x_rest, hinge.data());
   HOOKE_ASSERT(!hinge_degenerate(v), "dihedral-bending: a degenerate rest hinge");
-  m_hinges.push_back({hinge, hinge_stiffness(v, D), flat_rest ? 0.0 : hinge_angle(v)});
+  m_elements.push_back({hinge, hinge_stiffness(v, D), flat_rest ? 0.0 : hinge_angle(v)});
 }
 
 double DihedralBending::energy(ConstRef x, size_t begin, size_t end) const {
   double E = 0.0;
   for (size_t e = begin; e < end; ++e) {
-    const Hinge& h = m_hinges[e];
+    const Hinge& h = m_elements[e];
     const double d = wrap_angle(hinge_angle(hinge_vectors(x, h.ids.data())) - h.theta0);
     E += 0.5 * h.k * d * d;
   }
@@ -346,7 +346,7 @@ double DihedralBending::energy(ConstRef x, size_t begin, size_t end) const {
 void DihedralBending::gradient_hessian(ConstRef x, size_t begin, size_t end,
                                        PsdProjection projection, double* g, double* H) const {
   for (size_t e = begin; e < end; ++e) {
-    const Hinge& h = m_hinges[e];
+    const Hinge& h = m_elements[e];
     double* ge = g + 12 * (e - begin);
     double* He = H ? H + 144 * (e - begin) : nullptr;
     const HingeVectors v = hinge_vectors(x, h.ids.data());
@@ -374,7 +374,7 @@ void DihedralBending::gradient_hessian(ConstRef x, size_t begin, size_t end,
 
 void DihedralBending::constraint(ConstRef x, size_t e, double& C, double* dC,
                                  double& stiffness) const {
-  const Hinge& h = m_hinges[e];
+  const Hinge& h = m_elements[e];
   const HingeVectors v = hinge_vectors(x, h.ids.data());
   C = wrap_angle(hinge_angle(v) - h.theta0);
   stiffness = h.k;
@@ -401,7 +401,7 @@ void QuadraticBending::add(const std::array<int, 4>& hinge, double D, ConstRef x
   q.w[2] = -(q.w[0] * v.a.dot(eh) + q.w[3] * v.b.dot(eh)) / l;
   q.w[1] = -(q.w[0] + q.w[2] + q.w[3]);
   q.k = hinge_stiffness(v, D);
-  m_hinges.push_back(q);
+  m_elements.push_back(q);
 }
 
 namespace {
@@ -416,7 +416,7 @@ Vec3 quadratic_vector(ConstRef x, const int* id, const std::array<double, 4>& w)
 double QuadraticBending::energy(ConstRef x, size_t begin, size_t end) const {
   double E = 0.0;
   for (size_t e = begin; e < end; ++e) {
-    const Hinge& h = m_hinges[e];
+    const Hinge& h = m_elements[e];
     E += 0.5 * h.k * quadratic_vector(x, h.ids.data(), h.w).squaredNorm();
   }
   return E;
@@ -426,7 +426,7 @@ void QuadraticBending::gradient_hessian(ConstRef x, size_t begin, size_t end,
                                         PsdProjection /*projection: the Hessian is PSD*/, double* g,
                                         double* H) const {
   for (size_t e = begin; e < end; ++e) {
-    const Hinge& h = m_hinges[e];
+    const Hinge& h = m_elements[e];
     const Vec3 v = quadratic_vector(x, h.ids.data(), h.w);
     double* ge = g + 12 * (e - begin);
     for (int i = 0; i < 4; ++i)
@@ -446,19 +446,19 @@ void QuadraticBending::gradient_hessian(ConstRef x, size_t begin, size_t end,
 
 std::unique_ptr<ElementSet> RodBending::localize(const LocalIndex& index) const {
   auto local = std::make_unique<RodBending>();
-  local->m_hinges = localize_elements(m_hinges, index, name());
+  local->m_elements = localize_elements(m_elements, index, name());
   return local;
 }
 
 std::unique_ptr<ElementSet> DihedralBending::localize(const LocalIndex& index) const {
   auto local = std::make_unique<DihedralBending>(m_gauss_newton);
-  local->m_hinges = localize_elements(m_hinges, index, name());
+  local->m_elements = localize_elements(m_elements, index, name());
   return local;
 }
 
 std::unique_ptr<ElementSet> QuadraticBending::localize(const LocalIndex& index) const {
   auto local = std::make_unique<QuadraticBending>();
-  local->m_hinges = localize_elements(m_hinges, index, name());
+  local->m_elements = localize_elements(m_elements, index, name());
   return local;
 }
 

@@ -18,6 +18,40 @@
 
 namespace hooke {
 
+namespace bending_detail {
+/// The sets' elements: their K particle ids and parameters.
+struct RodHinge {
+  std::array<int, 3> ids;
+  double k;       // EI / l
+  double kappa0;  // rest |kappa b|
+};
+struct DihedralHinge {
+  std::array<int, 4> ids;
+  double k;
+  double theta0;
+};
+struct QuadraticHinge {
+  std::array<int, 4> ids;
+  std::array<double, 4> w;  // the weights K
+  double k;
+};
+
+/// What the sets of this file share: their elements, held in the order added as structs whose
+/// `ids` is the stencil, give stencil_size, size and stencil (and localize_elements the local
+/// copy's elements).
+template <int K, class Element>
+class StencilElements : public ElementSet {
+ public:
+  using Hinge = Element;
+  int stencil_size() const override { return K; }
+  size_t size() const override { return m_elements.size(); }
+  const int* stencil(size_t e) const override { return m_elements[e].ids.data(); }
+
+ protected:
+  std::vector<Element> m_elements;
+};
+}  // namespace bending_detail
+
 /// Strand bending of discrete elastic rods (Bergou et al. 2008), bending only (no twist). Per
 /// interior vertex q between p and r, with edges e0 = x_q - x_p and e1 = x_r - x_q, the curvature
 /// kappa = |kappa b| = 2 |e0 x e1| / (|e0| |e1| + e0 . e1) = 2 tan(phi / 2), phi the turning angle,
@@ -35,7 +69,7 @@ namespace hooke {
 /// Newton step asks for PsdProjection::Clamp per element (the implicit family's default,
 /// integrator.clamp_compressed). Constraint form (XPBD, Ceres): C = kappa - kappa0 with stiffness
 /// EI / l.
-class RodBending final : public ElementSet {
+class RodBending final : public bending_detail::StencilElements<3, bending_detail::RodHinge> {
  public:
   /// Below this sin(phi) a hinge of a bent rest is treated as exactly straight (see above).
   static constexpr double kStraight = 1e-8;
@@ -48,9 +82,6 @@ class RodBending final : public ElementSet {
   static double curvature(ConstRef x, int p, int q, int r);
 
   const char* name() const override { return "rod-bending"; }
-  int stencil_size() const override { return 3; }
-  size_t size() const override { return m_hinges.size(); }
-  const int* stencil(size_t e) const override { return m_hinges[e].ids.data(); }
   double energy(ConstRef x, size_t begin, size_t end) const override;
   void gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection, double* g,
                         double* H) const override;
@@ -59,16 +90,8 @@ class RodBending final : public ElementSet {
   std::unique_ptr<ElementSet> localize(const LocalIndex& index) const override;
 
   /// Element e's stiffness EI / l (N m) and rest curvature kappa0.
-  double stiffness(size_t e) const { return m_hinges[e].k; }
-  double rest_curvature(size_t e) const { return m_hinges[e].kappa0; }
-
- private:
-  struct Hinge {
-    std::array<int, 3> ids;
-    double k;       // EI / l
-    double kappa0;  // rest |kappa b|
-  };
-  std::vector<Hinge> m_hinges;
+  double stiffness(size_t e) const { return m_elements[e].k; }
+  double rest_curvature(size_t e) const { return m_elements[e].kappa0; }
 };
 
 /// The hinges of a triangle mesh: for every edge shared by exactly two triangles, the stencil
@@ -90,9 +113,10 @@ std::vector<std::array<int, 4>> interior_hinges(const std::vector<std::array<int
 /// right-triangle grids it is softer than that calibration once the vertices may relax: with the
 /// grid builder's alternating diagonals a cell-scale (2 x 2 periodic) fluctuation lowers a uniform
 /// bend's energy to 0.835 of it, with diagonals all one way a twist does so in a free strip
-/// (0.836), and a strip clamped at one end sags 1.2x the Euler-Bernoulli beam of rigidity D times
-/// its width (tests/problems/bending_scene_test.cpp). A bend along a diagonal stores 1.5x
-/// (alternating) to 3x (one way) the calibrated energy.
+/// (0.836), and a bend along a diagonal stores 1.5x (alternating) to 3x (one way) the calibrated
+/// energy (these three figures from a linearised study of the session that wrote this, not yet a
+/// test); a strip clamped at one end sags 1.22x the Euler-Bernoulli beam of rigidity D times its
+/// width (printed by BendingScene.SheetStripSagsAlikeUnderBothHingeModels).
 ///
 /// theta = atan2(Y, X) with X = (e.a)(e.b) - |e|^2 (a.b) and Y = -|e| e.(a x b), e = x2 - x1,
 /// a = x0 - x1, b = x3 - x1 (X = n0-hat.n1-hat and Y = the sine, both times |e|^2 h0 h1): defined
@@ -108,7 +132,8 @@ std::vector<std::array<int, 4>> interior_hinges(const std::vector<std::array<int
 /// gauss_newton, a requested projection returns k grad theta grad theta^T instead (the choice of
 /// Warp's VBD and of ARCSim): PSD by construction, equal to the exact Hessian at rest, about 6x
 /// cheaper, and Newton then converges linearly rather than quadratically.
-class DihedralBending final : public ElementSet {
+class DihedralBending final
+    : public bending_detail::StencilElements<4, bending_detail::DihedralHinge> {
  public:
   static constexpr double kDegenerate = 1e-12;
 
@@ -125,9 +150,6 @@ class DihedralBending final : public ElementSet {
   static double angle(ConstRef x, const std::array<int, 4>& hinge);
 
   const char* name() const override { return "dihedral-bending"; }
-  int stencil_size() const override { return 4; }
-  size_t size() const override { return m_hinges.size(); }
-  const int* stencil(size_t e) const override { return m_hinges[e].ids.data(); }
   double energy(ConstRef x, size_t begin, size_t end) const override;
   void gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection, double* g,
                         double* H) const override;
@@ -135,16 +157,10 @@ class DihedralBending final : public ElementSet {
   void constraint(ConstRef x, size_t e, double& C, double* dC, double& stiffness) const override;
   std::unique_ptr<ElementSet> localize(const LocalIndex& index) const override;
 
-  double stiffness(size_t e) const { return m_hinges[e].k; }
-  double rest_angle(size_t e) const { return m_hinges[e].theta0; }
+  double stiffness(size_t e) const { return m_elements[e].k; }
+  double rest_angle(size_t e) const { return m_elements[e].theta0; }
 
  private:
-  struct Hinge {
-    std::array<int, 4> ids;
-    double k;
-    double theta0;
-  };
-  std::vector<Hinge> m_hinges;
   bool m_gauss_newton;
 };
 
@@ -157,31 +173,21 @@ class DihedralBending final : public ElementSet {
 /// which agrees with the dihedral energy to second order about flat. The Hessian is constant
 /// (k K_i K_j I per block, PSD); the rest shape is flat (a sheet bent at rest needs `dihedral`).
 /// No constraint form: XPBD and the residual form of Ceres refuse it.
-class QuadraticBending final : public ElementSet {
+class QuadraticBending final
+    : public bending_detail::StencilElements<4, bending_detail::QuadraticHinge> {
  public:
   /// Adds the hinge with rigidity D (N m), K from x_rest's lengths (see rest_ok).
   void add(const std::array<int, 4>& hinge, double D, ConstRef x_rest);
 
   const char* name() const override { return "quadratic-bending"; }
-  int stencil_size() const override { return 4; }
-  size_t size() const override { return m_hinges.size(); }
-  const int* stencil(size_t e) const override { return m_hinges[e].ids.data(); }
   double energy(ConstRef x, size_t begin, size_t end) const override;
   void gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection, double* g,
                         double* H) const override;
   std::unique_ptr<ElementSet> localize(const LocalIndex& index) const override;
 
   /// Element e's weights K (1/m) and stiffness k (N m).
-  const std::array<double, 4>& weights(size_t e) const { return m_hinges[e].w; }
-  double stiffness(size_t e) const { return m_hinges[e].k; }
-
- private:
-  struct Hinge {
-    std::array<int, 4> ids;
-    std::array<double, 4> w;
-    double k;
-  };
-  std::vector<Hinge> m_hinges;
+  const std::array<double, 4>& weights(size_t e) const { return m_elements[e].w; }
+  double stiffness(size_t e) const { return m_elements[e].k; }
 };
 
 }  // namespace hooke
