@@ -139,14 +139,15 @@ concurrent)
     sleep 0.05
   done
   expect_status "$dir" running
-  start=$(date +%s%N)
   hk run "$cloth" --out "$dir" --no-progress
   expect_rc 2 "a second run into a folder in use"
   expect_err "error: $dir: output folder: is in use by pid $first (hooke run $cloth" "second run"
   hk resume "$dir" --no-progress
   expect_rc 2 "a resume of a folder in use"
   expect_err "error: $dir: output folder: is in use by pid $first" "resume"
-  [ $(($(date +%s%N) - start)) -lt 1500000000 ] || fail "refusing the second writer took over 1.5 s"
+  # The refusal does not wait for the lock: the first run, which holds it, is still running.
+  # (No wall-clock bound here: under ASan on a loaded 2-core machine two start-ups alone can take
+  # over a second, and a timing belongs in bench/, not in a test.)
   kill -0 $first 2> /dev/null || fail "the first run ended before the second writer was refused"
   ok
   wait $first

@@ -104,11 +104,12 @@ explicit)
     done
   done
   for scene in cloth_pulled_by_corner cloth_on_two_spheres cloth_dihedral strand_cantilever; do
-    # The strand's stiff bending (EI 2e-3 N m^2 at 5 mm spacing) needs rk4 below 4e-5 s.
-    dt=2e-4
-    [ "$scene" = strand_cantilever ] && dt=2e-5
+    # 100 rk4 steps each; the strand's stiff bending (EI 2e-3 N m^2 at 5 mm spacing) needs rk4
+    # below 4e-5 s, so its 100 steps cover a tenth of the time.
+    dt=2e-4 duration=0.02
+    [ "$scene" = strand_cantilever ] && dt=2e-5 duration=0.002
     args=(run "$SCENES/$scene.toml" --set integrator.method=rk4 --set time.dt=$dt
-          --set time.duration=0.02)
+          --set time.duration=$duration)
     run 0 "$OUT/$scene" "${args[@]}"
     expect_rc 0 "serial $scene" "$OUT/$scene"
     run 2 "$OUT/$scene.2" "${args[@]}"
