@@ -16,8 +16,9 @@
 //    factorizations and their seconds, solve and assembly seconds per step, and team_all, the
 //    share of the linear iterations run on all threads (CG's adaptive team). The target is 0.64 s
 //    per step (10x a classic Jacobi-PCG's 6.4 s).
-//  - BackwardEuler256/Bending/model:{0,1,2,3}: that step with no, dihedral, quadratic or
-//    Gauss-Newton dihedral bending (issue 54: at most 1.5x the step without it).
+//  - BackwardEuler256/Bending/model:{0,...,5}: that step with no, dihedral, quadratic,
+//    eigenvalue-projected dihedral, shell or eigenvalue-projected shell bending (issue 54: at
+//    most 1.5x the step without it).
 // Busy-core mode (issue 18): LocalGlobal411 and BackwardEuler256/pcg-nodal also run as
 // .../threads:T/busy:1 with T = 1 and 2 while a competing process spins on the last core
 // (bench/busy_core.hpp), one-thread and two-thread cases in one invocation: the two-thread run
@@ -162,18 +163,20 @@ void BM_BackwardEuler256(benchmark::State& state, std::string linear_solver, int
 
 /// Issue 54, acceptance 4: the same target's step with cloth bending added across its interior
 /// edges ([bending] model = none | dihedral | quadratic | dihedral with projection =
-/// gauss-newton, D = 1e-4 N m: a light fabric), on
+/// eigenvalues | shell | shell with projection = eigenvalues, D = 1e-4 N m: a light fabric), on
 /// pcg-nodal over 20 steps from rest, so that the cost of the hinge elements (their Hessians, the
 /// PSD projection and the denser pattern) reads against the step without them in one run.
 void BM_BackwardEuler256Bending(benchmark::State& state) {
-  static const char* const kModels[] = {"none", "dihedral", "quadratic", "dihedral"};
+  static const char* const kModels[] = {"none",     "dihedral", "quadratic",
+                                        "dihedral", "shell",    "shell"};
+  const bool eigenvalues = state.range(0) == 3 || state.range(0) == 5;
   const char* model = kModels[state.range(0)];
   std::vector<std::string> sets = {"integrator.linear_solver=pcg-nodal"};
   if (state.range(0) > 0) {
     sets.push_back(std::string("bending.model=") + model);
     sets.push_back("bending.stiffness=1e-4");
   }
-  if (state.range(0) == 3) sets.push_back("bending.projection=gauss-newton");
+  if (eigenvalues) sets.push_back("bending.projection=eigenvalues");
   const hooke::Scene scene = hooke::load_scene(scene_path("target_backward_euler_256.toml"), sets);
   const double h = scene.time.dt;
   const int steps = 20;
@@ -204,7 +207,7 @@ void BM_BackwardEuler256Bending(benchmark::State& state) {
   state.counters["factor_s"] = factor / runs;
   state.counters["solve_s"] = solve / runs;
   state.counters["lin_iters"] = double(iterations) / (runs * steps);
-  state.SetLabel(state.range(0) == 3 ? "dihedral, gauss-newton" : model);
+  state.SetLabel(std::string(model) + (eigenvalues ? ", eigenvalues" : ""));
 }
 
 const int registered = [] {
@@ -241,7 +244,7 @@ const int registered = [] {
     b->ArgNames({"threads", "busy"})->UseManualTime()->Iterations(1)->Unit(benchmark::kMillisecond);
   }
   benchmark::RegisterBenchmark("Target/BackwardEuler256/Bending", BM_BackwardEuler256Bending)
-      ->DenseRange(0, 3)
+      ->DenseRange(0, 5)
       ->ArgNames({"model"})
       ->UseManualTime()
       ->Iterations(1)

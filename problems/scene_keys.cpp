@@ -146,6 +146,14 @@ void add_mesh_lattice_keys(std::vector<SceneKey>& t) {
           .choices({"horizontal", "vertical"})
           .meaning("horizontal: in the x-z plane at y = 0; vertical: in the x-y plane, hanging "
                    "down from y = 0"));
+  add(K("mesh.diagonals", T::String)
+          .in({"grid"})
+          .def("'alternating'")
+          .choices({"alternating", "one-way"})
+          .meaning("how each cell of the cloth's surface (frames, [bending]) is split into two "
+                   "triangles: alternating diagonals (a checkerboard) or all one way (every edge's "
+                   "two triangles a parallelogram, where bending.model = 'shell' is exact in "
+                   "twist too; the hinge models then couple bending to twist)"));
   add(K("mesh.flexion_stride", T::Integer)
           .in({"grid"})
           .def("1")
@@ -486,12 +494,16 @@ void add_scene_part_keys(std::vector<SceneKey>& t) {
 void add_bending_keys(std::vector<SceneKey>& t) {
   auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
   add(K("bending.model", T::String)
-          .choices({"rod", "dihedral", "quadratic"})
+          .choices({"rod", "dihedral", "quadratic", "shell"})
           .example("'dihedral'")
           .meaning("rod: discrete elastic rods' curvature at every interior particle of a chain "
                    "or hair; dihedral: the hinge angle of discrete shells across every interior "
                    "edge of a grid or obj cloth; quadratic: the isometric quadratic model there "
-                   "(constant Hessian, flat rest); beside the spring meshes' own bending springs"));
+                   "(constant Hessian, flat rest); shell: a plate's shape operator per triangle "
+                   "from its edges' hinge angles, which converges to the Kirchhoff plate where "
+                   "the hinge models stay mesh dependent (on the alternating grid a pure twist "
+                   "is 2x stiff: mesh.diagonals = 'one-way' makes it exact); beside the spring "
+                   "meshes' own bending springs"));
   add(K("bending.stiffness", T::Number)
           .in({"rod"})
           .unit("N m^2")
@@ -500,7 +512,7 @@ void add_bending_keys(std::vector<SceneKey>& t) {
           .meaning("the strand's bending rigidity EI: a bend of curvature kappa stores 1/2 EI "
                    "kappa^2 per unit length"));
   add(K("bending.stiffness", T::Number)
-          .in({"dihedral", "quadratic"})
+          .in({"dihedral", "quadratic", "shell"})
           .unit("N m")
           .positive()
           .example("1e-3")
@@ -513,18 +525,26 @@ void add_bending_keys(std::vector<SceneKey>& t) {
           .meaning("the rest curvature: the initial shape's (a curly hair keeps its curl) or "
                    "none"));
   add(K("bending.rest", T::String)
-          .in({"dihedral"})
+          .in({"dihedral", "shell"})
           .def("'initial'")
           .choices({"initial", "flat"})
           .meaning("the rest angles: the initial shape's or flat"));
   add(K("bending.projection", T::String)
-          .in({"dihedral"})
-          .def("'eigenvalues'")
-          .choices({"eigenvalues", "gauss-newton"})
+          .in({"dihedral", "shell"})
+          .def("'gauss-newton'")
+          .choices({"gauss-newton", "eigenvalues"})
           .meaning("how the implicit family (with integrator.clamp_compressed) and vbd make each "
-                   "hinge's Hessian PSD: eigenvalues clamps the exact one's negative eigenvalues; "
-                   "gauss-newton takes k grad theta grad theta^T, about 6x cheaper, exact at rest, "
-                   "Newton then converging linearly"));
+                   "element's Hessian PSD: gauss-newton keeps only the angles' gradients' term (k "
+                   "grad theta grad theta^T for a hinge), PSD by construction and exact at rest; "
+                   "eigenvalues clamps the exact Hessian's negative eigenvalues, 2-7x the "
+                   "assembly's cost (on a draped cloth Newton took as many iterations or more "
+                   "with it)"));
+  add(K("bending.poisson", T::Number)
+          .in({"shell"})
+          .def("0")
+          .meaning("the plate's Poisson ratio nu in (-1, 0.5]: a bend stores D/2 [(1 - nu) "
+                   "|S|^2 + nu (tr S)^2] per unit area (S the shape operator), so 0 makes a "
+                   "strip the Euler-Bernoulli beam of rigidity D times its width"));
   add(K("bending.rest", T::String)
           .in({"quadratic"})
           .def("'initial'")

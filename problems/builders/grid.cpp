@@ -1,9 +1,10 @@
 // Cloth grid and cantilever: particles on a rectangular lattice with structural (i±1, j±1),
 // shear (diagonals) and flexion (i±2, j±2) springs. Grid keys: nx, ny, width, height,
-// orientation, mass | total_mass, pins, structural | shear | flexion (booleans, default true), and
-// flexion_stride: flexion springs start at every flexion_stride-th particle along their direction
-// (1, the default: every particle; 2: every other particle, the non-overlapping bending springs of
-// common public local/global cloth demos, e.g. the 411 x 411 grid with 842k springs).
+// orientation, diagonals (of the surface's triangles), mass | total_mass, pins, structural |
+// shear | flexion (booleans, default true), and flexion_stride: flexion springs start at every
+// flexion_stride-th particle along their direction (1, the default: every particle; 2: every
+// other particle, the non-overlapping bending springs of common public local/global cloth demos,
+// e.g. the 411 x 411 grid with 842k springs).
 #include <cmath>
 #include <sstream>
 
@@ -118,11 +119,15 @@ void build_grid(TableReader& mesh, TableReader& springs, MeshBuild& out) {
   // to twist in the hinge models (a strip clamped at one end twists as it sags, by 2.6% of its
   // sag across its width in a linearised study); alternating ones do not
   // (solver/forces/bending.hpp).
+  // mesh.diagonals = 'one-way' splits every cell (a, b, d), (a, d, c): each edge's two triangles
+  // then form a parallelogram, where the shell model is exact in twist too.
+  const bool alternating =
+      mesh.choice("diagonals", "alternating", {"alternating", "one-way"}) == "alternating";
   out.triangles.reserve(size_t(2 * (nx - 1) * (ny - 1)));
   for (long long j = 0; j + 1 < ny; ++j)
     for (long long i = 0; i + 1 < nx; ++i) {
       const int a = int(j * nx + i), b = a + 1, c = int((j + 1) * nx + i), d = c + 1;
-      if ((i + j) % 2 == 0) {
+      if (!alternating || (i + j) % 2 == 0) {
         out.triangles.push_back({a, b, d});
         out.triangles.push_back({a, d, c});
       } else {

@@ -12,6 +12,7 @@ using Vec9 = Eigen::Matrix<double, 9, 1>;
 using Mat9 = Eigen::Matrix<double, 9, 9>;
 using Mat6 = Eigen::Matrix<double, 6, 6>;
 using Vec6 = Eigen::Matrix<double, 6, 1>;
+using Mat12 = Eigen::Matrix<double, 12, 12>;
 
 /// The skew matrix S(v) with S(v) w = v x w.
 Mat3 skew(const Vec3& v) {
@@ -442,6 +443,169 @@ void QuadraticBending::gradient_hessian(ConstRef x, size_t begin, size_t end,
   }
 }
 
+void QuadraticBending::scalar_quadratic(size_t e, double* W) const {
+  const Hinge& h = m_elements[e];
+  for (int j = 0; j < 4; ++j)
+    for (int i = 0; i < 4; ++i) W[4 * j + i] = h.k * h.w[size_t(i)] * h.w[size_t(j)];
+}
+
+// ---------------------------------------------------------------------------------------------
+// Shell: a triangle's interior-edge hinges, each a DihedralBending angle over four of its K ids.
+
+std::vector<TriangleNeighbours> triangle_neighbours(
+    const std::vector<std::array<int, 3>>& triangles) {
+  // The hinges by their edge (i < j): the two opposite vertices.
+  const auto hinges = interior_hinges(triangles);
+  auto across_of = [&hinges](int a, int b, int own) {
+    const int i = std::min(a, b), j = std::max(a, b);
+    const auto it = std::lower_bound(hinges.begin(), hinges.end(), std::make_pair(i, j),
+                                     [](const std::array<int, 4>& h, const std::pair<int, int>& e) {
+                                       return std::make_pair(h[1], h[2]) < e;
+                                     });
+    if (it == hinges.end() || (*it)[1] != i || (*it)[2] != j) return -1;
+    if ((*it)[0] == own) return (*it)[3];
+    if ((*it)[3] == own) return (*it)[0];
+    return -1;
+  };
+  std::vector<TriangleNeighbours> out;
+  out.reserve(triangles.size());
+  for (const auto& t : triangles) {
+    TriangleNeighbours n{t, {-1, -1, -1}};
+    for (int k = 0; k < 3; ++k)
+      n.across[size_t(k)] = across_of(t[(k + 1) % 3], t[(k + 2) % 3], t[k]);
+    out.push_back(n);
+  }
+  return out;
+}
+
+namespace {
+/// The global ids of element h's s-th hinge, (own corner, edge in the triangle's winding, the
+/// vertex across), and their places in the element's stencil.
+template <int K>
+void shell_hinge(const bending_detail::ShellTriangle<K>& h, int s, std::array<int, 4>& id,
+                 std::array<int, 4>& place) {
+  const int k = h.edge[size_t(s)];
+  place = {k, (k + 1) % 3, (k + 2) % 3, 3 + s};
+  for (int a = 0; a < 4; ++a) id[size_t(a)] = h.ids[size_t(place[size_t(a)])];
+}
+}  // namespace
+
+template <int K>
+void ShellBending<K>::add(const TriangleNeighbours& t, double D, double nu, ConstRef x_rest,
+                          bool flat_rest) {
+  constexpr int m = K - 3;
+  HOOKE_ASSERT(t.interior() == m, "shell-bending: a triangle with "
+                                      << t.interior() << " interior edges in the set of " << m);
+  bending_detail::ShellTriangle<K> h;
+  h.ids[0] = t.tri[0];
+  h.ids[1] = t.tri[1];
+  h.ids[2] = t.tri[2];
+  int s = 0;
+  for (int k = 0; k < 3; ++k)
+    if (t.across[size_t(k)] >= 0) {
+      h.edge[size_t(s)] = k;
+      h.ids[size_t(3 + s)] = t.across[size_t(k)];
+      ++s;
+    }
+  const Vec3 p0 = x_rest.segment<3>(3 * t.tri[0]), p1 = x_rest.segment<3>(3 * t.tri[1]),
+             p2 = x_rest.segment<3>(3 * t.tri[2]);
+  const Vec3 N = (p1 - p0).cross(p2 - p0);
+  const double A = 0.5 * N.norm();
+  HOOKE_ASSERT(A > 0.0, "shell-bending: a degenerate rest triangle");
+  std::array<double, m> l;
+  std::array<Vec3, m> n;
+  for (int j = 0; j < m; ++j) {
+    std::array<int, 4> id, place;
+    shell_hinge(h, j, id, place);
+    const HingeVectors v = hinge_vectors(x_rest, id.data());
+    HOOKE_ASSERT(!hinge_degenerate(v), "shell-bending: a degenerate rest hinge");
+    l[size_t(j)] = v.e.norm();
+    n[size_t(j)] = v.e.cross(N).normalized();
+    h.theta0[size_t(j)] = flat_rest ? 0.0 : hinge_angle(v);
+  }
+  for (int j = 0; j < m; ++j)
+    for (int k = 0; k < m; ++k) {
+      const double c = n[size_t(j)].dot(n[size_t(k)]);
+      h.M[size_t(j * m + k)] =
+          D * l[size_t(j)] * l[size_t(k)] / (4.0 * A) * ((1.0 - nu) * c * c + nu);
+    }
+  this->m_elements.push_back(h);
+}
+
+template <int K>
+double ShellBending<K>::energy(ConstRef x, size_t begin, size_t end) const {
+  constexpr int m = K - 3;
+  double E = 0.0;
+  for (size_t e = begin; e < end; ++e) {
+    const auto& h = this->m_elements[e];
+    std::array<double, m> d;
+    for (int j = 0; j < m; ++j) {
+      std::array<int, 4> id, place;
+      shell_hinge(h, j, id, place);
+      d[size_t(j)] = wrap_angle(hinge_angle(hinge_vectors(x, id.data())) - h.theta0[size_t(j)]);
+    }
+    for (int j = 0; j < m; ++j)
+      for (int k = 0; k < m; ++k) E += 0.5 * h.M[size_t(j * m + k)] * d[size_t(j)] * d[size_t(k)];
+  }
+  return E;
+}
+
+template <int K>
+void ShellBending<K>::gradient_hessian(ConstRef x, size_t begin, size_t end,
+                                       PsdProjection projection, double* g, double* H) const {
+  constexpr int m = K - 3, n = 3 * K;
+  using VecN = Eigen::Matrix<double, n, 1>;
+  using MatN = Eigen::Matrix<double, n, n>;
+  const bool gauss_newton = m_gauss_newton && projection != PsdProjection::None;
+  for (size_t e = begin; e < end; ++e) {
+    const auto& h = this->m_elements[e];
+    Eigen::Map<VecN> ge(g + n * (e - begin));
+    // Each hinge's angle, its gradient over the stencil (P.col(j)) and, for the exact Hessian,
+    // M d's weight times its Hessian summed into Hs.
+    std::array<double, m> d;
+    Eigen::Matrix<double, n, m> P = Eigen::Matrix<double, n, m>::Zero();
+    std::array<Mat12, m> Ht;
+    std::array<bool, m> ok;
+    std::array<std::array<int, 4>, m> places;
+    for (int j = 0; j < m; ++j) {
+      std::array<int, 4> id;
+      shell_hinge(h, j, id, places[size_t(j)]);
+      const HingeVectors v = hinge_vectors(x, id.data());
+      d[size_t(j)] = wrap_angle(hinge_angle(v) - h.theta0[size_t(j)]);
+      Vec9 G;
+      Mat9 Hv;
+      const bool second = H && !gauss_newton;
+      ok[size_t(j)] = hinge_angle_derivatives(v, G, second ? &Hv : nullptr);
+      if (!ok[size_t(j)]) continue;  // degenerate: no defined angle, no derivative (as dihedral)
+      double g12[12];
+      to_positions<3, 4>(G, second ? &Hv : nullptr, kHingeCoef, g12,
+                         second ? Ht[size_t(j)].data() : nullptr);
+      for (int a = 0; a < 4; ++a)
+        P.template block<3, 1>(3 * places[size_t(j)][size_t(a)], j) +=
+            Eigen::Map<const Vec3>(g12 + 3 * a);
+    }
+    const Eigen::Map<const Eigen::Matrix<double, m, m, Eigen::RowMajor>> M(h.M.data());
+    const Eigen::Map<const Eigen::Matrix<double, m, 1>> dv(d.data());
+    const Eigen::Matrix<double, m, 1> Md = M * dv;
+    ge.noalias() = P * Md;
+    if (!H) continue;
+    Eigen::Map<MatN> He(H + n * n * (e - begin));
+    He.noalias() = P * M * P.transpose();
+    if (!gauss_newton) {
+      for (int j = 0; j < m; ++j) {
+        if (!ok[size_t(j)]) continue;
+        const auto& pl = places[size_t(j)];
+        for (int b = 0; b < 4; ++b)
+          for (int a = 0; a < 4; ++a)
+            He.template block<3, 3>(3 * pl[size_t(a)], 3 * pl[size_t(b)]) +=
+                Md[j] * Ht[size_t(j)].template block<3, 3>(3 * a, 3 * b);
+      }
+      He = (0.5 * (He + He.transpose())).eval();
+      if (projection != PsdProjection::None) project_psd(He.data(), n, projection);
+    }
+  }
+}
+
 // ---------------------------------------------------------------------------------------------
 
 std::unique_ptr<ElementSet> RodBending::localize(const LocalIndex& index) const {
@@ -461,5 +625,16 @@ std::unique_ptr<ElementSet> QuadraticBending::localize(const LocalIndex& index) 
   local->m_elements = localize_elements(m_elements, index, name());
   return local;
 }
+
+template <int K>
+std::unique_ptr<ElementSet> ShellBending<K>::localize(const LocalIndex& index) const {
+  auto local = std::make_unique<ShellBending<K>>(m_gauss_newton);
+  local->m_elements = localize_elements(this->m_elements, index, name());
+  return local;
+}
+
+template class ShellBending<4>;
+template class ShellBending<5>;
+template class ShellBending<6>;
 
 }  // namespace hooke

@@ -50,6 +50,16 @@ class StencilElements : public ElementSet {
  protected:
   std::vector<Element> m_elements;
 };
+/// A shell element: triangle (ids 0, 1, 2) and the vertex across each of its K - 3 interior edges
+/// (ids 3..); edge[s] is the triangle's corner opposite the s-th interior edge.
+template <int K>
+struct ShellTriangle {
+  static constexpr int kEdges = K - 3;
+  std::array<int, K> ids;
+  std::array<int, kEdges> edge;
+  std::array<double, kEdges> theta0;
+  std::array<double, kEdges * kEdges> M;  // the symmetric weights of the angles' quadratic form
+};
 }  // namespace bending_detail
 
 /// Strand bending of discrete elastic rods (Bergou et al. 2008), bending only (no twist). Per
@@ -116,7 +126,8 @@ std::vector<std::array<int, 4>> interior_hinges(const std::vector<std::array<int
 /// (0.836), and a bend along a diagonal stores 1.5x (alternating) to 3x (one way) the calibrated
 /// energy (these three figures from a linearised study of the session that wrote this, not yet a
 /// test); a strip clamped at one end sags 1.22x the Euler-Bernoulli beam of rigidity D times its
-/// width (printed by BendingScene.SheetStripSagsAlikeUnderBothHingeModels).
+/// width (printed by BendingScene.SheetStripSagsAlikeUnderBothHingeModels). ShellBending, which
+/// couples the angles of each triangle's edges, removes that: its strip is the beam.
 ///
 /// theta = atan2(Y, X) with X = (e.a)(e.b) - |e|^2 (a.b) and Y = -|e| e.(a x b), e = x2 - x1,
 /// a = x0 - x1, b = x3 - x1 (X = n0-hat.n1-hat and Y = the sine, both times |e|^2 h0 h1): defined
@@ -130,8 +141,10 @@ std::vector<std::array<int, 4>> interior_hinges(const std::vector<std::array<int
 /// each at random hinges, which the rank-one first term cannot lift), so Clamp and Abs change it
 /// wherever d != 0, at the cost of an eigensolve per hinge (7 x 7, see project_hinge). Built with
 /// gauss_newton, a requested projection returns k grad theta grad theta^T instead (the choice of
-/// Warp's VBD and of ARCSim): PSD by construction, equal to the exact Hessian at rest, about 6x
-/// cheaper, and Newton then converges linearly rather than quadratically.
+/// Warp's VBD and of ARCSim, and the scenes' default, bending.projection): PSD by construction,
+/// equal to the exact Hessian at rest, about 6x cheaper; Newton then converges linearly, as it
+/// does with the clamp wherever that changes the Hessian (on a draped cloth it took as many
+/// iterations or fewer: problems/builders/bending.cpp).
 class DihedralBending final
     : public bending_detail::StencilElements<4, bending_detail::DihedralHinge> {
  public:
@@ -172,7 +185,8 @@ class DihedralBending final
 ///   E = 1/2 k |v|^2,   k = D |e-bar|^2 / (A0-bar + A1-bar) (as DihedralBending's),
 /// which agrees with the dihedral energy to second order about flat. The Hessian is constant
 /// (k K_i K_j I per block, PSD); the rest shape is flat (a sheet bent at rest needs `dihedral`).
-/// No constraint form: XPBD and the residual form of Ceres refuse it.
+/// No constraint form: XPBD and Ceres refuse it. Its scalar quadratic form W = k K K^T is what
+/// fast-mass-spring takes.
 class QuadraticBending final
     : public bending_detail::StencilElements<4, bending_detail::QuadraticHinge> {
  public:
@@ -184,10 +198,80 @@ class QuadraticBending final
   void gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection, double* g,
                         double* H) const override;
   std::unique_ptr<ElementSet> localize(const LocalIndex& index) const override;
+  bool has_scalar_quadratic() const override { return true; }
+  void scalar_quadratic(size_t e, double* W) const override;
 
   /// Element e's weights K (1/m) and stiffness k (N m).
   const std::array<double, 4>& weights(size_t e) const { return m_elements[e].w; }
   double stiffness(size_t e) const { return m_elements[e].k; }
 };
+
+/// The triangles of a mesh with, for each corner k, the vertex across the edge opposite corner k
+/// (-1 where that edge has no hinge: a boundary or non-manifold edge, as interior_hinges decides).
+struct TriangleNeighbours {
+  std::array<int, 3> tri;
+  std::array<int, 3> across;
+  int interior() const { return (across[0] >= 0) + (across[1] >= 0) + (across[2] >= 0); }
+};
+std::vector<TriangleNeighbours> triangle_neighbours(
+    const std::vector<std::array<int, 3>>& triangles);
+
+/// Cloth bending by a shape operator per triangle (the rotation-free plate triangle of Onate and
+/// Zarate 2000, which is the discrete shape operator of Grinspun, Gingold, Reisman and Zorin 2006
+/// without its extra unknowns): on triangle T, with theta_e the hinge angle of DihedralBending on
+/// each of its interior edges (measured from theta0_e), l_e the rest length and n_e the rest
+/// in-plane unit normal of the edge,
+///   S_T = 1 / (2 A_T) sum_e l_e theta_e n_e n_e^T,
+///   E_T = A_T D / 2 [(1 - nu) |S_T|_F^2 + nu (tr S_T)^2],
+/// a plate of rigidity D and Poisson ratio nu; E_T = 1/2 sum_ef M_ef theta_e theta_f with
+/// M_ef = D l_e l_f / (4 A_T) [(1 - nu) (n_e . n_f)^2 + nu], positive semi-definite for
+/// |nu| <= 1. Linearised about flat, theta_e is the jump of the piecewise-linear slope across e,
+/// and S_T is exact for every quadratic deflection on a mesh whose edges each join two triangles
+/// forming a parallelogram (a grid with its diagonals all one way): there it converges to the
+/// Kirchhoff plate in bending and twist. On the grid builder's alternating diagonals the pairs
+/// across the grid-axis edges are mirror images, which do not see twist: bending about the grid
+/// axes still converges to the plate (a strip clamped at one end sags as the Euler-Bernoulli beam
+/// of rigidity D times its width, unlike the hinge models), but a pure twist stores 2x the
+/// plate's energy. The diagonal term M_ee with equal triangle areas is DihedralBending's k, so
+/// the two differ by the coupling of a triangle's edges, which is what makes the plate. Boundary
+/// edges carry no angle (the free edge of the plate triangle). Elements are triangles with 1, 2
+/// or 3 interior edges: K = 4, 5, 6 (one set per K).
+///
+/// Hessian: sum_ef M_ef grad theta_e grad theta_f^T + sum_e (M d)_e Hess theta_e; the first term
+/// is PSD (gauss_newton keeps only it when a projection is requested, as DihedralBending's), the
+/// exact one is projected as a 3K x 3K block. No constraint form (the energy couples three angles):
+/// XPBD and the energy form of Ceres refuse it.
+template <int K>
+class ShellBending final
+    : public bending_detail::StencilElements<K, bending_detail::ShellTriangle<K>> {
+  static_assert(K >= 4 && K <= 6, "a triangle with 1 to 3 interior edges");
+
+ public:
+  explicit ShellBending(bool gauss_newton = false) : m_gauss_newton(gauss_newton) {}
+  bool gauss_newton() const { return m_gauss_newton; }
+
+  /// Adds triangle t (t.interior() == K - 3) with rigidity D (N m) and Poisson ratio nu; rest
+  /// lengths, area, normals and angles from x_rest (theta0 = 0 if flat_rest). A degenerate rest
+  /// triangle or hinge is refused (HOOKE_ASSERT): the caller checks DihedralBending::rest_ok.
+  void add(const TriangleNeighbours& t, double D, double nu, ConstRef x_rest, bool flat_rest);
+
+  const char* name() const override { return "shell-bending"; }
+  double energy(ConstRef x, size_t begin, size_t end) const override;
+  void gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection, double* g,
+                        double* H) const override;
+  std::unique_ptr<ElementSet> localize(const LocalIndex& index) const override;
+
+  /// Element e's weights M (row-major, (K - 3) x (K - 3)).
+  const std::array<double, (K - 3) * (K - 3)>& weights(size_t e) const {
+    return this->m_elements[e].M;
+  }
+
+ private:
+  bool m_gauss_newton;
+};
+
+extern template class ShellBending<4>;
+extern template class ShellBending<5>;
+extern template class ShellBending<6>;
 
 }  // namespace hooke

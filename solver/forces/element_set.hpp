@@ -16,18 +16,18 @@ enum class PsdProjection {
   Abs,    ///< eigenvalues replaced by their absolute values (Chen et al. 2024's choice for VBD)
 };
 
-/// The largest stencil an element may have (a hinge or a point-triangle pair: 4 particles).
-inline constexpr int kMaxStencil = 4;
+/// The largest stencil an element may have (a shell triangle with its three neighbours: 6).
+inline constexpr int kMaxStencil = 6;
 /// The most coordinates of one element (3 kMaxStencil).
 inline constexpr int kMaxElementDofs = 3 * kMaxStencil;
 
 /// A set of elements, each an energy E_e(x_e) over a stencil of K particles x_e (K the same for
 /// every element of the set, 1 <= K <= kMaxStencil): springs are K = 2, angle and hinge bending
-/// K = 3 and 4, contact pairs K = 4. This is the unit every method reads: the assembled implicit
-/// step (through ElementForce, element_force.hpp), vertex block descent (per-vertex sums over the
-/// incident elements), XPBD (the constraint form) and Ceres (the residual form). The design is
-/// ipc-toolkit's potentials (src/ipc/potentials/potential.hpp): one per-stencil API, and the
-/// cumulative sums built on it by the callers.
+/// K = 3 and 4, shell triangles K = 4 to 6, contact pairs K = 4. This is the unit every method
+/// reads: the assembled implicit step (through ElementForce, element_force.hpp), vertex block
+/// descent (per-vertex sums over the incident elements), XPBD (the constraint form) and Ceres (the
+/// residual form). The design is ipc-toolkit's potentials (src/ipc/potentials/potential.hpp): one
+/// per-stencil API, and the cumulative sums built on it by the callers.
 ///
 /// Calls are batched over elements [begin, end) so that a set dispatches once per batch, never
 /// once per element, and keeps its fixed-size kernels inside. Every call is const, must not
@@ -36,7 +36,8 @@ inline constexpr int kMaxElementDofs = 3 * kMaxStencil;
 /// issue 55).
 ///
 /// Must implement: name, stencil_size, size, stencil, energy, gradient_hessian.
-/// May implement: the constraint form (has_constraint / constraint) for XPBD and Ceres; a method
+/// May implement: the constraint form (has_constraint / constraint) for XPBD and Ceres, the
+/// constant quadratic form (has_scalar_quadratic / scalar_quadratic) for fast-mass-spring; a method
 /// that needs a form the set lacks refuses the scene at load time, naming the methods that can
 /// take it (its *_unsupported function, through SpringPotentialForces::unsupported).
 class ElementSet {
@@ -67,6 +68,15 @@ class ElementSet {
   virtual void constraint(ConstRef /*x*/, size_t /*e*/, double& /*C*/, double* /*dC*/,
                           double& /*stiffness*/) const {
     HOOKE_ASSERT(false, name() << " has no constraint form");
+  }
+
+  /// True if every element's energy is 1/2 sum_ab W_ab x_a . x_b for a constant symmetric K x K
+  /// matrix W (a quadratic with no linear part, the same for each coordinate): fast-mass-spring
+  /// then puts it into its global matrix, exactly. The default: no such form.
+  virtual bool has_scalar_quadratic() const { return false; }
+  /// Element e's W (K x K, column-major, at W). Called only when has_scalar_quadratic().
+  virtual void scalar_quadratic(size_t /*e*/, double* /*W*/) const {
+    HOOKE_ASSERT(false, name() << " has no constant scalar quadratic form");
   }
 
   /// The set as one process of a distributed run holds it (Force::localize): the elements with at

@@ -136,7 +136,7 @@ class ElementCost final : public ceres::DynamicCostFunction {
   }
   bool Evaluate(double const* const* parameters, double* residuals,
                 double** jacobians) const override {
-    static constexpr int kSlots[kMaxStencil] = {0, 1, 2, 3};
+    static constexpr int kSlots[kMaxStencil] = {0, 1, 2, 3, 4, 5};
     const Vec& x = stencil_positions(m_set, m_e, m_y, parameters, kSlots);
     double C = 0.0, k = 0.0;
     std::array<double, kMaxElementDofs> dC;

@@ -175,7 +175,8 @@ std::string fast_mass_spring_unsupported(const MassSpringSystem& system) {
   return SpringPotentialForces::unsupported(
       system, "fast-mass-spring",
       "the local/global split needs each force to be a spring potential, a constant or quadratic "
-      "in x; spring dampers are not");
+      "in x; spring dampers are not",
+      false, ElementNeed::ScalarQuadratic);
 }
 
 FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
@@ -198,6 +199,7 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
     }
   const Index nf = Index(m_free.size());
 
+  collect_quadratic_elements();
   plan_global_matrix();
 
   if (m_opt.global_solver == GlobalSolver::Jacobi) {
@@ -235,12 +237,37 @@ FastMassSpringStepper::FastMassSpringStepper(const MassSpringSystem& system,
   set_up_helped_local();
 }
 
+void FastMassSpringStepper::collect_quadratic_elements() {
+  const Index n = m_sys.num_particles();
+  std::vector<Eigen::Triplet<double, int>> t;
+  std::array<double, kMaxStencil * kMaxStencil> W;
+  for (const ElementSet* set : m_f.elements) {
+    HOOKE_ASSERT(set->has_scalar_quadratic(), "fast-mass-spring: " << set->name());
+    const int K = set->stencil_size();
+    for (size_t e = 0; e < set->size(); ++e) {
+      set->scalar_quadratic(e, W.data());
+      const int* id = set->stencil(e);
+      for (int b = 0; b < K; ++b)
+        for (int a = 0; a < K; ++a) t.emplace_back(id[a], id[b], W[size_t(K * b + a)]);
+    }
+  }
+  m_Q.resize(n, n);
+  m_Q.setFromTriplets(t.begin(), t.end());  // duplicates summed
+  m_Q.makeCompressed();
+}
+
 void FastMassSpringStepper::plan_global_matrix() {
   const Index nf = Index(m_free.size());
   // Pattern of the free x free global matrix: the diagonal plus both triangles of every spring
-  // joining two free particles (set-up only; steps just rewrite values).
+  // joining two free particles and of every entry of Q between two free particles (set-up only;
+  // steps just rewrite values).
   std::vector<Eigen::Triplet<double, int>> t;
   for (Index r = 0; r < nf; ++r) t.emplace_back(int(r), int(r), 0.0);
+  for (Index c = 0; c < m_Q.outerSize(); ++c)
+    for (SparseMatrix::InnerIterator it(m_Q, c); it; ++it) {
+      const Index ri = m_row[size_t(it.row())], rc = m_row[size_t(c)];
+      if (ri >= 0 && rc >= 0) t.emplace_back(int(ri), int(rc), 0.0);
+    }
   for (const SpringSet* s : m_f.springs)
     for (size_t k = 0; k < s->size(); ++k) {
       const Index ri = m_row[size_t(s->i[k])], rj = m_row[size_t(s->j[k])];
@@ -275,6 +302,12 @@ void FastMassSpringStepper::plan_global_matrix() {
       if (rj >= 0 && ri < 0) m_pin_links.push_back({rj, Index(s.i[k]), si, k});
     }
   }
+  for (Index c = 0; c < m_Q.outerSize(); ++c)
+    for (SparseMatrix::InnerIterator it(m_Q, c); it; ++it) {
+      const Index ri = m_row[size_t(it.row())], rc = m_row[size_t(c)];
+      if (ri >= 0 && rc >= 0) m_q_slots.emplace_back(position(ri, rc), it.value());
+      if (ri >= 0 && rc < 0) m_q_pins.push_back({ri, c, it.value()});
+    }
 }
 
 void FastMassSpringStepper::set_up_helped_local() {
@@ -355,6 +388,7 @@ void FastMassSpringStepper::prepare(double h) {
       if (slot[3] >= 0) a[slot[3]] -= c;
     }
   }
+  for (const auto& [slot, value] : m_q_slots) a[slot] += value;
   const Vec& m = m_sys.masses();
   for (size_t r = 0; r < m_free.size(); ++r) a[m_diag[r]] += m[m_free[r]] / (h * h) + m_f.drag / h;
   if (!m_chol) {
@@ -397,6 +431,8 @@ void FastMassSpringStepper::begin_step(const State& s0, double h) {
   });
   for (const PinLink& l : m_pin_links)
     m_const.row(l.r) += m_f.springs[l.set]->coeff[l.spring] * m_y.segment<3>(3 * l.q).transpose();
+  for (const QuadraticPin& l : m_q_pins)
+    m_const.row(l.r) -= l.value * m_y.segment<3>(3 * l.q).transpose();
 }
 
 double FastMassSpringStepper::local_step(ConstRef x, bool gradient) {
@@ -511,6 +547,9 @@ double FastMassSpringStepper::error_estimate(ConstRef x) const {
     Vec3 grad = (m[p] / (h * h)) * (xp - m_y.segment<3>(3 * p)) - m[p] * m_f.gravity +
                 m_spring_grad.segment<3>(3 * p);
     if (m_f.drag > 0.0) grad += (m_f.drag / h) * (xp - m_s0->x.segment<3>(3 * p) - h * m_f.wind);
+    if (m_Q.nonZeros() > 0)
+      for (SparseMatrix::InnerIterator it(m_Q, p); it; ++it)  // Q symmetric: column p is row p
+        grad += it.value() * x.segment<3>(3 * it.row());
     worst = std::max(worst, position_error(grad, m[p], h));
   }
   return worst / m_size;
@@ -528,6 +567,12 @@ double FastMassSpringStepper::quadratic_terms(ConstRef x, ConstRef x0, ConstRef 
     if (m_f.drag > 0.0)
       q += m_f.drag / (2 * h) * (xp - x0.segment<3>(3 * p) - h * m_f.wind).squaredNorm();
   }
+  // 1/2 x^T (Q (x) I3) x, over the entries with a free particle (the pinned-pinned ones are a
+  // constant of the step).
+  for (Index c = 0; m_Q.nonZeros() > 0 && c < m_Q.outerSize(); ++c)
+    for (SparseMatrix::InnerIterator it(m_Q, c); it; ++it)
+      if (m_row[size_t(it.row())] >= 0 || m_row[size_t(c)] >= 0)
+        q += 0.5 * it.value() * x.segment<3>(3 * it.row()).dot(x.segment<3>(3 * c));
   return q;
 }
 

@@ -180,8 +180,9 @@ class FastMassSpringStepper final : public Stepper {
 
  private:
   /// Set-up: the pattern of the free x free global matrix m_A (the diagonal and both triangles of
-  /// every spring joining two free particles), each row's diagonal slot, each spring's slots and
-  /// the springs to pinned particles (m_pin_links). Steps only rewrite its values.
+  /// every spring joining two free particles and of m_Q), each row's diagonal slot, each spring's
+  /// slots and the springs to pinned particles (m_pin_links), m_Q's slots and pinned entries.
+  /// Steps only rewrite its values.
   void plan_global_matrix();
   /// Set-up: the helper thread of the local step (m_helped, m_local_helper), when every spring
   /// set is grouped alike into at least two ranges and there is a second CPU.
@@ -198,7 +199,10 @@ class FastMassSpringStepper final : public Stepper {
   void helped_interior(ConstRef x, bool gradient);
   /// The relative error estimate of iterate x after local_step(x, true) (see Options::tolerance).
   double error_estimate(ConstRef x) const;
-  /// The inertia, gravity and drag terms of g at x for a step from x0 with prediction y (3n).
+  /// The constant quadratic element sets' m_Q from m_f.elements (constructor).
+  void collect_quadratic_elements();
+  /// The inertia, gravity, drag and constant quadratic terms of g at x for a step from x0 with
+  /// prediction y (3n).
   double quadratic_terms(ConstRef x, ConstRef x0, ConstRef y, double h) const;
   /// The same for the current step (m_s0, m_y, m_h).
   double quadratic_terms(ConstRef x) const;
@@ -241,6 +245,18 @@ class FastMassSpringStepper final : public Stepper {
     size_t set, spring;
   };
   std::vector<PinLink> m_pin_links;
+  // The constant quadratic element sets (ElementSet::has_scalar_quadratic, e.g. the quadratic
+  // bending model): their energy 1/2 x^T (Q (x) I3) x lies in the global matrix exactly, so the
+  // local step has nothing to do for them. m_Q is n x n over all particles (both triangles);
+  // m_q_slots the value index in m_A of each free-free entry, m_q_pins its free-to-pinned
+  // entries, which move b: b_r -= Q_rq y_q.
+  SparseMatrix m_Q;
+  std::vector<std::pair<Index, double>> m_q_slots;
+  struct QuadraticPin {
+    Index r, q;
+    double value;
+  };
+  std::vector<QuadraticPin> m_q_pins;
   std::unique_ptr<CholmodSolver> m_chol;  // null with global_solver = "jacobi"
   Vec m_inv_diag;                         // 1 / A_rr (global_solver = "jacobi")
   Rows3 m_R;  // b - A x of the global step (factor_precision = "single")

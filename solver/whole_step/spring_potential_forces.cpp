@@ -8,7 +8,8 @@ namespace hooke {
 
 std::string element_set_takers(const ElementSet& set) {
   return std::string("the explicit and implicit steppers, cvode, ida and vbd") +
-         (set.has_constraint() ? ", xpbd and ceres-implicit" : "") + " take it";
+         (set.has_constraint() ? ", xpbd and ceres-implicit" : "") +
+         (set.has_scalar_quadratic() ? ", fast-mass-spring" : "") + " take it";
 }
 
 std::string SpringPotentialForces::unsupported(const MassSpringSystem& system,
@@ -29,11 +30,14 @@ std::string SpringPotentialForces::unsupported(const MassSpringSystem& system,
       continue;
     if (t.form == ForceForm::Elements) {
       if (elements == ElementNeed::Energy ||
-          (elements == ElementNeed::Constraint && t.elements->has_constraint()))
+          (elements == ElementNeed::Constraint && t.elements->has_constraint()) ||
+          (elements == ElementNeed::ScalarQuadratic && t.elements->has_scalar_quadratic()))
         continue;
       return method + " cannot take the '" + t.elements->name() + "' elements" +
              (elements == ElementNeed::Constraint ? " (they have no constraint form k/2 C^2)"
-                                                  : "") +
+              : elements == ElementNeed::ScalarQuadratic
+                  ? " (they are not a constant quadratic in the positions)"
+                  : "") +
              "; " + element_set_takers(*t.elements);
     }
     return method + " handles Hooke springs" + (takes_dampers ? ", spring dampers" : "") +

@@ -10,9 +10,10 @@ namespace hooke {
 
 /// What a whole-step method can take of an element set (forces/element_set.hpp).
 enum class ElementNeed {
-  None,        ///< no element sets (the method has no path for them yet)
-  Energy,      ///< any element set: its energy, gradient and Hessian (vbd)
-  Constraint,  ///< element sets of the constraint form k/2 C^2 (xpbd)
+  None,             ///< no element sets (the method has no path for them yet)
+  Energy,           ///< any element set: its energy, gradient and Hessian (vbd)
+  Constraint,       ///< element sets of the constraint form k/2 C^2 (xpbd)
+  ScalarQuadratic,  ///< element sets of a constant quadratic form (fast-mass-spring)
 };
 
 /// The forces of a system as the position-based whole-step methods (fast-mass-spring, xpbd, vbd)
@@ -43,7 +44,7 @@ struct SpringPotentialForces {
 
 /// Which methods take the element set `set`, for the messages of those that do not: the
 /// Force-driven methods and vbd take every set, xpbd and ceres-implicit those with the constraint
-/// form.
+/// form, fast-mass-spring those with a constant scalar quadratic form.
 std::string element_set_takers(const ElementSet& set);
 
 /// How far s1 (with v1 = (x1 - x0) / h) is from solving the backward-Euler step from s0:

@@ -102,6 +102,8 @@ def test_jacobians_match_central_differences_of_the_forces():
     ("curly_hair_rod", {"mesh.n": 8}),
     ("cloth_dihedral", {"mesh.nx": 4, "mesh.ny": 4}),
     ("cloth_dihedral", {"mesh.nx": 4, "mesh.ny": 4, "bending.model": "quadratic"}),
+    ("cloth_dihedral", {"mesh.nx": 4, "mesh.ny": 4, "bending.model": "shell",
+                        "bending.poisson": 0.3}),
 ])
 def test_bending_energy_gradient_and_hessian_match_central_differences(scene_name, sets):
     # [bending] reaches Python as part of the system: its energy, -gradient (forces at v = 0, no
