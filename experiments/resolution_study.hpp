@@ -27,15 +27,26 @@ struct ResolutionOptions {
   /// Multiplies the scene's stiffnesses (1000, 200, 20 N/m at 16 x 16): 0.1 makes the cloth soft
   /// enough (strains near 0.3) that its sag measures its stiffness, not only its geometry.
   double stiffness_scale = 0.1;
+  /// Particles along the strand and sheet cantilevers (empty: 21, 41, 81; full: up to 321).
+  std::vector<int> cantilever_n;
   bool full = false;
   bool plot = true;
   std::string out_dir = "out/resolution";
 };
 
+/// The Euler-Bernoulli cantilever built in at x = clamp with rigidity EI under point loads P_i at
+/// x_i: its deflection at x_tip, sum_i P_i a_i^2 (3 L - a_i) / (6 EI), a_i = x_i - clamp,
+/// L = x_tip - clamp.
+double cantilever_deflection(const std::vector<double>& xs, const std::vector<double>& loads,
+                             double clamp, double x_tip, double EI);
+
 /// `hooke resolution`: the hanging cloth of hanging_cloth_16.toml (1 m x 1 m, 1 kg, two corners
 /// pinned) at each grid size and variant: the first swing period from a dynamic run and the static
-/// sag from settling; writes OUT/resolution.csv and (experiments/plot/resolution.py)
-/// OUT/resolution.png and OUT/resolution.md.
+/// sag from settling; then the bending cantilevers of strand_cantilever.toml (rod) and
+/// sheet_cantilever.toml (shell on both diagonal patterns, dihedral, quadratic) at each number of
+/// particles along, their settled tip sag against the Euler-Bernoulli beam's; writes
+/// OUT/resolution.csv, OUT/cantilever.csv and (experiments/plot/resolution.py) OUT/resolution.png
+/// and OUT/resolution.md.
 int run_resolution(const ResolutionOptions& options, const std::string& scenes_dir);
 
 /// Period (s) of a sampled signal y (at spacing dt): the time between its first two local minima,

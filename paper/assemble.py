@@ -120,6 +120,44 @@ def resolution_findings(out):
                                 "period max/min - 1"], table))
 
 
+def bending_findings(out):
+    """The cantilevers against beam theory (resolution/cantilever.csv) and the explicit step limit
+    under strand bending against the spacing (stability/stability.csv, cases bending_strand_N)."""
+    rows = read_csv(os.path.join(out, "resolution", "cantilever.csv"))
+    table = []
+    for key in dict.fromkeys((r["mesh"], r["model"], r["diagonals"]) for r in rows):
+        pts = [r for r in rows if (r["mesh"], r["model"], r["diagonals"]) == key]
+        devs = [num(r["ratio"]) - 1.0 for r in pts]
+        order = "-"
+        if len(pts) >= 2 and devs[-1] != 0 and devs[-2] / devs[-1] > 0:
+            spacing = (num(pts[-1]["n_along"]) - 1) / (num(pts[-2]["n_along"]) - 1)
+            order = g3(math.log(devs[-2] / devs[-1]) / math.log(spacing))
+        table.append([key[0], key[1], key[2] or "-", ", ".join(r["n_along"] for r in pts),
+                      ", ".join("%+.2e" % d for d in devs), order])
+    text = markdown_table(["mesh", "model", "diagonals", "particles along", "tip sag / beam - 1",
+                           "order (last two)"], table)
+    stab = [r for r in read_csv(os.path.join(out, "stability", "stability.csv"))
+            if re.fullmatch(r"bending_strand_[0-9]+", r["case"]) and r["bound"] == "bracketed"]
+    slopes = []
+    for label in dict.fromkeys(r["label"] for r in stab):
+        by_n = {}
+        for r in stab:
+            if r["label"] == label:
+                by_n.setdefault(int(r["case"].rsplit("_", 1)[1]), {})[r["k"]] = num(r["h_stable"])
+        ns = sorted(by_n)
+        for a, b in zip(ns, ns[1:]):
+            common = [k for k in by_n[a] if k in by_n[b]]
+            fits = [math.log(by_n[a][k] / by_n[b][k]) / math.log((b - 1) / (a - 1)) for k in common]
+            if fits:
+                slopes.append([label, f"{a} -> {b}", len(fits), g3(min(fits)), g3(max(fits))])
+    if slopes:
+        text += ("\nThe largest stable step under strand bending against the spacing: the slope of log h over "
+                 "log spacing between two strands at the same EI (2 for a limit set by bending):\n\n" +
+                 markdown_table(["method", "particles", "EI values", "slope min", "slope max"], slopes))
+    with open(os.path.join(out, "findings_bending.md"), "w") as f:
+        f.write(text)
+
+
 def timings(out):
     rows = read_csv(os.path.join(out, "timings.csv"))
     with open(os.path.join(out, "timings.md"), "w") as f:
@@ -185,6 +223,7 @@ def main(source, out):
     work_precision_findings(out)
     tolerance_findings(out)
     resolution_findings(out)
+    bending_findings(out)
     timings(out)
     lines = []
     with open(source) as f:

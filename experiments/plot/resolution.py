@@ -1,9 +1,10 @@
 """Plots the resolution study written by `hooke resolution` (experiments/resolution_study.cpp).
 
 Usage: /usr/bin/python3 experiments/plot/resolution.py OUT_DIR
-Reads OUT_DIR/resolution.csv; writes OUT_DIR/resolution.png (static sag of the centre of mass and
-first swing period against the grid size n, one line per scaling rule, log2 x axis) and
-OUT_DIR/resolution.md (the same numbers as a table).
+Reads OUT_DIR/resolution.csv (and OUT_DIR/cantilever.csv if there); writes OUT_DIR/resolution.png
+(static sag of the centre of mass and first swing period against the grid size n, one line per
+scaling rule, log2 x axis) and OUT_DIR/resolution.md (the same numbers as a table, and the
+cantilevers' sags against beam theory).
 """
 import os
 import sys
@@ -47,9 +48,18 @@ def main(out_dir):
     table = [[r["variant"], r["n"], r["particles"], g3(num(r["k_structural"])), g3(num(r["drag"])),
               g3(num(r["sag_com_m"])), g3(num(r["sag_lowest_m"])), g3(num(r["period_s"])), g3(num(r["wall_s"]))]
              for r in rows]
-    write_text(os.path.join(out_dir, "resolution.md"),
-               markdown_table(["variant", "n", "particles", "k structural (N/m)", "drag (kg/s per particle)",
-                               "sag CoM (m)", "sag lowest (m)", "period (s)", "wall (s)"], table))
+    text = markdown_table(["variant", "n", "particles", "k structural (N/m)", "drag (kg/s per particle)",
+                           "sag CoM (m)", "sag lowest (m)", "period (s)", "wall (s)"], table)
+    cantilever = os.path.join(out_dir, "cantilever.csv")
+    if os.path.exists(cantilever):
+        crows = read_csv(cantilever)
+        ctable = [[r["mesh"], r["model"], r["diagonals"] or "-", r["n_along"], r["particles"], g3(num(r["sag_m"])),
+                   g3(num(r["beam_m"])), "%+.2e" % (num(r["ratio"]) - 1.0), g3(num(r["wall_s"]))] for r in crows]
+        text += ("\nBending cantilevers (cantilever.csv): the settled tip sag against the Euler-Bernoulli beam of "
+                 "the same rigidity.\n\n" +
+                 markdown_table(["mesh", "model", "diagonals", "n along", "particles", "tip sag (m)", "beam (m)",
+                                 "sag / beam - 1", "wall (s)"], ctable))
+    write_text(os.path.join(out_dir, "resolution.md"), text)
     print(f"resolution.py: wrote {out_dir}/resolution.png and resolution.md")
 
 

@@ -18,7 +18,8 @@
 #               script writes stability_two_particle.png.
 #   workprecision  `hooke workprecision` on the chain with three methods: workprecision.csv and
 #               reference.csv have their headers, rk4's smallest step has a finite error; the PNG.
-#   resolution  `hooke resolution` at n = 4, 6: one row per variant and size with a finite sag.
+#   resolution  `hooke resolution` at n = 4, 6: one row per variant and size with a finite sag;
+#               the cantilevers at 9 and 17 along, the shell sheet's sag near its beam's.
 #   energy      `hooke energy` at 50 periods: its two CSVs, symplectic Euler bounded, backward
 #               Euler dissipating, and the figure.
 #   adaptive    error-controlled dopri5: log columns, frames at their times, the end line, a
@@ -637,8 +638,16 @@ elseif(CASE STREQUAL "workprecision")
   expect_csv("${OUT}/fluid/reference.csv" "case,rtol,wall_s,err_rms_final,err_rms_traj,err_max_traj,how" 1)
 
 elseif(CASE STREQUAL "resolution")
-  hooke_exec(resolution --n 4,6 --duration 0.5 --out "${OUT}" --no-plot)
+  hooke_exec(resolution --n 4,6 --duration 0.5 --cantilever-n 9,17 --out "${OUT}" --no-plot)
   expect_rc(0)
+  # Five cantilevers (rod; shell on both diagonals, dihedral, quadratic) at two sizes, each with
+  # a finite sag.
+  expect_csv("${OUT}/cantilever.csv"
+             "mesh,model,diagonals,n_along,particles,sag_m,beam_m,ratio,settle_speed,wall_s" 11)
+  file(STRINGS "${OUT}/cantilever.csv" rows REGEX "^sheet,shell,one-way,17,")
+  if(NOT rows MATCHES "^sheet,shell,one-way,17,[0-9]+,0\\.[0-9]+,0\\.[0-9]+,(0\\.9|1\\.0)")
+    message(FATAL_ERROR "the shell sheet at 17 along is not near its beam: '${rows}'${report}")
+  endif()
   expect_csv("${OUT}/resolution.csv"
              "variant,n,particles,springs,k_structural,drag,period_s,sag_com_m,sag_lowest_m,settle_speed,wall_s" 7)
   file(STRINGS "${OUT}/resolution.csv" rows REGEX "^membrane,6,36,")

@@ -32,6 +32,24 @@ TEST(ResolutionStudy, FirstPeriodOfAnOverdampedFallIsNaN) {
   EXPECT_TRUE(std::isnan(first_period(y, 1e-3, 0.2, 0.01)));
 }
 
+TEST(ResolutionStudy, CantileverDeflectionIsTheBeamsUnderAnEndLoadAndAUniformOne) {
+  // An end load P: P L^3 / (3 EI); a clamp anywhere shifts the beam's root.
+  EXPECT_NEAR(cantilever_deflection({1.0}, {2.0}, 0.0, 1.0, 0.5), 2.0 / 1.5, 1e-15);
+  EXPECT_NEAR(cantilever_deflection({1.3}, {2.0}, 0.3, 1.3, 0.5), 2.0 / 1.5, 1e-14);
+  // A load q spread over N equal point loads at the cell midpoints: q L^4 / (8 EI) as N grows,
+  // the midpoint rule's error second order.
+  auto uniform = [](int N) {
+    std::vector<double> xs, loads;
+    for (int i = 0; i < N; ++i) {
+      xs.push_back((i + 0.5) / N);
+      loads.push_back(3.0 / N);
+    }
+    return cantilever_deflection(xs, loads, 0.0, 1.0, 2.0) / (3.0 / 16.0) - 1.0;
+  };
+  EXPECT_LT(std::abs(uniform(100)), 1e-4);
+  EXPECT_NEAR(uniform(50) / uniform(100), 4.0, 0.01);
+}
+
 TEST(ResolutionStudy, VariantsAreUnscaledMembraneAndOneDimensionalRule) {
   const auto v = resolution_variants();
   ASSERT_EQ(v.size(), 3u);
