@@ -318,11 +318,18 @@ void MassSpringRun::restore(const Checkpoint& c) {
   m_sim.set_halved_steps(c.halved_steps);
   m_wall = c.wall;
   const bool restarted = c.history.empty() && !m_sim.stepper().history().empty();
-  if ((!m_sim.stepper().exact_resume() || restarted) && m_group.root())
+  if (restarted && m_group.root())
     std::fprintf(stderr,
-                 "note: %s keeps an internal history that a checkpoint cannot hold: it restarts at "
-                 "step %lld, so the result agrees with an uninterrupted run to the solver's "
-                 "tolerance, not bit for bit\n",
+                 "note: %s keeps an internal history that this checkpoint does not hold: it "
+                 "restarts at step %lld, so the result agrees with an uninterrupted run to the "
+                 "solver's tolerance, not bit for bit\n",
+                 method.c_str(), c.step);
+  else if (!m_sim.stepper().exact_resume() && m_group.root())
+    std::fprintf(stderr,
+                 "note: %s keeps solver state that a checkpoint cannot hold (a reused "
+                 "factorization or preconditioner, or the integrator's own history): it is "
+                 "rebuilt at step %lld, so the result agrees with an uninterrupted run to the "
+                 "solver's tolerance, not bit for bit\n",
                  method.c_str(), c.step);
 }
 

@@ -29,7 +29,8 @@
 #              system) resumes on 2 processes and on 1 to the uninterrupted serial run's final.csv.
 #              BDF2 and backward Euler on PETSc stopped on 2 processes (each writing its piece of
 #              the checkpoint: local state and stepper history) resume on 2 to the uninterrupted
-#              2-process run's final.csv byte for byte; with a damaged piece, the resume says so
+#              2-process run's final.csv within 1e-6 m, saying they are not bit for bit (the
+#              PETSc hierarchy is rebuilt); with a damaged piece, the resume says so
 #              and continues from the whole state.
 set -uo pipefail
 CASE=${1:?case} HOOKE=${2:?hooke binary} MPIRUN=${3:?mpirun} SCENES=${4:?scenes dir} OUT=${5:?scratch dir}
@@ -255,8 +256,13 @@ resume)
   done
   # Implicit steps keep a history (BDF2: the previous state; every Krylov solve: its warm start).
   # Each process writes it in its piece of the checkpoint, and a resume on as many processes
-  # takes it back: the resumed run is the uninterrupted one, bit for bit. (Without the pieces it
-  # is not: BDF2 restarts with a backward Euler step, the solves from a zero guess.)
+  # takes it back. (Without the pieces BDF2 would restart with a backward Euler step, the solves
+  # from a zero guess.) The PETSc backend's multigrid hierarchy is not in the pieces: the resumed
+  # run builds a new one where the uninterrupted run may still reuse an older one
+  # (PetscSolver::exact_resume() is false), so the resume says it is not bit for bit and the two
+  # runs must agree to the solves' tolerance: linear_tolerance 1e-8 of the velocity change over
+  # 10 steps of a 1 m cloth is far below 1e-6 m, while a lost history is not (BDF2 resumed on one
+  # process, which restarts it with a backward Euler step: 1.8e-3 m, measured).
   for m in bdf2 implicit; do
     args=(run "$SCENES/hanging_cloth_16.toml" --set integrator.method="$m" --set time.dt=0.02
           --set time.duration=0.2 --set integrator.linear_solver=petsc
@@ -272,7 +278,9 @@ resume)
     "$MPIRUN" -q -n 2 "$HOOKE" resume "$OUT/$m.stopped" --no-progress > /dev/null 2> "$OUT/$m.resume.err"
     rc=$?
     expect_rc 0 "$m resumed on 2 processes" "$OUT/$m.resume"
-    same_run "$OUT/$m.whole" "$OUT/$m.stopped"
+    grep -q "not bit for bit" "$OUT/$m.resume.err" ||
+      fail "$m on petsc resumed without saying it is not bit for bit: $(cat "$OUT/$m.resume.err")"
+    close_x "$OUT/$m.whole" "$OUT/$m.stopped" 1e-6
   done
   # A damaged piece is not used: the run resumes from checkpoint.bin's whole state and says why.
   run 2 "$OUT/damaged" "${args[@]}" --stop-after 4
