@@ -231,16 +231,18 @@ std::vector<TriangleNeighbours> triangle_neighbours(
 /// Kirchhoff plate in bending and twist. On the grid builder's alternating diagonals the pairs
 /// across the grid-axis edges are mirror images, which do not see twist: bending about the grid
 /// axes still converges to the plate (a strip clamped at one end sags as the Euler-Bernoulli beam
-/// of rigidity D times its width, unlike the hinge models), but a pure twist stores 2x the
-/// plate's energy. The diagonal term M_ee with equal triangle areas is DihedralBending's k, so
-/// the two differ by the coupling of a triangle's edges, which is what makes the plate. Boundary
-/// edges carry no angle (the free edge of the plate triangle). Elements are triangles with 1, 2
-/// or 3 interior edges: K = 4, 5, 6 (one set per K).
+/// of rigidity D times its width, unlike the hinge models), but a bend about a diagonal stores
+/// 1.5x and a pure twist 2x the plate's energy (ShellBending.IsTheKirchhoffPlate...). The diagonal
+/// term M_ee with equal triangle areas is DihedralBending's k, so the two differ by the coupling of
+/// a triangle's edges, which is what makes the plate. Boundary edges carry no angle (the free edge
+/// of the plate triangle). Elements are triangles with 1, 2 or 3 interior edges: K = 4, 5, 6 (one
+/// set per K).
 ///
 /// Hessian: sum_ef M_ef grad theta_e grad theta_f^T + sum_e (M d)_e Hess theta_e; the first term
 /// is PSD (gauss_newton keeps only it when a projection is requested, as DihedralBending's), the
-/// exact one is projected as a 3K x 3K block. No constraint form (the energy couples three angles):
-/// XPBD and the energy form of Ceres refuse it.
+/// exact one is projected as a 3K x 3K block (the scenes' default, bending.projection, is
+/// Gauss-Newton). No constraint form (the energy couples three angles): XPBD and ceres-implicit
+/// refuse it.
 template <int K>
 class ShellBending final
     : public bending_detail::StencilElements<K, bending_detail::ShellTriangle<K>> {

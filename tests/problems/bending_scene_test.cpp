@@ -9,6 +9,7 @@
 #include <gtest/gtest.h>
 
 #include <Eigen/Dense>
+#include <Eigen/SparseCholesky>
 #include <cmath>
 #include <cstdio>
 #include <string>
@@ -51,9 +52,28 @@ Eigen::MatrixXd free_hessian(const MassSpringSystem& sys, const Vec& x,
   return H;
 }
 
-/// The static equilibrium from the scene's initial shape: Newton on the exact Hessian until the
-/// free forces are 1e-8 of the total weight (the stiff springs' round-off, a few k 1e-16 |x|, is
-/// about 1e-9 of it; Newton converges quadratically down to it).
+/// -K on the free coordinates at x, sparse (the static solve's Newton matrix).
+Eigen::SparseMatrix<double> free_hessian_sparse(const MassSpringSystem& sys, const Vec& x,
+                                                const std::vector<Index>& dofs) {
+  Jacobians J = sys.make_jacobians();
+  JacobianOptions exact;
+  exact.clamp_compressed = false;
+  sys.assemble_jacobians(x, Vec::Zero(x.size()), J, exact);
+  std::vector<Index> at(size_t(x.size()), -1);
+  for (size_t i = 0; i < dofs.size(); ++i) at[size_t(dofs[i])] = Index(i);
+  std::vector<Eigen::Triplet<double>> t;
+  for (int c = 0; c < J.K.outerSize(); ++c)
+    for (SparseMatrix::InnerIterator it(J.K, c); it; ++it)
+      if (at[size_t(it.row())] >= 0 && at[size_t(c)] >= 0)
+        t.emplace_back(int(at[size_t(it.row())]), int(at[size_t(c)]), -it.value());
+  Eigen::SparseMatrix<double> H(Index(dofs.size()), Index(dofs.size()));
+  H.setFromTriplets(t.begin(), t.end());
+  return H;
+}
+
+/// The static equilibrium from the scene's initial shape: Newton on the exact Hessian (a sparse
+/// LDL^T) until the free forces are 1e-8 of the total weight (the stiff springs' round-off, a few
+/// k 1e-16 |x|, is about 1e-9 of it; Newton converges quadratically down to it).
 Vec static_equilibrium(const Scene& scene) {
   const MassSpringSystem& sys = *scene.system;
   const std::vector<Index> dofs = free_dofs(sys);
@@ -66,7 +86,13 @@ Vec static_equilibrium(const Scene& scene) {
     Eigen::VectorXd r(dofs.size());
     for (size_t i = 0; i < dofs.size(); ++i) r[Index(i)] = f[dofs[i]];
     if (r.cwiseAbs().maxCoeff() <= 1e-8 * weight) return x;
-    const Eigen::VectorXd dx = free_hessian(sys, x, dofs).ldlt().solve(r);
+    const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(
+        free_hessian_sparse(sys, x, dofs));
+    if (ldlt.info() != Eigen::Success) {
+      ADD_FAILURE() << "the free Hessian is singular";
+      return x;
+    }
+    const Eigen::VectorXd dx = ldlt.solve(r);
     for (size_t i = 0; i < dofs.size(); ++i) x[dofs[i]] += dx[Index(i)];
   }
   ADD_FAILURE() << "Newton did not reach the static equilibrium";
