@@ -120,6 +120,9 @@ class HelpedBins {
   /// Bins whose result the helper computed, and bins the owner took over from it, so far.
   long long helper_bins() const { return m_helper_bins; }
   long long taken_over() const { return m_taken_over; }
+  /// For tests: how many of kHelperStalls' sleeps have ended (so that a test can tell that a
+  /// round returned while the helper still slept, an order of events rather than a time).
+  int test_stalls_ended() const { return m_test_stalls_ended.load(std::memory_order_relaxed); }
 
   // The helper's side (from its HelperThread job).
   /// Claims bin b of round gen (Free -> Claimed): 1 if claimed (copy its inputs, then run()),
@@ -142,8 +145,10 @@ class HelpedBins {
     std::uint64_t s = tag(gen, kClaimed);
     const bool kept = m_state[b].compare_exchange_strong(s, tag(gen, kRunning));
     m_reading.store(0);
-    if (kept && (m_test.load(std::memory_order_relaxed) & kHelperStalls))
+    if (kept && (m_test.load(std::memory_order_relaxed) & kHelperStalls)) {
       std::this_thread::sleep_for(std::chrono::duration<double>(kTestStall));
+      m_test_stalls_ended.fetch_add(1, std::memory_order_relaxed);
+    }
     return kept;
   }
   /// The helper's work done in bin b so far (the units of set_bins' weights).
@@ -200,6 +205,7 @@ class HelpedBins {
   std::unique_ptr<std::atomic<std::int64_t>[]> m_claimed_ns, m_progress;
   std::atomic<std::uint64_t> m_reading{0};
   std::atomic<int> m_test{0};
+  std::atomic<int> m_test_stalls_ended{0};
   // The owner's alone.
   double m_ns_per_work = 0.0;  // the owner's time per unit of work, smoothed
   long long m_helper_bins = 0, m_taken_over = 0;

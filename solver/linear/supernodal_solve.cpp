@@ -527,6 +527,7 @@ SupernodalSolver::Helped SupernodalSolver::helped() const {
     for (const HelpedBins& sweep : m_helped->sweep) {
       out.helper_bins += sweep.helper_bins();
       out.taken_over += sweep.taken_over();
+      out.stalls_ended += sweep.test_stalls_ended();
     }
   }
   return out;

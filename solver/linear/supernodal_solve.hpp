@@ -86,9 +86,10 @@ class SupernodalSolver {
   Shape shape() const;
   /// What the helper thread did in the solves on two threads so far: bins of either sweep whose
   /// result it computed, and bins it had claimed that the caller's thread took over (computed
-  /// itself) because the helper held them too long.
+  /// itself) because the helper held them too long; and (kHelperStalls) how many of the helper's
+  /// test sleeps have ended.
   struct Helped {
-    long long helper_bins = 0, taken_over = 0;
+    long long helper_bins = 0, taken_over = 0, stalls_ended = 0;
   };
   Helped helped() const;
   /// For tests of the two-thread solves, flags: kHelperFirst, the calling thread lets the helper
