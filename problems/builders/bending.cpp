@@ -54,30 +54,7 @@ std::vector<std::unique_ptr<ElementSet>> shell_bending(TableReader& bending, con
   if (!(nu > -1.0 && nu <= 0.5))
     bending.fail("poisson", "the Poisson ratio of an isotropic plate lies in (-1, 0.5], not " +
                                 std::to_string(nu));
-  const bool gn = gauss_newton(bending);
-  auto s4 = std::make_unique<ShellBending<4>>(gn);
-  auto s5 = std::make_unique<ShellBending<5>>(gn);
-  auto s6 = std::make_unique<ShellBending<6>>(gn);
-  for (const TriangleNeighbours& t : triangle_neighbours(b.triangles)) {
-    switch (t.interior()) {
-      case 1:
-        s4->add(t, D, nu, b.x, flat);
-        break;
-      case 2:
-        s5->add(t, D, nu, b.x, flat);
-        break;
-      case 3:
-        s6->add(t, D, nu, b.x, flat);
-        break;
-      default:
-        break;  // a triangle with no interior edge bends nowhere
-    }
-  }
-  std::vector<std::unique_ptr<ElementSet>> sets;
-  if (s6->size() > 0) sets.push_back(std::move(s6));
-  if (s5->size() > 0) sets.push_back(std::move(s5));
-  if (s4->size() > 0) sets.push_back(std::move(s4));
-  return sets;
+  return shell_bending_sets(b.triangles, D, nu, b.x, flat, gauss_newton(bending));
 }
 
 std::vector<std::unique_ptr<ElementSet>> cloth_bending(TableReader& bending,

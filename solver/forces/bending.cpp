@@ -637,4 +637,23 @@ template class ShellBending<4>;
 template class ShellBending<5>;
 template class ShellBending<6>;
 
+std::vector<std::unique_ptr<ElementSet>> shell_bending_sets(
+    const std::vector<std::array<int, 3>>& triangles, double D, double nu, ConstRef x_rest,
+    bool flat_rest, bool gauss_newton) {
+  auto s4 = std::make_unique<ShellBending<4>>(gauss_newton);
+  auto s5 = std::make_unique<ShellBending<5>>(gauss_newton);
+  auto s6 = std::make_unique<ShellBending<6>>(gauss_newton);
+  for (const TriangleNeighbours& t : triangle_neighbours(triangles)) {
+    if (t.interior() == 1) s4->add(t, D, nu, x_rest, flat_rest);
+    if (t.interior() == 2) s5->add(t, D, nu, x_rest, flat_rest);
+    if (t.interior() == 3) s6->add(t, D, nu, x_rest, flat_rest);
+    // a triangle with no interior edge bends nowhere
+  }
+  std::vector<std::unique_ptr<ElementSet>> sets;
+  if (s6->size() > 0) sets.push_back(std::move(s6));
+  if (s5->size() > 0) sets.push_back(std::move(s5));
+  if (s4->size() > 0) sets.push_back(std::move(s4));
+  return sets;
+}
+
 }  // namespace hooke

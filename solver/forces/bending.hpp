@@ -276,4 +276,11 @@ extern template class ShellBending<4>;
 extern template class ShellBending<5>;
 extern template class ShellBending<6>;
 
+/// The shell bending of a triangle mesh: its triangles with an interior edge split by how many
+/// they have into the sets ShellBending<4>, <5> and <6> (those that are not empty, largest K
+/// first), each with rigidity D, Poisson ratio nu and the rest from x_rest (flat if flat_rest).
+std::vector<std::unique_ptr<ElementSet>> shell_bending_sets(
+    const std::vector<std::array<int, 3>>& triangles, double D, double nu, ConstRef x_rest,
+    bool flat_rest, bool gauss_newton = false);
+
 }  // namespace hooke

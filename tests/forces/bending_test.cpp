@@ -602,18 +602,7 @@ TEST(ShellBending, WeightsAreThePlatesAndTheDiagonalIsTheHingeModels) {
 struct ShellGrid {
   std::vector<std::unique_ptr<ElementSet>> sets;
   ShellGrid(int n, bool alternating, const Vec& rest, double D, double nu) {
-    const std::vector<std::array<int, 3>> triangles = grid_triangles(n, alternating);
-    auto s4 = std::make_unique<ShellBending<4>>();
-    auto s5 = std::make_unique<ShellBending<5>>();
-    auto s6 = std::make_unique<ShellBending<6>>();
-    for (const TriangleNeighbours& t : triangle_neighbours(triangles)) {
-      if (t.interior() == 1) s4->add(t, D, nu, rest, true);
-      if (t.interior() == 2) s5->add(t, D, nu, rest, true);
-      if (t.interior() == 3) s6->add(t, D, nu, rest, true);
-    }
-    sets.push_back(std::move(s4));
-    sets.push_back(std::move(s5));
-    sets.push_back(std::move(s6));
+    sets = shell_bending_sets(grid_triangles(n, alternating), D, nu, rest, true);
   }
   double energy(const Vec& x) const {
     double E = 0.0;

@@ -108,18 +108,8 @@ struct BendingSystem {
         for (const auto& h : interior_hinges(triangles)) d->add(h, 5e-3, rest, false);
         sets.push_back(std::move(d));
       } else if (model == Model::Shell) {
-        auto s4 = std::make_unique<ShellBending<4>>();
-        auto s5 = std::make_unique<ShellBending<5>>();
-        auto s6 = std::make_unique<ShellBending<6>>();
-        for (const TriangleNeighbours& t : triangle_neighbours(triangles)) {
-          if (t.interior() == 1) s4->add(t, 5e-3, 0.3, rest, false);
-          if (t.interior() == 2) s5->add(t, 5e-3, 0.3, rest, false);
-          if (t.interior() == 3) s6->add(t, 5e-3, 0.3, rest, false);
-        }
-        EXPECT_GT(s6->size() * s5->size() * s4->size(), 0u);  // the patch has all three kinds
-        sets.push_back(std::move(s4));
-        sets.push_back(std::move(s5));
-        sets.push_back(std::move(s6));
+        sets = shell_bending_sets(triangles, 5e-3, 0.3, rest, false);
+        EXPECT_EQ(sets.size(), 3u);  // the patch has triangles of 1, 2 and 3 interior edges
       } else {
         auto q = std::make_unique<QuadraticBending>();
         for (const auto& h : interior_hinges(triangles)) q->add(h, 5e-3, rest);
