@@ -518,6 +518,17 @@ void add_bending_keys(std::vector<SceneKey>& t) {
           .example("1e-3")
           .meaning("the sheet's bending rigidity D: a cylindrical bend of curvature kappa about "
                    "a grid axis stores 1/2 D kappa^2 per unit area"));
+  add(K("bending.damping", T::Number)
+          .in({"rod", "dihedral", "quadratic", "shell"})
+          .unit("s")
+          .def("0")
+          .non_negative()
+          .meaning("Rayleigh damping beta on the bending rates: each element dissipates beta/2 "
+                   "times its energy's quadratic form on the rates of its angles (the rate of the "
+                   "curvature for rod), so a small bending oscillation of angular frequency omega "
+                   "is damped with ratio beta omega / 2 and no rigid motion is damped; the "
+                   "implicit family, explicit steppers, cvode and ida take it, the whole-step "
+                   "methods (vbd, xpbd, fast-mass-spring, ceres-implicit) refuse it"));
   add(K("bending.rest", T::String)
           .in({"rod"})
           .def("'initial'")

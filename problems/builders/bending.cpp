@@ -117,9 +117,20 @@ void add_bending(TableReader& bending, const MeshBuild& b, MassSpringSystem& sys
                               "' bends cloth (mesh.type = 'grid' or 'obj'); this mesh is '" +
                               b.type + "'" + (is_strand(b.type) ? ": use 'rod'" : ""));
   const double stiffness = bending.positive("stiffness");
+  // Rayleigh damping on the bending rates (ElementForce): every model has the form.
+  const double damping = bending.non_negative("damping", 0.0);
   auto sets = model == "rod" ? strand_bending(bending, b, stiffness)
                              : cloth_bending(bending, model, b, stiffness);
-  for (auto& set : sets) sys.add_force(std::make_unique<ElementForce>(std::move(set)));
+  for (auto& set : sets) {
+    auto force = std::make_unique<ElementForce>(std::move(set));
+    if (damping > 0.0) {
+      auto dampers = std::make_unique<ElementDamping>(force->set(), damping);
+      sys.add_force(std::move(force));
+      sys.add_force(std::move(dampers));
+    } else {
+      sys.add_force(std::move(force));
+    }
+  }
 }
 
 }  // namespace hooke

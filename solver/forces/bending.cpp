@@ -194,6 +194,62 @@ double wrap_angle(double d) {
   return d;
 }
 
+/// One element's Rayleigh damping (ElementSet::damping) from the gradients of its M rate
+/// coordinates q over its N = 3K positions (P.col(a) = dq_a/dx_e), their weights W and, for Dx,
+/// their Hessians Hq[a] (N x N): with qdot = P^T v_e,
+///   f = -P W qdot,  Dv = -P W P^T,  Dx = -sum_a (W qdot)_a Hq_a - P W Z^T,  Z.col(b) = Hq_b v_e,
+/// written at f, Dv and Dx (column-major) where those are not null.
+template <int N, int M>
+void rayleigh(const Eigen::Matrix<double, N, M>& P, const Eigen::Matrix<double, M, M>& W,
+              const Eigen::Matrix<double, N, 1>& ve, const Eigen::Matrix<double, N, N>* Hq,
+              double* f, double* Dv, double* Dx) {
+  const Eigen::Matrix<double, M, 1> Wq = W * (P.transpose() * ve);
+  Eigen::Map<Eigen::Matrix<double, N, 1>>(f).noalias() = -P * Wq;
+  const Eigen::Matrix<double, N, M> PW = P * W;
+  if (Dv) Eigen::Map<Eigen::Matrix<double, N, N>>(Dv).noalias() = -PW * P.transpose();
+  if (!Dx) return;
+  Eigen::Map<Eigen::Matrix<double, N, N>> X(Dx);
+  Eigen::Matrix<double, N, M> Z;
+  for (int a = 0; a < M; ++a) Z.col(a).noalias() = Hq[a] * ve;
+  X.noalias() = -PW * Z.transpose();
+  for (int a = 0; a < M; ++a) X.noalias() -= Wq[a] * Hq[a];
+}
+
+/// The stencil's velocities v_e (3K) of element ids.
+template <int K>
+Eigen::Matrix<double, 3 * K, 1> stencil_velocities(ConstRef v, const int* ids) {
+  Eigen::Matrix<double, 3 * K, 1> ve;
+  for (int a = 0; a < K; ++a) ve.template segment<3>(3 * a) = v.segment<3>(3 * ids[a]);
+  return ve;
+}
+
+/// Zeros for element e of a batch starting at begin: no defined rate, no damping.
+template <int K>
+void no_damping(size_t e, size_t begin, double* f, double* Dv, double* Dx) {
+  constexpr size_t n = 3 * K;
+  std::fill(f + n * (e - begin), f + n * (e - begin + 1), 0.0);
+  if (Dv) std::fill(Dv + n * n * (e - begin), Dv + n * n * (e - begin + 1), 0.0);
+  if (Dx) std::fill(Dx + n * n * (e - begin), Dx + n * n * (e - begin + 1), 0.0);
+}
+
+/// The damping of one hinge (x0, x1, x2, x3) of stiffness k: the rate theta-dot of its angle
+/// with W = k (ElementSet::damping), at f, Dv and Dx (12 and 144 values); zeros at a degenerate
+/// hinge.
+void hinge_damping(ConstRef x, ConstRef v, const int* ids, double k, double* f, double* Dv,
+                   double* Dx) {
+  Vec9 G;
+  Mat9 Ht;
+  if (!hinge_angle_derivatives(hinge_vectors(x, ids), G, Dx ? &Ht : nullptr)) {
+    no_damping<4>(0, 0, f, Dv, Dx);
+    return;
+  }
+  Eigen::Matrix<double, 12, 1> P;
+  Mat12 Hq;
+  to_positions<3, 4>(G, Dx ? &Ht : nullptr, kHingeCoef, P.data(), Dx ? Hq.data() : nullptr);
+  rayleigh<12, 1>(P, Eigen::Matrix<double, 1, 1>(k), stencil_velocities<4>(v, ids),
+                  Dx ? &Hq : nullptr, f, Dv, Dx);
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -270,6 +326,33 @@ void RodBending::constraint(ConstRef x, size_t e, double& C, double* dC, double&
   rod_cosine_derivatives(r, G, nullptr);
   const Vec6 gv = (-2.0 / (one_plus_c(r) * r.s)) * G;
   to_positions<2, 3>(gv, nullptr, kRodCoef, dC, nullptr);
+}
+
+void RodBending::damping(ConstRef x, ConstRef v, size_t begin, size_t end, double* f, double* Dv,
+                         double* Dx) const {
+  for (size_t e = begin; e < end; ++e) {
+    const Hinge& h = m_elements[e];
+    const RodGeometry r = rod_geometry(x, h.ids.data());
+    if (!r.ok || r.s < kStraight) {  // no bending plane: kappa's rate is undefined (see hpp)
+      no_damping<3>(e, begin, f, Dv, Dx);
+      continue;
+    }
+    const double opc = one_plus_c(r);
+    const double dk = -2.0 / (opc * r.s);
+    const double d2k = 2.0 * r.s / opc * (1.0 - 2.0 * r.c) / (r.s * r.s * r.s * r.s);
+    Vec6 G;
+    Mat6 Hc;
+    rod_cosine_derivatives(r, G, Dx ? &Hc : nullptr);
+    Vec9 P;
+    Mat9 Hk;
+    Mat6 Hv;
+    if (Dx) Hv = d2k * G * G.transpose() + dk * Hc;
+    to_positions<2, 3>(Vec6(dk * G), Dx ? &Hv : nullptr, kRodCoef, P.data(),
+                       Dx ? Hk.data() : nullptr);
+    const size_t o = 9 * (e - begin), oo = 81 * (e - begin);
+    rayleigh<9, 1>(P, Eigen::Matrix<double, 1, 1>(h.k), stencil_velocities<3>(v, h.ids.data()),
+                   Dx ? &Hk : nullptr, f + o, Dv ? Dv + oo : nullptr, Dx ? Dx + oo : nullptr);
+  }
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -387,6 +470,13 @@ void DihedralBending::constraint(ConstRef x, size_t e, double& C, double* dC,
   to_positions<3, 4>(G, nullptr, kHingeCoef, dC, nullptr);
 }
 
+void DihedralBending::damping(ConstRef x, ConstRef v, size_t begin, size_t end, double* f,
+                              double* Dv, double* Dx) const {
+  for (size_t e = begin; e < end; ++e)
+    hinge_damping(x, v, m_elements[e].ids.data(), m_elements[e].k, f + 12 * (e - begin),
+                  Dv ? Dv + 144 * (e - begin) : nullptr, Dx ? Dx + 144 * (e - begin) : nullptr);
+}
+
 // ---------------------------------------------------------------------------------------------
 
 void QuadraticBending::add(const std::array<int, 4>& hinge, double D, ConstRef x_rest) {
@@ -447,6 +537,13 @@ void QuadraticBending::scalar_quadratic(size_t e, double* W) const {
   const Hinge& h = m_elements[e];
   for (int j = 0; j < 4; ++j)
     for (int i = 0; i < 4; ++i) W[4 * j + i] = h.k * h.w[size_t(i)] * h.w[size_t(j)];
+}
+
+void QuadraticBending::damping(ConstRef x, ConstRef v, size_t begin, size_t end, double* f,
+                               double* Dv, double* Dx) const {
+  for (size_t e = begin; e < end; ++e)
+    hinge_damping(x, v, m_elements[e].ids.data(), m_elements[e].k, f + 12 * (e - begin),
+                  Dv ? Dv + 144 * (e - begin) : nullptr, Dx ? Dx + 144 * (e - begin) : nullptr);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -603,6 +700,43 @@ void ShellBending<K>::gradient_hessian(ConstRef x, size_t begin, size_t end,
       He = (0.5 * (He + He.transpose())).eval();
       if (projection != PsdProjection::None) project_psd(He.data(), n, projection);
     }
+  }
+}
+
+template <int K>
+void ShellBending<K>::damping(ConstRef x, ConstRef v, size_t begin, size_t end, double* f,
+                              double* Dv, double* Dx) const {
+  constexpr int m = K - 3, n = 3 * K;
+  using MatN = Eigen::Matrix<double, n, n>;
+  for (size_t e = begin; e < end; ++e) {
+    const auto& h = this->m_elements[e];
+    // Each hinge angle's gradient over the stencil (P.col(j)) and, for Dx, its Hessian (Hq[j]).
+    Eigen::Matrix<double, n, m> P = Eigen::Matrix<double, n, m>::Zero();
+    std::array<MatN, m> Hq;
+    for (int j = 0; j < m; ++j) {
+      std::array<int, 4> id, place;
+      shell_hinge(h, j, id, place);
+      if (Dx) Hq[size_t(j)].setZero();
+      Vec9 G;
+      Mat9 Hv;
+      if (!hinge_angle_derivatives(hinge_vectors(x, id.data()), G, Dx ? &Hv : nullptr))
+        continue;  // degenerate: no defined angle, no rate (as dihedral)
+      double g12[12];
+      Mat12 H12;
+      to_positions<3, 4>(G, Dx ? &Hv : nullptr, kHingeCoef, g12, Dx ? H12.data() : nullptr);
+      for (int a = 0; a < 4; ++a) {
+        P.template block<3, 1>(3 * place[size_t(a)], j) += Eigen::Map<const Vec3>(g12 + 3 * a);
+        if (Dx)
+          for (int b = 0; b < 4; ++b)
+            Hq[size_t(j)].template block<3, 3>(3 * place[size_t(a)], 3 * place[size_t(b)]) +=
+                H12.template block<3, 3>(3 * a, 3 * b);
+      }
+    }
+    const Eigen::Matrix<double, m, m> W =
+        Eigen::Map<const Eigen::Matrix<double, m, m, Eigen::RowMajor>>(h.M.data());
+    const size_t o = size_t(n) * (e - begin), oo = size_t(n * n) * (e - begin);
+    rayleigh<n, m>(P, W, stencil_velocities<K>(v, h.ids.data()), Dx ? Hq.data() : nullptr, f + o,
+                   Dv ? Dv + oo : nullptr, Dx ? Dx + oo : nullptr);
   }
 }
 

@@ -78,7 +78,10 @@ struct ShellTriangle {
 /// The exact Hessian is E''(c) grad c grad c^T + E'(c) Hess c: indefinite away from rest, so a
 /// Newton step asks for PsdProjection::Clamp per element (the implicit family's default,
 /// integrator.clamp_compressed). Constraint form (XPBD, Ceres): C = kappa - kappa0 with stiffness
-/// EI / l.
+/// EI / l. Damping form: the rate kappa-dot of the scalar curvature, W = EI / l, so only the
+/// hinge's one bending motion (its turning angle) is damped; a hinge within kStraight of straight
+/// has no bending plane, hence no rate, and carries no damping at that instant (as its constraint
+/// form's subgradient 0).
 class RodBending final : public bending_detail::StencilElements<3, bending_detail::RodHinge> {
  public:
   /// Below this sin(phi) a hinge of a bent rest is treated as exactly straight (see above).
@@ -98,6 +101,9 @@ class RodBending final : public bending_detail::StencilElements<3, bending_detai
   bool has_constraint() const override { return true; }
   void constraint(ConstRef x, size_t e, double& C, double* dC, double& stiffness) const override;
   std::unique_ptr<ElementSet> localize(const LocalIndex& index) const override;
+  bool has_damping() const override { return true; }
+  void damping(ConstRef x, ConstRef v, size_t begin, size_t end, double* f, double* Dv,
+               double* Dx) const override;
 
   /// Element e's stiffness EI / l (N m) and rest curvature kappa0.
   double stiffness(size_t e) const { return m_elements[e].k; }
@@ -135,6 +141,7 @@ std::vector<std::array<int, 4>> interior_hinges(const std::vector<std::array<int
 /// of atan2 of two polynomials (and of |e|). theta - theta0 is taken in (-pi, pi]. A hinge with a
 /// degenerate triangle (|n0| or |n1| below kDegenerate of |e| |a| or |e| |b|) has no defined
 /// angle: its gradient and Hessian are 0 there. Constraint form: C = theta - theta0, stiffness k.
+/// Damping form: the rate theta-dot, W = k.
 ///
 /// PSD projection: the exact Hessian k (grad theta grad theta^T + d Hess theta), d = theta -
 /// theta0, is indefinite at every bent hinge (Hess theta has eigenvalues of both signs, four of
@@ -169,6 +176,9 @@ class DihedralBending final
   bool has_constraint() const override { return true; }
   void constraint(ConstRef x, size_t e, double& C, double* dC, double& stiffness) const override;
   std::unique_ptr<ElementSet> localize(const LocalIndex& index) const override;
+  bool has_damping() const override { return true; }
+  void damping(ConstRef x, ConstRef v, size_t begin, size_t end, double* f, double* Dv,
+               double* Dx) const override;
 
   double stiffness(size_t e) const { return m_elements[e].k; }
   double rest_angle(size_t e) const { return m_elements[e].theta0; }
@@ -186,7 +196,9 @@ class DihedralBending final
 /// which agrees with the dihedral energy to second order about flat. The Hessian is constant
 /// (k K_i K_j I per block, PSD); the rest shape is flat (a sheet bent at rest needs `dihedral`).
 /// No constraint form: XPBD and Ceres refuse it. Its scalar quadratic form W = k K K^T is what
-/// fast-mass-spring takes.
+/// fast-mass-spring takes. Damping form: DihedralBending's, the rate of the hinge angle with W = k,
+/// which agrees with this energy's Hessian about flat; the rate of v itself would damp rigid
+/// rotations of a bent hinge (v turns with one).
 class QuadraticBending final
     : public bending_detail::StencilElements<4, bending_detail::QuadraticHinge> {
  public:
@@ -198,6 +210,9 @@ class QuadraticBending final
   void gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection, double* g,
                         double* H) const override;
   std::unique_ptr<ElementSet> localize(const LocalIndex& index) const override;
+  bool has_damping() const override { return true; }
+  void damping(ConstRef x, ConstRef v, size_t begin, size_t end, double* f, double* Dv,
+               double* Dx) const override;
   bool has_scalar_quadratic() const override { return true; }
   void scalar_quadratic(size_t e, double* W) const override;
 
@@ -242,7 +257,7 @@ std::vector<TriangleNeighbours> triangle_neighbours(
 /// is PSD (gauss_newton keeps only it when a projection is requested, as DihedralBending's), the
 /// exact one is projected as a 3K x 3K block (the scenes' default, bending.projection, is
 /// Gauss-Newton). No constraint form (the energy couples three angles): XPBD and ceres-implicit
-/// refuse it.
+/// refuse it. Damping form: the rates of the triangle's hinge angles, W = M.
 template <int K>
 class ShellBending final
     : public bending_detail::StencilElements<K, bending_detail::ShellTriangle<K>> {
@@ -262,6 +277,9 @@ class ShellBending final
   void gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProjection projection, double* g,
                         double* H) const override;
   std::unique_ptr<ElementSet> localize(const LocalIndex& index) const override;
+  bool has_damping() const override { return true; }
+  void damping(ConstRef x, ConstRef v, size_t begin, size_t end, double* f, double* Dv,
+               double* Dx) const override;
 
   /// Element e's weights M (row-major, (K - 3) x (K - 3)).
   const std::array<double, (K - 3) * (K - 3)>& weights(size_t e) const {

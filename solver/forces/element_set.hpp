@@ -37,7 +37,8 @@ inline constexpr int kMaxElementDofs = 3 * kMaxStencil;
 ///
 /// Must implement: name, stencil_size, size, stencil, energy, gradient_hessian.
 /// May implement: the constraint form (has_constraint / constraint) for XPBD and Ceres, the
-/// constant quadratic form (has_scalar_quadratic / scalar_quadratic) for fast-mass-spring; a method
+/// constant quadratic form (has_scalar_quadratic / scalar_quadratic) for fast-mass-spring, the
+/// Rayleigh damping form (has_damping / damping) for ElementDamping; a method
 /// that needs a form the set lacks refuses the scene at load time, naming the methods that can
 /// take it (its *_unsupported function, through SpringPotentialForces::unsupported).
 class ElementSet {
@@ -77,6 +78,24 @@ class ElementSet {
   /// Element e's W (K x K, column-major, at W). Called only when has_scalar_quadratic().
   virtual void scalar_quadratic(size_t /*e*/, double* /*W*/) const {
     HOOKE_ASSERT(false, name() << " has no constant scalar quadratic form");
+  }
+
+  /// True if the set has a Rayleigh damping form (ElementDamping, the scenes'
+  /// bending.damping): every element's energy is (or agrees about rest with) 1/2 (q - q0)^T W
+  /// (q - q0) in m rate coordinates
+  /// q_e(x) (its angles or curvature: functions of the stencil's shape alone, so unchanged by a
+  /// rigid motion) with a constant symmetric positive semi-definite W_e, and its dissipation with
+  /// coefficient beta (s) is R_e = beta/2 qdot^T W qdot, qdot = J v_e, J = dq_e/dx_e: the energy's
+  /// quadratic form on the rates, which no rigid motion excites. The default: no such form.
+  virtual bool has_damping() const { return false; }
+  /// For each element e of [begin, end) at (x, v): the damping force -J^T W J v_e of R_e with
+  /// beta = 1 (3K values at f + 3K (e - begin)); when Dv is not null its velocity Jacobian
+  /// -J^T W J (3K x 3K, column-major, symmetric negative semi-definite) at Dv + 9K^2 (e - begin);
+  /// when Dx is not null its position Jacobian (3K x 3K, column-major, not symmetric) likewise.
+  /// Called only when has_damping(); const, no allocation, as gradient_hessian.
+  virtual void damping(ConstRef /*x*/, ConstRef /*v*/, size_t /*begin*/, size_t /*end*/,
+                       double* /*f*/, double* /*Dv*/, double* /*Dx*/) const {
+    HOOKE_ASSERT(false, name() << " has no damping form");
   }
 
   /// The set as one process of a distributed run holds it (Force::localize): the elements with at

@@ -21,6 +21,7 @@ enum class ForceForm {
   Gravity,   ///< a uniform acceleration ForceTerms::acceleration on every particle's mass
   Drag,      ///< linear air drag -c (v - w), c = ForceTerms::drag, w = ForceTerms::wind
   Elements,  ///< an element set's energy (ForceTerms::elements)
+  ElementDampers,  ///< an element set's Rayleigh damping (ForceTerms::elements, element_damping)
 };
 
 /// What a force is in a whole-step method's terms (Force::terms): its form and the data of that
@@ -31,7 +32,8 @@ struct ForceTerms {
   Vec3 acceleration = Vec3::Zero();      ///< Gravity (m/s^2)
   double drag = 0.0;                     ///< Drag: c (kg/s per particle)
   Vec3 wind = Vec3::Zero();              ///< Drag: w (m/s)
-  const ElementSet* elements = nullptr;  ///< Elements
+  const ElementSet* elements = nullptr;  ///< Elements, ElementDampers
+  double element_damping = 0.0;          ///< ElementDampers: the Rayleigh coefficient beta (s)
 };
 
 /// Options of a Jacobian assembly that change what is written, not the pattern.

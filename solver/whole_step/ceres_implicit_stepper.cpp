@@ -283,6 +283,14 @@ std::string ceres_implicit_unsupported(const MassSpringSystem& system) {
     std::ostringstream os;
     os << "ceres-implicit: force '" << f->name() << "' (force " << n << " of the system) ";
     const ForceTerms t = f->terms();
+    if (t.form == ForceForm::ElementDampers) {
+      os << "damps the '" << t.elements->name()
+         << "' elements (bending.damping): a dissipation on their rates is not the gradient of "
+            "any function of x1, so the backward Euler step is not a minimisation; set it to 0 "
+            "(air-drag is supported) or use method 'implicit' with beta = 1 and "
+            "newton_iterations > 1 for the same step";
+      return os.str();
+    }
     if (t.form == ForceForm::Elements) {
       if (t.elements->has_constraint()) continue;  // a sum of squares: sqrt(k) C per element
       os << "has '" << t.elements->name()

@@ -15,16 +15,29 @@ std::string element_set_takers(const ElementSet& set) {
 std::string SpringPotentialForces::unsupported(const MassSpringSystem& system,
                                                const std::string& method, const std::string& why,
                                                bool takes_dampers, ElementNeed elements) {
-  // Every other obstacle is named before the dampers, which a scene can drop with --set (the
-  // loader then says how): the damper message must mean that dropping them is enough.
+  // Every other obstacle is named before the dampers (of elements, then of springs), which a scene
+  // can drop with --set (the loader then says how): a damper message must mean that dropping the
+  // dampers is enough.
   const auto& forces = system.forces();
   std::vector<const Force*> order;
   for (const auto& f : forces)
     if (f->terms().form != ForceForm::Dampers) order.push_back(f.get());
   for (const auto& f : forces)
     if (f->terms().form == ForceForm::Dampers) order.push_back(f.get());
+  const ElementSet* damped = nullptr;  // the first element set with Rayleigh damping
+  auto damped_message = [&] {
+    return method + " cannot take the damping of the '" + damped->name() +
+           "' elements (a dissipation on their rates, not an energy of the positions, which " +
+           method + " minimises): set bending.damping = 0 (air drag is taken), or use the " +
+           "explicit or implicit steppers, cvode or ida";
+  };
   for (const Force* f : order) {
     const ForceTerms t = f->terms();
+    if (t.form == ForceForm::ElementDampers) {
+      if (!damped) damped = t.elements;
+      continue;
+    }
+    if (damped && t.form == ForceForm::Dampers) return damped_message();
     if (t.form == ForceForm::Springs || t.form == ForceForm::Gravity || t.form == ForceForm::Drag ||
         (takes_dampers && t.form == ForceForm::Dampers))
       continue;
@@ -44,7 +57,7 @@ std::string SpringPotentialForces::unsupported(const MassSpringSystem& system,
            ", gravity and air drag (" + why + "); this scene has a '" + f->name() + "' force (" +
            (takes_dampers ? "" : "use air drag for damping, or ") + "use an implicit method)";
   }
-  return "";
+  return damped ? damped_message() : "";
 }
 
 double backward_euler_residual(const MassSpringSystem& system, const State& s0, double h,
@@ -110,6 +123,7 @@ SpringPotentialForces::SpringPotentialForces(const MassSpringSystem& system) {
       case ForceForm::Elements:
         elements.push_back(t.elements);
         break;
+      case ForceForm::ElementDampers:
       case ForceForm::Unknown:
         break;  // refused by unsupported()
     }

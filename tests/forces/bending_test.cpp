@@ -13,6 +13,8 @@
 #include <cmath>
 #include <cstdio>
 #include <random>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "hooke/forces/element_force.hpp"
@@ -82,26 +84,38 @@ Vec hinge_at(double theta) {
   return x;
 }
 
+/// The hinges of the random-configuration checks, named, over particles 0..3 resting at a random
+/// displacement of x: rod with a bent and a straight rest, dihedral with a bent and a flat rest,
+/// and quadratic (its rest flattened).
+std::vector<std::pair<std::string, std::unique_ptr<ElementSet>>> random_hinges(const Vec& x,
+                                                                               std::mt19937& rng) {
+  const Vec rest = x + 0.3 * random_positions(4, rng);
+  Vec flat_rest = rest;
+  for (int p = 0; p < 4; ++p) flat_rest[3 * p + 2] = 0.0;
+  std::vector<std::pair<std::string, std::unique_ptr<ElementSet>>> sets;
+  for (bool straight : {false, true}) {
+    auto rod = std::make_unique<RodBending>();
+    rod->add(0, 1, 2, 0.3, rest, straight);
+    sets.emplace_back(std::string("rod, random, straight rest ") + (straight ? "yes" : "no"),
+                      std::move(rod));
+  }
+  for (bool flat : {false, true}) {
+    auto d = std::make_unique<DihedralBending>();
+    d->add({0, 1, 2, 3}, 0.7, rest, flat);
+    sets.emplace_back(std::string("dihedral, random, flat rest ") + (flat ? "yes" : "no"),
+                      std::move(d));
+  }
+  auto q = std::make_unique<QuadraticBending>();
+  q->add({0, 1, 2, 3}, 0.7, flat_rest);
+  sets.emplace_back("quadratic, random", std::move(q));
+  return sets;
+}
+
 TEST(Bending, GradientsAndHessiansMatchCentralDifferences) {
   std::mt19937 rng(54);
   for (int t = 0; t < 10; ++t) {
     const Vec x = random_positions(4, rng);
-    const Vec rest = x + 0.3 * random_positions(4, rng);
-    Vec flat_rest = rest;
-    for (int p = 0; p < 4; ++p) flat_rest[3 * p + 2] = 0.0;
-    for (bool straight : {false, true}) {
-      RodBending rod;
-      rod.add(0, 1, 2, 0.3, rest, straight);
-      expect_exact(rod, x, std::string("rod, random, straight rest ") + (straight ? "yes" : "no"));
-    }
-    for (bool flat : {false, true}) {
-      DihedralBending d;
-      d.add({0, 1, 2, 3}, 0.7, rest, flat);
-      expect_exact(d, x, std::string("dihedral, random, flat rest ") + (flat ? "yes" : "no"));
-    }
-    QuadraticBending q;
-    q.add({0, 1, 2, 3}, 0.7, flat_rest);
-    expect_exact(q, x, "quadratic, random");
+    for (const auto& [what, set] : random_hinges(x, rng)) expect_exact(*set, x, what);
   }
   // Near flat, folded to within 0.02 rad of shut on either side, and (for the signed angle)
   // through +-pi's neighbourhood.
@@ -664,6 +678,215 @@ TEST(ShellBending, IsTheKirchhoffPlateOnParallelogramGridsAndInAxisBendsOnAltern
         EXPECT_GT(alt41, 1.4) << s.name;  // the alternating grid's anisotropy, documented
       }
     }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Rayleigh damping (ElementSet::damping, bending.damping).
+
+/// Element 0's damping at (x, v): the force f (3K) and the Jacobians Dv and Dx (3K x 3K).
+struct DampingAt {
+  Eigen::VectorXd f;
+  Eigen::MatrixXd Dv, Dx;
+};
+DampingAt damping_of(const ElementSet& set, const Vec& x, const Vec& v) {
+  const int n = 3 * set.stencil_size();
+  DampingAt d{Eigen::VectorXd(n), Eigen::MatrixXd(n, n), Eigen::MatrixXd(n, n)};
+  set.damping(x, v, 0, 1, d.f.data(), d.Dv.data(), d.Dx.data());
+  return d;
+}
+
+/// Element 0's stencil part of a 3n vector.
+Eigen::VectorXd on_stencil(const ElementSet& set, const Vec& y) {
+  const int* s = set.stencil(0);
+  Eigen::VectorXd out(3 * set.stencil_size());
+  for (int a = 0; a < set.stencil_size(); ++a) out.segment<3>(3 * a) = y.segment<3>(3 * s[a]);
+  return out;
+}
+
+/// The damping of element 0 at x with a random v: f = Dv v (linear in v), Dv symmetric negative
+/// semi-definite, Dx the central differences of f in x, and no force for any rigid velocity.
+void expect_exact_damping(const ElementSet& set, const Vec& x, std::mt19937& rng,
+                          const std::string& what, double step = kFdStep) {
+  const int n = 3 * set.stencil_size();
+  const int* s = set.stencil(0);
+  const Vec v = random_positions(int(x.size() / 3), rng);
+  const DampingAt d = damping_of(set, x, v);
+  const Eigen::VectorXd ve = on_stencil(set, v);
+  const double Dv_max = d.Dv.cwiseAbs().maxCoeff();
+  ASSERT_GT(Dv_max, 0.0) << what;
+  EXPECT_LE((d.f - d.Dv * ve).cwiseAbs().maxCoeff(), 1e-12 * Dv_max * ve.cwiseAbs().sum()) << what;
+  EXPECT_LE((d.Dv - d.Dv.transpose()).cwiseAbs().maxCoeff(), 1e-14 * Dv_max) << what;
+  const Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd> eig(d.Dv);
+  EXPECT_LE(eig.eigenvalues().maxCoeff(), 1e-12 * Dv_max) << what;
+  double err = 0.0, scale = d.Dx.cwiseAbs().maxCoeff();
+  for (int i = 0; i < n; ++i) {
+    const Index dof = 3 * s[i / 3] + i % 3;
+    Vec xp = x, xm = x;
+    xp[dof] += step;
+    xm[dof] -= step;
+    const Eigen::VectorXd fd = (damping_of(set, xp, v).f - damping_of(set, xm, v).f) / (2.0 * step);
+    err = std::max(err, (fd - d.Dx.col(i)).cwiseAbs().maxCoeff());
+    scale = std::max(scale, fd.cwiseAbs().maxCoeff());
+  }
+  EXPECT_LE(err, kFdRel * scale) << what << ": Dx against central differences";
+  // A rigid velocity t + w x (x - c) changes no angle: no damping force.
+  const Vec3 t = Vec3::Random(), w = Vec3::Random(), c = Vec3::Random();
+  Vec rigid(x.size());
+  for (Index p = 0; p < x.size() / 3; ++p)
+    rigid.segment<3>(3 * p) = t + w.cross(x.segment<3>(3 * p) - c);
+  const double rigid_scale = Dv_max * on_stencil(set, rigid).cwiseAbs().sum();
+  EXPECT_LE(damping_of(set, x, rigid).f.cwiseAbs().maxCoeff(), 1e-12 * rigid_scale) << what;
+}
+
+TEST(Bending, DampingIsTheRatesQuadraticFormWithExactJacobiansAndNoRigidMotionIsDamped) {
+  std::mt19937 rng(541);
+  for (int t = 0; t < 6; ++t) {
+    const Vec x = random_positions(4, rng);
+    for (const auto& [what, set] : random_hinges(x, rng)) expect_exact_damping(*set, x, rng, what);
+    std::uniform_real_distribution<double> U(-1.0, 1.0);
+    const Vec patch =
+        shell_patch({2.0 * U(rng), 2.0 * U(rng), 2.0 * U(rng)}) + 0.05 * random_positions(6, rng);
+    const Vec patch_rest = shell_patch({U(rng), U(rng), U(rng)});
+    expect_exact_damping(shell_of<6>(patch_rest, 0.7, 0.3, false), patch, rng, "shell K = 6");
+    expect_exact_damping(shell_of<5>(patch_rest, 0.7, 0.3, false), patch, rng, "shell K = 5");
+    expect_exact_damping(shell_of<4>(patch_rest, 0.7, 0.3, false), patch, rng, "shell K = 4");
+  }
+  // Near straight, near flat and folded to within 0.02 rad of shut.
+  Vec straight(9);
+  straight << 0, 0, 0, 1, 0, 0, 2, 0, 0;
+  for (double eps : {1e-4, 1e-2}) {
+    Vec x = straight;
+    x[7] = eps;
+    x[8] = 0.3 * eps;
+    RodBending rod;
+    rod.add(0, 1, 2, 1.0, straight, true);
+    // The scalar curvature's rate turns with the bending plane, which near straight turns at
+    // 1/eps per unit of transverse motion: differences at a step of 1e-4 eps.
+    expect_exact_damping(rod, x, rng, "rod near straight " + std::to_string(eps), 1e-4 * eps);
+  }
+  for (double theta : {1e-3, M_PI - 0.02}) {
+    DihedralBending dihedral;
+    dihedral.add({0, 1, 2, 3}, 1.0, hinge_at(0.0), true);
+    expect_exact_damping(dihedral, hinge_at(theta), rng, "dihedral at " + std::to_string(theta));
+  }
+}
+
+TEST(Bending, DampingAtRestIsMinusTheEnergysHessianAndNoneWhereNoRateIsDefined) {
+  // At rest the energy's Hessian is its rates' quadratic form J^T W J, which Dv is minus.
+  std::mt19937 rng(542);
+  std::uniform_real_distribution<double> U(-1.0, 1.0);
+  const Vec zero = Vec::Zero(18);
+  auto expect_minus_hessian = [&](const ElementSet& set, const Vec& rest, const std::string& what) {
+    const int n = 3 * set.stencil_size();
+    std::vector<double> g(static_cast<size_t>(n)), H(static_cast<size_t>(n * n));
+    set.gradient_hessian(rest, 0, 1, PsdProjection::None, g.data(), H.data());
+    const Eigen::Map<const Eigen::MatrixXd> Hm(H.data(), n, n);
+    const DampingAt d = damping_of(set, rest, zero.head(rest.size()));
+    EXPECT_LE((d.Dv + Hm).cwiseAbs().maxCoeff(), 1e-12 * Hm.cwiseAbs().maxCoeff()) << what;
+    EXPECT_EQ(d.f.cwiseAbs().maxCoeff(), 0.0) << what;  // v = 0
+  };
+  for (int t = 0; t < 4; ++t) {
+    const Vec rest = random_positions(4, rng);
+    RodBending rod;
+    rod.add(0, 1, 2, 0.3, rest, false);
+    expect_minus_hessian(rod, rest, "rod at its bent rest");
+    DihedralBending dihedral;
+    dihedral.add({0, 1, 2, 3}, 0.7, rest, false);
+    expect_minus_hessian(dihedral, rest, "dihedral at its rest");
+    const Vec patch = shell_patch({U(rng), U(rng), U(rng)});
+    expect_minus_hessian(shell_of<6>(patch, 0.7, 0.3, false), patch, "shell at its rest");
+  }
+  // The quadratic model's damping is the dihedral hinge's (its own rate v turns with a rigid
+  // rotation), whose Dv at flat is minus the dihedral's Hessian there.
+  for (double theta : {0.0, 0.4}) {
+    QuadraticBending quadratic;
+    quadratic.add({0, 1, 2, 3}, 0.7, hinge_at(0.0));
+    DihedralBending dihedral;
+    dihedral.add({0, 1, 2, 3}, 0.7, hinge_at(0.0), true);
+    const Vec v = random_positions(4, rng);
+    const DampingAt q = damping_of(quadratic, hinge_at(theta), v);
+    const DampingAt d = damping_of(dihedral, hinge_at(theta), v);
+    EXPECT_EQ(q.f, d.f);
+    EXPECT_EQ(q.Dv, d.Dv);
+    EXPECT_EQ(q.Dx, d.Dx);
+  }
+  {
+    DihedralBending dihedral;
+    dihedral.add({0, 1, 2, 3}, 0.7, hinge_at(0.0), true);
+    expect_minus_hessian(dihedral, hinge_at(0.0), "dihedral at flat");
+  }
+  // An exactly straight strand and a degenerate hinge define no rate: no damping, no NaN.
+  Vec straight(9), v(9);
+  straight << 0, 0, 0, 1, 0, 0, 2, 0, 0;
+  v << 0, 0, 0, 0, 1, 0, 0, 0, 1;
+  RodBending rod;
+  rod.add(0, 1, 2, 1.0, straight, true);
+  const DampingAt d = damping_of(rod, straight, v);
+  EXPECT_EQ(d.f.cwiseAbs().maxCoeff() + d.Dv.cwiseAbs().maxCoeff() + d.Dx.cwiseAbs().maxCoeff(),
+            0.0);
+  Vec degenerate = hinge_at(0.3);
+  degenerate.segment<3>(0) = Vec3(0.5, 0.0, 0.0);  // x0 on the edge's line
+  DihedralBending dihedral;
+  dihedral.add({0, 1, 2, 3}, 1.0, hinge_at(0.0), true);
+  const DampingAt dd = damping_of(dihedral, degenerate, random_positions(4, rng));
+  EXPECT_EQ(dd.f.cwiseAbs().maxCoeff() + dd.Dv.cwiseAbs().maxCoeff() + dd.Dx.cwiseAbs().maxCoeff(),
+            0.0);
+}
+
+TEST(Bending, DampingDecaysASmallHingeOscillationWithRatioBetaOmegaOverTwo) {
+  // Hinge (0, 1, 2, 3) with 0, 1, 2 held and 3 (mass m) free, at distance h1 from the edge:
+  // theta ~ -delta / h1 for a displacement delta along the normal, so the hinge oscillates with
+  // omega^2 = k / (m h1^2), and the dissipation beta/2 k theta-dot^2 damps it with ratio
+  // zeta = beta omega / 2. Integrated by RK4 at omega h = 2 pi / 4000 from delta = 1e-4 h1; the
+  // ratio from the decay of the maxima over 10 periods, the period from their spacing.
+  const Vec rest = hinge_at(0.0);
+  const double D = 0.2, m = 0.01, beta = 0.01;
+  auto set = std::make_unique<DihedralBending>();
+  set->add({0, 1, 2, 3}, D, rest, true);
+  const double k = set->stiffness(0), h1 = 0.8;  // hinge_at's x3 lies 0.8 from the edge
+  const ElementForce force(std::move(set));
+  const ElementDamping damping(force.set(), beta);
+  const double omega = std::sqrt(k / (m * h1 * h1)), zeta = 0.5 * beta * omega;
+  ASSERT_GT(zeta, 0.005);
+  ASSERT_LT(zeta, 0.05);
+  const Vec3 normal(0.0, 0.0, 1.0);
+  const double period = 2.0 * M_PI / omega, h = period / 4000.0;
+  Vec x = rest, v = Vec::Zero(12);
+  x[11] += 1e-4 * h1;
+  auto accel = [&](const Vec& xs, const Vec& vs) {
+    Vec f = Vec::Zero(12);
+    force.add_forces(xs, vs, f);
+    damping.add_forces(xs, vs, f);
+    Vec a = Vec::Zero(12);
+    a.segment<3>(9) = f.segment<3>(9) / m;
+    return a;
+  };
+  std::vector<double> peaks, peak_times;
+  double prev2 = 0.0, prev1 = x[11] - rest[11];
+  for (int step = 1; step <= 4000 * 12; ++step) {
+    const Vec a1 = accel(x, v), x2 = x + 0.5 * h * v, v2 = v + 0.5 * h * a1;
+    const Vec a2 = accel(x2, v2), x3 = x + 0.5 * h * v2, v3 = v + 0.5 * h * a2;
+    const Vec a3 = accel(x3, v3), x4 = x + h * v3, v4 = v + h * a3;
+    const Vec a4 = accel(x4, v4);
+    x += h / 6.0 * (v + 2.0 * v2 + 2.0 * v3 + v4);
+    v += h / 6.0 * (a1 + 2.0 * a2 + 2.0 * a3 + a4);
+    const double now = normal.dot(x.segment<3>(9) - rest.segment<3>(9));
+    if (step >= 2 && prev1 > prev2 && prev1 >= now) {  // a maximum at the previous step (parabola)
+      const double c = 0.5 * (prev2 - 2.0 * prev1 + now), b = 0.5 * (now - prev2);
+      peaks.push_back(prev1 - b * b / (4.0 * c));
+      peak_times.push_back((step - 1 - b / (2.0 * c)) * h);
+    }
+    prev2 = prev1;
+    prev1 = now;
+  }
+  ASSERT_GE(peaks.size(), size_t(11));
+  const double r = std::log(peaks[0] / peaks[10]) / 10.0;  // zeta omega T_d per period
+  const double measured = r / std::sqrt(4.0 * M_PI * M_PI + r * r);
+  const double T_d = (peak_times[10] - peak_times[0]) / 10.0;
+  std::printf("hinge oscillation: zeta %.6f (beta omega / 2 = %.6f), period %.6f s (%.6f)\n",
+              measured, zeta, T_d, period / std::sqrt(1.0 - zeta * zeta));
+  EXPECT_NEAR(measured / zeta, 1.0, 0.01);
+  EXPECT_NEAR(T_d * std::sqrt(1.0 - zeta * zeta) / period, 1.0, 0.001);
 }
 
 }  // namespace

@@ -1,8 +1,8 @@
 // Conformance claims of every concrete hooke::Force in solver/forces/ (HookeSpring, SpringDamper,
-// Gravity, AirDrag, the last also with wind, and ElementForce over the tests' angle elements): one
-// parameterised suite over force factories, each claim at the same random configurations of four
-// kinds (random; every spring compressed; near-collinear chains; one spring of length 1e-3 of its
-// rest length):
+// Gravity, AirDrag, the last also with wind, and ElementForce and ElementDamping over the tests'
+// angle elements): one parameterised suite over force factories, each claim at the same
+// random configurations of four kinds (random; every spring compressed; near-collinear chains; one
+// spring of length 1e-3 of its rest length):
 //   - a conservative force (nonzero potential_energy) is minus the central-difference gradient of
 //     its energy; a dissipative force reports zero energy (counted, not compared);
 //   - K = df/dx and D = df/dv, assembled through declare_blocks / bind / add_jacobians with the
@@ -43,6 +43,7 @@ using hooke::Vec;
 using hooke::Vec3;
 using hooke::test::central_gradient4;
 using hooke::test::central_jacobian;
+using hooke::test::central_jacobian4;
 using hooke::test::near_entrywise;
 using hooke::test::random_unit;
 using hooke::test::random_vec;
@@ -63,6 +64,13 @@ constexpr double kStepRel = 1e-5;
 // length 1e-3 of its rest length (at second order and 1x that spring's round-off had come to
 // 1.6e-5 N against a floor of 1e-5 N).
 constexpr double kEnergyStepFactor = 30.0;
+// K = df/dx is compared with the fourth-order difference (central_jacobian4) at 10x the step: a
+// damping's K vanishes with its rate's gradient where that does (the angle-cosine damping's at a
+// near-collinear angle, like the size of the angle, 1e-5 here) while the truncation of the
+// second-order difference does not: there it missed by 8e-6 of the matrix's largest entry at 1x
+// and by 6.5e-4 at 10x (second order, so truncation). Fourth order at 10x meets kRelTol for every
+// case, with a tenth of the round-off eps |f| / h of 1x.
+constexpr double kJacobianStepFactor = 10.0;
 // Identities that hold exactly in real arithmetic (null spaces, the matrix-free product against
 // the matrices, adding into K and D): round-off relative to the largest magnitude involved.
 constexpr double kRoundoff = 1e-12;
@@ -234,6 +242,13 @@ std::unique_ptr<hooke::Force> make_angle_elements(const Configuration& c) {
   return std::make_unique<hooke::ElementForce>(std::move(set));
 }
 
+// The Rayleigh damping (ElementDamping) of the same angle elements: their rate c-dot with W = k.
+std::unique_ptr<hooke::Force> make_angle_damping(const Configuration& c) {
+  auto set = std::make_unique<hooke::test::AngleCosineElements>();
+  for (int q = 1; q + 1 < c.n; ++q) set->add(q - 1, q, q + 1, c.pairs[size_t(q)].k, 0.0);
+  return std::make_unique<hooke::ElementDamping>(std::move(set), 0.1 + c.pairs[0].c);
+}
+
 // Gravity pulls every particle towards a fixed direction, not towards the others: the net force is
 // sum_i m_i g, not zero. It depends on neither x nor v, so K = D = 0 (translations are then in
 // K's null space only trivially).
@@ -270,6 +285,7 @@ const std::vector<ForceCase>& cases() {
       {"AirDragWithWind", make_air_drag_with_wind, false, false, true, false, true, true,
        drag_claims},
       {"AngleElements", make_angle_elements, true, true, false, true, false, true, nullptr},
+      {"AngleDamping", make_angle_damping, false, true, false, true, true, false, nullptr},
   };
   return list;
 }
@@ -409,8 +425,9 @@ TEST_P(ForceConformance, AssembledJacobiansMatchCentralDifferences) {
       SCOPED_TRACE(std::string(config_name(kind)) + " sample " + std::to_string(k));
       const Sample s = make_sample(fc, kind, rng);
       const Assembled J = assemble(s);
-      const Dense fd_x = central_jacobian(
-          [&](const Vec& y) { return force_at(*s.force, y, s.c.v); }, s.c.x, s.c.hx);
+      const Dense fd_x =
+          central_jacobian4([&](const Vec& y) { return force_at(*s.force, y, s.c.v); }, s.c.x,
+                            Vec(kJacobianStepFactor * s.c.hx));
       const Dense fd_v = central_jacobian(
           [&](const Vec& y) { return force_at(*s.force, s.c.x, y); }, s.c.v, kStepRel);
       ASSERT_TRUE(near_entrywise(J.K, fd_x, kRelTol, kFloorRel)) << "K = df/dx";
@@ -533,8 +550,9 @@ INSTANTIATE_TEST_SUITE_P(, ForceConformance, ::testing::ValuesIn(cases()),
 TEST(ForceConformanceCoverage, CasesCoverEveryForceAndTheExpectedProductProviders) {
   // Every concrete Force in solver/forces/, by name(): a new force must join cases().
   // ElementForce is named after its element set: the tests' angle-cosine set stands for it.
-  const std::set<std::string> every_force = {"air-drag", "angle-cosine", "gravity", "hooke-spring",
-                                             "spring-damper"};
+  // ElementDamping is named after its set too ("angle-cosine-damping").
+  const std::set<std::string> every_force = {"air-drag", "angle-cosine", "angle-cosine-damping",
+                                             "gravity",  "hooke-spring", "spring-damper"};
   // All of them give the matrix-free product, so ImplicitOperator (which needs every force of a
   // system to) works on any system built from them.
   const std::vector<std::string> expected_providers = {"HookeSpring", "SpringDamper", "Gravity",

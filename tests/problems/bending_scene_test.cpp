@@ -10,9 +10,11 @@
 
 #include <Eigen/Dense>
 #include <Eigen/SparseCholesky>
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "hooke/model/mass_spring_system.hpp"
@@ -304,6 +306,63 @@ TEST(BendingScene, RefusesWhatTheMeshCannotCarry) {
   EXPECT_TRUE(refused(grid + "[bending]\nmodel = 'shell'\nstiffness = 1\n[integrator]\n"
                              "method = 'xpbd'\n",
                       "integrator.method"));
+}
+
+TEST(BendingScene, DampingIsASeparateForceThatTheWholeStepMethodsRefuse) {
+  const std::string grid = "[mesh]\ntype = 'grid'\nnx = 4\nny = 4\n";
+  auto names = [](const Scene& scene) {
+    std::vector<std::string> out;
+    for (const auto& f : scene.system->forces()) out.emplace_back(f->name());
+    return out;
+  };
+  // Without damping no damping force; with it one beside each set, with the coefficient given.
+  for (const std::string model : {"dihedral", "quadratic"}) {
+    const std::string bending = "[bending]\nmodel = '" + model + "'\nstiffness = 1\n";
+    const auto plain = names(load_scene_from_string(grid + bending, "plain.toml"));
+    EXPECT_EQ(std::count(plain.begin(), plain.end(), model + "-bending-damping"), 0);
+    const Scene damped = load_scene_from_string(grid + bending + "damping = 0.02\n", "d.toml");
+    const auto with = names(damped);
+    ASSERT_EQ(std::count(with.begin(), with.end(), model + "-bending-damping"), 1) << model;
+    for (const auto& f : damped.system->forces())
+      if (f->terms().form == ForceForm::ElementDampers) {
+        EXPECT_EQ(f->terms().element_damping, 0.02);
+      }
+  }
+  const std::string shell =
+      names(load_scene_from_string(grid + "[bending]\nmodel = 'shell'\nstiffness = 1\n"
+                                          "damping = 0.02\n",
+                                   "shell.toml"))
+          .back();
+  EXPECT_EQ(shell, "shell-bending-damping");
+  auto refusal = [&](const std::string& text) {
+    try {
+      load_scene_from_string(text, "bad.toml");
+    } catch (const InputError& e) {
+      return std::string(e.what());
+    }
+    return std::string();
+  };
+  EXPECT_NE(refusal(grid + "[bending]\nmodel = 'dihedral'\nstiffness = 1\ndamping = -0.1\n")
+                .find("bending.damping"),
+            std::string::npos);
+  // The whole-step methods pose the step as a minimisation: a dissipation has no place there.
+  for (const auto& [model, method] :
+       std::vector<std::pair<std::string, std::string>>{{"dihedral", "vbd"},
+                                                        {"dihedral", "xpbd"},
+                                                        {"quadratic", "fast-mass-spring"},
+                                                        {"dihedral", "ceres-implicit"}}) {
+    const std::string text = grid + "[bending]\nmodel = '" + model +
+                             "'\nstiffness = 1\ndamping = 0.02\n[integrator]\nmethod = '" + method +
+                             "'\n";
+    const std::string why = refusal(text);
+    EXPECT_NE(why.find("integrator.method"), std::string::npos) << method << ": " << why;
+    EXPECT_NE(why.find("damp"), std::string::npos) << method << ": " << why;
+    // The same scene without the damping is taken.
+    EXPECT_EQ(refusal(grid + "[bending]\nmodel = '" + model +
+                      "'\nstiffness = 1\n[integrator]\nmethod = '" + method + "'\n"),
+              "")
+        << method;
+  }
 }
 
 }  // namespace

@@ -70,6 +70,24 @@ class AngleCosineElements final : public ElementSet {
     stiffness = m_k[e];
   }
 
+  /// Damping form: the rate c-dot = G . v_e with W = k, so f = -k (G . v_e) G, Dv = -k G G^T and
+  /// Dx = -k [(G . v_e) Hess c + G (Hess c v_e)^T].
+  bool has_damping() const override { return true; }
+  void damping(ConstRef x, ConstRef v, size_t begin, size_t end, double* f, double* Dv,
+               double* Dx) const override {
+    for (size_t e = begin; e < end; ++e) {
+      Vec9 G, ve;
+      Mat9 Hc;
+      derivatives(x, e, G, Dx ? &Hc : nullptr);
+      for (int a = 0; a < 3; ++a) ve.segment<3>(3 * a) = v.segment<3>(3 * m_stencils[e][size_t(a)]);
+      const double k = m_k[e], rate = G.dot(ve);
+      Eigen::Map<Vec9>(f + 9 * (e - begin)) = -k * rate * G;
+      if (Dv) Eigen::Map<Mat9>(Dv + 81 * (e - begin)) = -k * G * G.transpose();
+      if (Dx)
+        Eigen::Map<Mat9>(Dx + 81 * (e - begin)) = -k * (rate * Hc + G * (Hc * ve).transpose());
+    }
+  }
+
   /// The cosine of element e at x.
   double cosine(ConstRef x, size_t e) const {
     const auto& s = m_stencils[e];

@@ -38,6 +38,14 @@ inline Eigen::MatrixXd central_jacobian(const std::function<Vec(const Vec&)>& g,
   return J;
 }
 
+/// Fourth-order central-difference Jacobian of g at y (Richardson's combination (4 D(h) - D(2h))
+/// / 3 of two central differences), with step h[c] for coordinate c.
+inline Eigen::MatrixXd central_jacobian4(const std::function<Vec(const Vec&)>& g, const Vec& y,
+                                         const Vec& h) {
+  const Eigen::MatrixXd d1 = central_jacobian(g, y, h), d2 = central_jacobian(g, y, Vec(2.0 * h));
+  return (4.0 * d1 - d2) / 3.0;
+}
+
 /// Central-difference Jacobian of g at y with the same step h for every coordinate.
 inline Eigen::MatrixXd central_jacobian(const std::function<Vec(const Vec&)>& g, const Vec& y,
                                         double h) {
