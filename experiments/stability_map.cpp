@@ -308,12 +308,15 @@ Command add_stability_command(CLI::App& app) {
       "theoretical explicit limits; writes stability.csv and stability_<case>.png");
   cmd->add_flag("--full", a->stab.full, "paper size: 16 x 16 cloth, k in half decades");
   add_list(cmd, "--cases", a->cases,
-           "comma-separated: two_particle,hanging_cloth,stiff_flexion,dam_break_2d (default: all)");
+           "comma-separated: two_particle,hanging_cloth,stiff_flexion,dam_break_2d,"
+           "bending_strand_41,bending_strand_81 (and bending_strand_161 with --full; default: "
+           "all)");
   add_list(cmd, "--methods", a->methods,
            "comma-separated study labels or method names (default: all)");
   add_list(cmd, "--k", a->k,
-           "comma-separated stiffness values in N/m, for dam_break_2d speeds of sound in m/s "
-           "(default 1e1..1e7 by decades; dam_break_2d: 10, 40, 160 m/s)");
+           "comma-separated stiffness values in N/m, for dam_break_2d speeds of sound in m/s, "
+           "for the bending cases EI in N m^2 (default 1e1..1e7 by decades; dam_break_2d: 10, "
+           "40, 160 m/s; bending: 1e-5, 1e-4, 1e-3 N m^2)");
   cmd->add_option("--h-min", st.h_min, "smallest step tried (s, default 1e-5)");
   cmd->add_option("--h-max", st.h_max, "largest step tried (s, default 1e-1)");
   cmd->add_option("--bisections", st.bisections, "bisections of the bracket in log h (default 4)");
