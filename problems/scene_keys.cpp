@@ -527,8 +527,8 @@ void add_bending_keys(std::vector<SceneKey>& t) {
                    "times its energy's quadratic form on the rates of its angles (the rate of the "
                    "curvature for rod), so a small bending oscillation of angular frequency omega "
                    "is damped with ratio beta omega / 2 and no rigid motion is damped; the "
-                   "implicit family, explicit steppers, cvode and ida take it, the whole-step "
-                   "methods (vbd, xpbd, fast-mass-spring, ceres-implicit) refuse it"));
+                   "implicit family, explicit steppers, cvode, ida and vbd take it; xpbd, "
+                   "fast-mass-spring and ceres-implicit refuse it"));
   add(K("bending.rest", T::String)
           .in({"rod"})
           .def("'initial'")

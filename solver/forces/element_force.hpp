@@ -100,8 +100,9 @@ class ElementForce final : public ElementTerms {
 /// stiffness alone is damped with ratio beta omega / 2 (stiffness-proportional Rayleigh damping
 /// with the energy's Hessian at rest), and no rigid motion is damped, since q is unchanged by one.
 /// A separate force beside the set's ElementForce (sharing its set): a scene without damping pays
-/// nothing for it, and the whole-step methods, which pose the step as a minimisation of an
-/// energy, see its form (ForceForm::ElementDampers) and refuse it.
+/// nothing for it, and the whole-step methods see its form (ForceForm::ElementDampers): vbd takes
+/// it as it takes spring dampers, the others, which pose the step as a minimisation of an energy,
+/// refuse it.
 class ElementDamping final : public ElementTerms {
  public:
   /// beta > 0 (s); the set must have_damping().

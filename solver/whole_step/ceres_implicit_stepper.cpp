@@ -283,14 +283,7 @@ std::string ceres_implicit_unsupported(const MassSpringSystem& system) {
     std::ostringstream os;
     os << "ceres-implicit: force '" << f->name() << "' (force " << n << " of the system) ";
     const ForceTerms t = f->terms();
-    if (t.form == ForceForm::ElementDampers) {
-      os << "damps the '" << t.elements->name()
-         << "' elements (bending.damping): a dissipation on their rates is not the gradient of "
-            "any function of x1, so the backward Euler step is not a minimisation; set it to 0 "
-            "(air-drag is supported) or use method 'implicit' with beta = 1 and "
-            "newton_iterations > 1 for the same step";
-      return os.str();
-    }
+    if (t.form == ForceForm::ElementDampers) continue;  // named after every other obstacle
     if (t.form == ForceForm::Elements) {
       if (t.elements->has_constraint()) continue;  // a sum of squares: sqrt(k) C per element
       os << "has '" << t.elements->name()
@@ -327,6 +320,19 @@ std::string ceres_implicit_unsupported(const MassSpringSystem& system) {
             "beta = 1 and newton_iterations > 1";
       return os.str();
     }
+  }
+  // The element sets' damping last: then dropping it is enough.
+  for (size_t n = 0; n < forces.size(); ++n) {
+    const ForceTerms t = forces[n]->terms();
+    if (t.form != ForceForm::ElementDampers) continue;
+    std::ostringstream os;
+    os << "ceres-implicit: force '" << forces[n]->name() << "' (force " << n
+       << " of the system) damps the '" << t.elements->name()
+       << "' elements (bending.damping): a dissipation on their rates is not the gradient of any "
+          "function of x1, so the backward Euler step is not a minimisation; set it to 0 "
+          "(air-drag is supported), or use vbd, or method 'implicit' with beta = 1 and "
+          "newton_iterations > 1 for the same step";
+    return os.str();
   }
   return "";
 }

@@ -28,13 +28,13 @@ std::string SpringPotentialForces::unsupported(const MassSpringSystem& system,
   auto damped_message = [&] {
     return method + " cannot take the damping of the '" + damped->name() +
            "' elements (a dissipation on their rates, not an energy of the positions, which " +
-           method + " minimises): set bending.damping = 0 (air drag is taken), or use the " +
+           method + " minimises): set bending.damping = 0 (air drag is taken), or use vbd, the " +
            "explicit or implicit steppers, cvode or ida";
   };
   for (const Force* f : order) {
     const ForceTerms t = f->terms();
     if (t.form == ForceForm::ElementDampers) {
-      if (!damped) damped = t.elements;
+      if (!damped && !takes_dampers) damped = t.elements;
       continue;
     }
     if (damped && t.form == ForceForm::Dampers) return damped_message();
@@ -124,6 +124,8 @@ SpringPotentialForces::SpringPotentialForces(const MassSpringSystem& system) {
         elements.push_back(t.elements);
         break;
       case ForceForm::ElementDampers:
+        element_dampers.push_back({t.elements, t.element_damping});
+        break;
       case ForceForm::Unknown:
         break;  // refused by unsupported()
     }

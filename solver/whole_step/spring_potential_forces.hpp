@@ -28,6 +28,13 @@ struct SpringPotentialForces {
   /// The element sets of every force that has one (Force::terms, ForceForm::Elements), in force
   /// order; only the methods that say so in unsupported() take them.
   std::vector<const ElementSet*> elements;
+  /// The Rayleigh damping of element sets (ElementDamping, ForceForm::ElementDampers): the set and
+  /// beta (s), in force order; only the methods that take dampers (vbd) take them.
+  struct ElementDampers {
+    const ElementSet* set;
+    double beta;
+  };
+  std::vector<ElementDampers> element_dampers;
   Vec3 gravity = Vec3::Zero();  ///< total gravity acceleration (m/s^2)
   double drag = 0.0;            ///< total air-drag coefficient c (kg/s per particle)
   Vec3 wind = Vec3::Zero();     ///< c-weighted mean wind velocity (m/s)
@@ -36,7 +43,8 @@ struct SpringPotentialForces {
   explicit SpringPotentialForces(const MassSpringSystem& system);
   /// "" if every force of system is one of the three kinds or an element set the method takes
   /// (`elements`), else a message naming the first other force; `method` and `why` are spliced
-  /// into it ("xpbd", "... needs each force to be ...").
+  /// into it ("xpbd", "... needs each force to be ..."). takes_dampers: the method takes spring
+  /// dampers and the element sets' damping too.
   static std::string unsupported(const MassSpringSystem& system, const std::string& method,
                                  const std::string& why, bool takes_dampers = false,
                                  ElementNeed elements = ElementNeed::None);

@@ -63,17 +63,20 @@ VbdStepper::VbdStepper(const MassSpringSystem& system, VbdOptions options)
     m_links[size_t(next[size_t(i)]++)] = {j, k, L, c};
     m_links[size_t(next[size_t(j)]++)] = {i, k, L, c};
   });
-  // Element incidences per particle (counting pass, then filling), in set and element order.
+  // Element incidences per particle (counting pass, then filling), in term and element order.
+  for (const ElementSet* set : m_f.elements) m_terms.push_back({set, 0.0});
+  for (const auto& d : m_f.element_dampers) m_terms.push_back({d.set, d.beta});
+  m_damped = !m_f.element_dampers.empty();
   m_incidence_start.assign(size_t(n) + 1, 0);
-  for (const ElementSet* set : m_f.elements)
-    for (size_t e = 0; e < set->size(); ++e)
-      for (int a = 0; a < set->stencil_size(); ++a)
-        ++m_incidence_start[size_t(set->stencil(e)[a]) + 1];
+  for (const ElementTerm& t : m_terms)
+    for (size_t e = 0; e < t.set->size(); ++e)
+      for (int a = 0; a < t.set->stencil_size(); ++a)
+        ++m_incidence_start[size_t(t.set->stencil(e)[a]) + 1];
   for (size_t p = 0; p < size_t(n); ++p) m_incidence_start[p + 1] += m_incidence_start[p];
   m_incidence.resize(size_t(m_incidence_start.back()));
   std::vector<Index> next_incidence(m_incidence_start.begin(), m_incidence_start.end() - 1);
-  for (size_t si = 0; si < m_f.elements.size(); ++si) {
-    const ElementSet& set = *m_f.elements[si];
+  for (size_t si = 0; si < m_terms.size(); ++si) {
+    const ElementSet& set = *m_terms[si].set;
     for (size_t e = 0; e < set.size(); ++e)
       for (int a = 0; a < set.stencil_size(); ++a)
         m_incidence[size_t(next_incidence[size_t(set.stencil(e)[a])]++)] = {int(si), a, e};
@@ -81,6 +84,7 @@ VbdStepper::VbdStepper(const MassSpringSystem& system, VbdOptions options)
   colour();
   for (Vec* v : {&m_x0, &m_y, &m_x, &m_xprev, &m_xprev2, &m_xbar, &m_force, &m_last_v0})
     v->setZero(3 * n);
+  if (m_damped) m_d.setZero(3 * n);
   m_err.setZero(n);
 }
 
@@ -90,7 +94,7 @@ void VbdStepper::for_each_neighbour(Index p, Visit&& visit) const {
     visit(Index(m_links[size_t(l)].other));
   for (Index i = m_incidence_start[size_t(p)]; i < m_incidence_start[size_t(p) + 1]; ++i) {
     const Incidence& in = m_incidence[size_t(i)];
-    const ElementSet& set = *m_f.elements[size_t(in.set)];
+    const ElementSet& set = *m_terms[size_t(in.set)].set;
     const int* stencil = set.stencil(in.element);
     for (int a = 0; a < set.stencil_size(); ++a) visit(Index(stencil[a]));
   }
@@ -170,6 +174,7 @@ void VbdStepper::initialise(const State& s0, double h) {
     }
     m_x.segment<3>(3 * p) = x;
   }
+  sync_displacement();
 }
 
 Vec3 VbdStepper::vertex_gradient(Index p, Mat3* H) const {
@@ -207,14 +212,27 @@ void VbdStepper::add_element_terms(Index p, Vec3& grad, Mat3* H) const {
   std::array<double, kMaxElementDofs * kMaxElementDofs> He;
   for (Index i = m_incidence_start[size_t(p)]; i < m_incidence_start[size_t(p) + 1]; ++i) {
     const Incidence& in = m_incidence[size_t(i)];
-    const ElementSet& set = *m_f.elements[size_t(in.set)];
-    set.gradient_hessian(m_x, in.element, in.element + 1, PsdProjection::None, g.data(),
-                         H ? He.data() : nullptr);
+    const ElementTerm& t = m_terms[size_t(in.set)];
+    const int dofs = 3 * t.set->stencil_size(), o = 3 * in.slot;
+    Mat3 B;
+    if (t.beta > 0.0) {
+      // The damping with v = d/h: its force is linear in v, so with d in place of v it is h times
+      // the force, and Dv does not depend on v.
+      t.set->damping(m_x, m_d, in.element, in.element + 1, g.data(), H ? He.data() : nullptr,
+                     nullptr);
+      grad -= (t.beta / m_h) * Eigen::Map<const Vec3>(g.data() + 3 * in.slot);
+      if (!H) continue;
+      // -Dv is PSD, so is its diagonal block: no projection.
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) B(r, c) = -(t.beta / m_h) * He[size_t((o + c) * dofs + o + r)];
+      *H += B;
+      continue;
+    }
+    t.set->gradient_hessian(m_x, in.element, in.element + 1, PsdProjection::None, g.data(),
+                            H ? He.data() : nullptr);
     grad += Eigen::Map<const Vec3>(g.data() + 3 * in.slot);
     if (!H) continue;
     // The vertex's diagonal block of the element Hessian (3K x 3K, column-major), made PSD.
-    const int dofs = 3 * set.stencil_size(), o = 3 * in.slot;
-    Mat3 B;
     for (int c = 0; c < 3; ++c)
       for (int r = 0; r < 3; ++r) B(r, c) = He[size_t((o + c) * dofs + o + r)];
     project_psd(B.data(), 3, PsdProjection::Clamp);
@@ -226,9 +244,34 @@ double VbdStepper::element_energy(Index p) const {
   double E = 0.0;
   for (Index i = m_incidence_start[size_t(p)]; i < m_incidence_start[size_t(p) + 1]; ++i) {
     const Incidence& in = m_incidence[size_t(i)];
-    E += m_f.elements[size_t(in.set)]->energy(m_x, in.element, in.element + 1);
+    const ElementTerm& t = m_terms[size_t(in.set)];
+    if (t.beta == 0.0) E += t.set->energy(m_x, in.element, in.element + 1);
   }
   return E;
+}
+
+double VbdStepper::element_damping_change(Index p, const Vec3& s) const {
+  // beta/(2h) d^T A d with A = -Dv at m_x (frozen): moving x_p by s changes it by
+  // beta/h (s . (A d)_p + s^T A_pp s / 2), and A d = -f(x, d) (f = Dv d, linear in d).
+  std::array<double, kMaxElementDofs> f;
+  std::array<double, kMaxElementDofs * kMaxElementDofs> Dv;
+  double dg = 0.0;
+  for (Index i = m_incidence_start[size_t(p)]; i < m_incidence_start[size_t(p) + 1]; ++i) {
+    const Incidence& in = m_incidence[size_t(i)];
+    const ElementTerm& t = m_terms[size_t(in.set)];
+    if (t.beta == 0.0) continue;
+    t.set->damping(m_x, m_d, in.element, in.element + 1, f.data(), Dv.data(), nullptr);
+    const int dofs = 3 * t.set->stencil_size(), o = 3 * in.slot;
+    double sAs = 0.0;
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) sAs -= s[r] * Dv[size_t((o + c) * dofs + o + r)] * s[c];
+    dg += t.beta / m_h * (-s.dot(Eigen::Map<const Vec3>(f.data() + o)) + 0.5 * sAs);
+  }
+  return dg;
+}
+
+void VbdStepper::sync_displacement() {
+  if (m_damped) m_d = m_x - m_x0;
 }
 
 double VbdStepper::local_change(Index p, const Vec3& s, double& noise) {
@@ -254,6 +297,7 @@ double VbdStepper::local_change(Index p, const Vec3& s, double& noise) {
       dg += k.c / (2 * h) * qs * (2.0 * q + qs);
     }
   }
+  if (m_damped) dg += element_damping_change(p, s);
   noise = 0.0;
   if (m_incidence_start[size_t(p)] < m_incidence_start[size_t(p) + 1]) {
     const double before = element_energy(p);
@@ -295,6 +339,7 @@ double VbdStepper::update(Index p) {
     }
   }
   m_x.segment<3>(3 * p) += alpha * step;
+  if (m_damped) m_d.segment<3>(3 * p) = m_x.segment<3>(3 * p) - m_x0.segment<3>(3 * p);
   return error;
 }
 
@@ -405,9 +450,11 @@ StepSummary VbdStepper::step(const State& s0, double h, State& s1) {
         for (const Index p : m_order)
           m_x.segment<3>(3 * p) = m_xprev2.segment<3>(3 * p) +
                                   omega * (m_xbar.segment<3>(3 * p) - m_xprev2.segment<3>(3 * p));
+        sync_displacement();
         const double g = objective(s0, h, m_x);
         if (g > g_prev) {  // overshot: keep the plain iterate and restart the semi-iteration
           m_x = m_xbar;
+          sync_displacement();
           weights.restart();
           ++m_chebyshev_restarts;
           g_prev = objective(s0, h, m_x);

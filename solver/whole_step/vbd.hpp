@@ -58,8 +58,8 @@ struct VbdOptions {
   OptionError validate() const;
 };
 
-/// "" if VbdStepper can run the system, else why not (Hooke springs, spring dampers, gravity and
-/// air drag).
+/// "" if VbdStepper can run the system, else why not (Hooke springs, spring dampers, gravity, air
+/// drag, element sets and their damping).
 std::string vbd_unsupported(const MassSpringSystem& system);
 
 /// Vertex block descent (Chen, Liu, Yang and Yuksel 2024, "Vertex Block Descent", ACM TOG 43(4)):
@@ -86,6 +86,12 @@ std::string vbd_unsupported(const MassSpringSystem& system);
 /// dampers the iteration is a nonlinear block Gauss-Seidel on the backward-Euler equations (its
 /// line search uses the damping quadratic with u frozen at the update's start); it converges to
 /// the same exact step, but g is no longer an objective that must fall.
+///
+/// Element dampers (ElementDamping: the Rayleigh damping of a set, bending.damping) are taken as
+/// the spring dampers are: each update adds the damping force with v = (x - x0)/h to the gradient
+/// and beta/h times the vertex's diagonal block of J^T W J (PSD) to the block; the line search uses
+/// the damping quadratic beta/(2h) d^T (J^T W J) d, d = x - x0, with J frozen at the update's
+/// start.
 ///
 /// Element sets (forces/element_set.hpp: bending, any energy over a small stencil) add their
 /// energies to g: each vertex block sums, over the elements that hold the vertex, the element
@@ -136,8 +142,12 @@ class VbdStepper final : public Stepper {
   /// and back (bit for bit) to evaluate p's elements: no other vertex of p's colour reads it.
   /// noise: the round-off of the elements' share (their energies are not in difference form).
   double local_change(Index p, const Vec3& s, double& noise);
-  /// The gradient (and with H, the PSD diagonal blocks) of p's elements at m_x, added in.
+  /// The gradient (and with H, the PSD diagonal blocks) of p's elements at m_x, added in; for a
+  /// damping term the gradient of its quadratic beta/(2h) d^T A d, A = -Dv at m_x, d = m_d on the
+  /// stencil (its force with v = d/h, negated) and the block beta/h A_pp.
   void add_element_terms(Index p, Vec3& grad, Mat3* H) const;
+  /// The change of p's element dampers' frozen quadratic when x_p moves by s (local_change).
+  double element_damping_change(Index p, const Vec3& s) const;
   /// The sum of p's elements' energies at m_x.
   double element_energy(Index p) const;
   /// One Newton step on vertex p; returns position_error() of the gradient it started from.
@@ -153,9 +163,16 @@ class VbdStepper final : public Stepper {
   SpringPotentialForces m_f;
   std::vector<Index> m_link_start;  // per particle: its links in m_links
   std::vector<Link> m_links;
-  struct Incidence {  // an element seen from one of its vertices
-    int set;          // index in m_f.elements
-    int slot;         // the vertex's place in the element's stencil
+  /// An element set's energy (beta = 0) or its Rayleigh damping (beta > 0, ElementDamping).
+  struct ElementTerm {
+    const ElementSet* set;
+    double beta;
+  };
+  std::vector<ElementTerm> m_terms;  // m_f.elements' energies, then m_f.element_dampers
+  bool m_damped = false;             // some term is a damping: m_d is kept
+  struct Incidence {                 // an element seen from one of its vertices
+    int set;                         // index in m_terms
+    int slot;                        // the vertex's place in the element's stencil
     size_t element;
   };
   std::vector<Index> m_incidence_start;  // per particle: its elements in m_incidence
@@ -171,6 +188,9 @@ class VbdStepper final : public Stepper {
   // Per-step data and scratch (sized once).
   double m_h = 0.0, m_size = 1.0;
   Vec m_x0, m_y, m_x, m_xprev, m_xprev2, m_xbar, m_err, m_force;
+  Vec m_d;  // m_x - m_x0 (only with element damping: h times the velocity the dampers see)
+  /// m_d = m_x - m_x0 (when damped), after m_x changed for every vertex.
+  void sync_displacement();
   // Adaptive initialisation: the last step's end time, size and start velocity.
   double m_last_end = 0.0, m_last_h = 0.0;
   bool m_has_last = false;

@@ -308,7 +308,7 @@ TEST(BendingScene, RefusesWhatTheMeshCannotCarry) {
                       "integrator.method"));
 }
 
-TEST(BendingScene, DampingIsASeparateForceThatTheWholeStepMethodsRefuse) {
+TEST(BendingScene, DampingIsASeparateForceThatVbdTakesAndTheOtherWholeStepMethodsRefuse) {
   const std::string grid = "[mesh]\ntype = 'grid'\nnx = 4\nny = 4\n";
   auto names = [](const Scene& scene) {
     std::vector<std::string> out;
@@ -345,10 +345,13 @@ TEST(BendingScene, DampingIsASeparateForceThatTheWholeStepMethodsRefuse) {
   EXPECT_NE(refusal(grid + "[bending]\nmodel = 'dihedral'\nstiffness = 1\ndamping = -0.1\n")
                 .find("bending.damping"),
             std::string::npos);
-  // The whole-step methods pose the step as a minimisation: a dissipation has no place there.
+  // vbd takes it (as it takes spring dampers); the other whole-step methods pose the step as a
+  // minimisation, where a dissipation has no place.
+  EXPECT_EQ(refusal(grid + "[bending]\nmodel = 'shell'\nstiffness = 1\ndamping = 0.02\n"
+                           "[integrator]\nmethod = 'vbd'\n"),
+            "");
   for (const auto& [model, method] :
-       std::vector<std::pair<std::string, std::string>>{{"dihedral", "vbd"},
-                                                        {"dihedral", "xpbd"},
+       std::vector<std::pair<std::string, std::string>>{{"dihedral", "xpbd"},
                                                         {"quadratic", "fast-mass-spring"},
                                                         {"dihedral", "ceres-implicit"}}) {
     const std::string text = grid + "[bending]\nmodel = '" + model +
