@@ -82,6 +82,14 @@ double one_plus_c(const RodGeometry& r) { return std::max(1.0 + r.c, 1e-12); }
 
 double rod_kappa(const RodGeometry& r) { return r.ok ? 2.0 * r.s / one_plus_c(r) : 0.0; }
 
+/// kappa's first and second derivatives in c, dkappa/dc = -2 / ((1 + c) s) and
+/// d2kappa/dc2 = kappa (1 - 2c) / s^4: defined off straight (s > 0) only, where kappa is a cone.
+void rod_kappa_derivatives(const RodGeometry& r, double& dk, double& d2k) {
+  const double opc = one_plus_c(r);
+  dk = -2.0 / (opc * r.s);
+  d2k = 2.0 * r.s / opc * (1.0 - 2.0 * r.c) / (r.s * r.s * r.s * r.s);
+}
+
 /// grad c over (e0, e1) and, if Hc, its Hessian.
 void rod_cosine_derivatives(const RodGeometry& r, Vec6& G, Mat6* Hc) {
   const Vec3 g0 = (r.w - r.c * r.u) / r.l0, g1 = (r.u - r.c * r.w) / r.l1;
@@ -250,6 +258,15 @@ void hinge_damping(ConstRef x, ConstRef v, const int* ids, double k, double* f, 
                   Dx ? &Hq : nullptr, f, Dv, Dx);
 }
 
+/// hinge_damping for the hinges [begin, end) of a set whose elements have ids and k.
+template <class Hinge>
+void hinges_damping(const std::vector<Hinge>& hinges, ConstRef x, ConstRef v, size_t begin,
+                    size_t end, double* f, double* Dv, double* Dx) {
+  for (size_t e = begin; e < end; ++e)
+    hinge_damping(x, v, hinges[e].ids.data(), hinges[e].k, f + 12 * (e - begin),
+                  Dv ? Dv + 144 * (e - begin) : nullptr, Dx ? Dx + 144 * (e - begin) : nullptr);
+}
+
 }  // namespace
 
 // ---------------------------------------------------------------------------------------------
@@ -294,9 +311,8 @@ void RodBending::gradient_hessian(ConstRef x, size_t begin, size_t end, PsdProje
     const double opc = one_plus_c(r);
     double dE = -4.0 * h.k / (opc * opc), d2E = 8.0 * h.k / (opc * opc * opc);
     if (h.kappa0 > 0.0 && r.s >= kStraight) {
-      const double kappa = 2.0 * r.s / opc;
-      const double dk = -2.0 / (opc * r.s);
-      const double d2k = kappa * (1.0 - 2.0 * r.c) / (r.s * r.s * r.s * r.s);
+      double dk, d2k;
+      rod_kappa_derivatives(r, dk, d2k);
       dE -= h.k * h.kappa0 * dk;
       d2E -= h.k * h.kappa0 * d2k;
     }
@@ -324,7 +340,9 @@ void RodBending::constraint(ConstRef x, size_t e, double& C, double* dC, double&
   }
   Vec6 G;
   rod_cosine_derivatives(r, G, nullptr);
-  const Vec6 gv = (-2.0 / (one_plus_c(r) * r.s)) * G;
+  double dk, d2k;
+  rod_kappa_derivatives(r, dk, d2k);
+  const Vec6 gv = dk * G;
   to_positions<2, 3>(gv, nullptr, kRodCoef, dC, nullptr);
 }
 
@@ -337,9 +355,8 @@ void RodBending::damping(ConstRef x, ConstRef v, size_t begin, size_t end, doubl
       no_damping<3>(e, begin, f, Dv, Dx);
       continue;
     }
-    const double opc = one_plus_c(r);
-    const double dk = -2.0 / (opc * r.s);
-    const double d2k = 2.0 * r.s / opc * (1.0 - 2.0 * r.c) / (r.s * r.s * r.s * r.s);
+    double dk, d2k;
+    rod_kappa_derivatives(r, dk, d2k);
     Vec6 G;
     Mat6 Hc;
     rod_cosine_derivatives(r, G, Dx ? &Hc : nullptr);
@@ -472,9 +489,7 @@ void DihedralBending::constraint(ConstRef x, size_t e, double& C, double* dC,
 
 void DihedralBending::damping(ConstRef x, ConstRef v, size_t begin, size_t end, double* f,
                               double* Dv, double* Dx) const {
-  for (size_t e = begin; e < end; ++e)
-    hinge_damping(x, v, m_elements[e].ids.data(), m_elements[e].k, f + 12 * (e - begin),
-                  Dv ? Dv + 144 * (e - begin) : nullptr, Dx ? Dx + 144 * (e - begin) : nullptr);
+  hinges_damping(m_elements, x, v, begin, end, f, Dv, Dx);
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -541,9 +556,7 @@ void QuadraticBending::scalar_quadratic(size_t e, double* W) const {
 
 void QuadraticBending::damping(ConstRef x, ConstRef v, size_t begin, size_t end, double* f,
                                double* Dv, double* Dx) const {
-  for (size_t e = begin; e < end; ++e)
-    hinge_damping(x, v, m_elements[e].ids.data(), m_elements[e].k, f + 12 * (e - begin),
-                  Dv ? Dv + 144 * (e - begin) : nullptr, Dx ? Dx + 144 * (e - begin) : nullptr);
+  hinges_damping(m_elements, x, v, begin, end, f, Dv, Dx);  // the dihedral angle's rate
 }
 
 // ---------------------------------------------------------------------------------------------
