@@ -1,0 +1,332 @@
+// Python bindings: Simulation, a scene's run stepped from Python.
+
+#include <cmath>
+#include <cstdio>
+#include <memory>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "experiments/checkpoint.hpp"
+#include "experiments/output/vtk_writer.hpp"
+#include "experiments/run_command.hpp"
+#include "experiments/run_output.hpp"
+#include "hooke/config.hpp"
+#include "hooke/registry.hpp"
+#include "hooke/simulation.hpp"
+#include "problems/input_error.hpp"
+#include "problems/scene_keys.hpp"
+#include "python/bindings.hpp"
+
+namespace hooke::python {
+namespace {
+
+/// A scene's run without files: Simulation with the scene's stepper and [run] settings, stepped
+/// exactly as `hooke run` steps it, with a state whose buffers stay put (numpy views follow it).
+class PySimulation {
+ public:
+  explicit PySimulation(std::shared_ptr<Scene> scene) : m_scene(std::move(scene)) {
+    if (!m_scene->system)
+      throw py::value_error("an [ode] scene has no mass-spring system to simulate");
+    std::unique_ptr<Stepper> stepper;
+    try {
+      stepper =
+          make_stepper(m_scene->integrator.method, *m_scene->system, m_scene->integrator.options);
+    } catch (const SetupError& e) {
+      throw InputError(m_scene->file, "integrator.method", e.what());
+    }
+    m_sim = std::make_unique<Simulation>(*m_scene->system, std::move(stepper), m_scene->initial);
+    m_sim->set_accept_not_converged(m_scene->run.allow_not_converged);
+    m_sim->set_max_step_halvings(m_scene->run.max_step_halvings);
+    if (m_scene->integrator.adaptive)
+      m_sim->set_error_control(m_scene->integrator.error_control, m_scene->time.dt);
+    m_method = m_scene->integrator.method;
+  }
+
+  double t() const { return m_sim->state().t; }
+  long long steps_taken() const { return m_steps; }
+
+  /// One step of size h (the scene's dt by default; under error control, the controller's step,
+  /// ending at the scene's duration at the latest while it is ahead); raises StepError if it
+  /// fails.
+  py::dict step(std::optional<double> h) {
+    if (!h && adaptive()) {
+      const double end = m_scene->time.duration;
+      return advance_controlled(t() < end ? end : std::numeric_limits<double>::infinity());
+    }
+    const double size = h ? *h : m_scene->time.dt;
+    if (!(size > 0.0)) throw py::value_error("h must be > 0");
+    return advance_by(size);
+  }
+  /// Steps of dt until time t, the last one shortened to land on t exactly (under error control:
+  /// the controller's steps, the last one landing on t).
+  void advance(double t_end) {
+    if (adaptive()) {
+      // Through the frame times hooke run lands on (Scene::next_stop), so that run() takes its
+      // steps.
+      while (t() < t_end) {
+        if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between steps
+        const double stop = m_scene->next_stop(t());  // the duration once past the frames
+        advance_controlled(stop > t() ? std::min(t_end, stop) : t_end);
+      }
+      return;
+    }
+    const double dt = m_scene->time.dt, left = t_end - t();
+    // Nothing to do when t_end is here already, to round-off (a time reached by steps of dt).
+    if (!(left > 1e-12 * std::max(dt, std::abs(t_end)))) return;
+    // As TimeSettings::steps(): the last step is shortened, never a sliver after a full one.
+    const long long n = static_cast<long long>(std::ceil(left / dt * (1.0 - 1e-12)));
+    for (long long k = 1; k <= n; ++k) {
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between steps
+      advance_by(k == n ? t_end - t() : dt);
+    }
+  }
+  /// To the scene's duration, with the step sizes of `hooke run` (the last one shortened). With
+  /// `out`, it is `hooke run` itself (run_scene: the same files, messages and exit rules) from
+  /// t = 0, and the simulation continues from where that run ended.
+  void run(std::optional<std::string> out, bool force) {
+    if (out) return run_with_files(*out, force);
+    if (adaptive()) return advance(m_scene->time.duration);
+    const long long total = m_scene->time.steps();
+    while (m_steps < total) {
+      if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between steps
+      advance_by(m_scene->time.step_size(m_steps + 1, t()));
+    }
+  }
+
+  const std::shared_ptr<Scene>& scene() const { return m_scene; }
+
+  void run_with_files(const std::string& out, bool force) {
+    if (m_steps != 0)
+      throw py::value_error("run(out=...) is hooke run from t = 0 and this simulation has taken " +
+                            std::to_string(m_steps) +
+                            " steps: use a new Simulation (or save_checkpoint)");
+    RunOptions o;
+    o.out_dir = out;
+    o.progress = false;
+    o.force = force;
+    o.on_finished = [this](const Simulation& run) {
+      const State& s = run.state();
+      State& mine = m_sim->mutable_state();
+      mine.x = s.x;  // into the existing buffers: live views see the final state
+      mine.v = s.v;
+      mine.t = s.t;
+      // The stepper's history and the error control's state, as a checkpoint carries them.
+      std::vector<double> history = run.stepper().history();
+      if (adaptive()) {
+        append_error_control(run, history);
+        restore_error_control(history, *m_sim);
+      }
+      m_sim->stepper().restore_history(history);
+      m_steps = adaptive() ? run.accepted_steps() : m_scene->time.steps();
+    };
+    int code;
+    {
+      py::gil_scoped_release release;
+      code = run_scene(*m_scene, o);
+    }
+    if (code == 130 || code == 143) {  // stopped by a signal, after writing its checkpoint
+      PyErr_SetNone(PyExc_KeyboardInterrupt);
+      throw py::error_already_set();
+    }
+    if (code != 0)
+      throw StepFailed(m_scene->file + ": the run stopped (exit " + std::to_string(code) +
+                       ", message above); " + out + " keeps what it wrote");
+  }
+
+  py::array_t<double> x(py::handle self) {
+    return view(m_sim->mutable_state().x.data(), m_scene->system->num_particles(), self,
+                &m_live_views);
+  }
+  py::array_t<double> v(py::handle self) {
+    return view(m_sim->mutable_state().v.data(), m_scene->system->num_particles(), self,
+                &m_live_views);
+  }
+  double kinetic_energy() const { return m_scene->system->kinetic_energy(m_sim->state().v); }
+  double potential_energy() const { return m_scene->system->potential_energy(m_sim->state().x); }
+  py::dict stats() {
+    const StepperStats s = m_sim->stepper().stats();
+    py::dict d;
+    d["steps"] = s.steps;
+    d["internal_steps"] = s.internal_steps;
+    d["iterations"] = s.iterations;
+    d["linear_iterations"] = s.linear_iterations;
+    d["factorizations"] = s.factorizations;
+    d["last_residual"] = s.last_residual;
+    d["assembly_seconds"] = s.assembly_seconds;
+    d["analyze_seconds"] = s.analyze_seconds;
+    d["factor_seconds"] = s.factor_seconds;
+    d["solve_seconds"] = s.solve_seconds;
+    d["total_seconds"] = s.total_seconds;
+    if (adaptive()) {  // the error control's counts (integrator.adaptive)
+      d["accepted"] = m_sim->accepted_steps();
+      d["rejected"] = m_sim->rejected_steps();
+      d["next_h"] = m_sim->next_step();
+    }
+    return d;
+  }
+  std::string method() const { return m_method; }
+  /// Continues from the current state with another method; the scene's [integrator] options
+  /// carry over where that method takes them (options_for), as `hooke crosscheck` passes them.
+  void set_method(const std::string& name) {
+    try {
+      method_info(name);
+    } catch (const UnknownName& e) {
+      throw InputError("<set_method>", "integrator.method", e.what());
+    }
+    if (const std::string why = method_unsupported(name, *m_scene->system); !why.empty())
+      throw InputError(m_scene->file, "integrator.method", why);
+    if (adaptive() && method_info(name).error_estimate_order == 0)
+      throw InputError(m_scene->file, "integrator.method",
+                       "method '" + name +
+                           "' makes no local error estimate, and this scene runs under error "
+                           "control (integrator.adaptive = true)");
+    try {
+      m_sim->set_stepper(
+          make_stepper(name, *m_scene->system, options_for(name, m_scene->integrator.options)));
+    } catch (const SetupError& e) {
+      throw InputError(m_scene->file, "integrator.method", e.what());
+    }
+    // The controller takes the new method's order; the counts and the next step carry on.
+    if (adaptive()) m_sim->set_error_control(m_scene->integrator.error_control, m_sim->next_step());
+    m_method = name;
+  }
+  /// The state, the stepper's history and the step count, in hooke run's checkpoint format.
+  void save_checkpoint(const std::string& path) {
+    Checkpoint c;
+    c.version = HOOKE_VERSION;
+    c.scene = resolved_scene_text(*m_scene);
+    c.initial_hash = initial_state_hash(m_scene->initial, m_scene->system->pinned());
+    c.method = m_method;
+    c.step = m_steps;
+    c.state = m_sim->state();
+    c.history = m_sim->stepper().history();
+    if (adaptive()) append_error_control(*m_sim, c.history);
+    write_checkpoint(path, c);
+  }
+  /// Continues from a checkpoint of this scene and method (save_checkpoint, or hooke run's
+  /// DIR/checkpoint.bin): refused, as hooke resume refuses it, when either differs.
+  void load_checkpoint(const std::string& path) {
+    const Checkpoint c = read_checkpoint(path, m_scene->system->dofs());
+    if (c.version != HOOKE_VERSION)
+      throw InputError(path, "checkpoint",
+                       "was written by hooke " + c.version + "; this is hooke " HOOKE_VERSION);
+    if (const std::string changes = scene_changes(c.scene, resolved_scene_text(*m_scene));
+        !changes.empty())
+      throw InputError(path, "scene", "was written for another scene (" + changes + ")");
+    if (c.initial_hash != initial_state_hash(m_scene->initial, m_scene->system->pinned()))
+      throw InputError(path, "mesh", "was written for another initial state");
+    if (c.method != m_method)
+      throw InputError(path, "checkpoint",
+                       "was written by method '" + c.method + "', this simulation steps with '" +
+                           m_method + "' (set_method first)");
+    try {
+      std::vector<double> history = c.history;
+      if (adaptive()) restore_error_control(history, *m_sim);
+      m_sim->stepper().restore_history(history);
+    } catch (const InternalError& e) {
+      throw InputError(path, "checkpoint", std::string("stepper history: ") + e.what());
+    }
+    State& s = m_sim->mutable_state();
+    s.x = c.state.x;  // into the existing buffers: live views see the restored state
+    s.v = c.state.v;
+    s.t = c.state.t;
+    m_steps = c.step;
+  }
+  /// The current state as a VTK frame (the format of hooke run's frames).
+  void write_vtk(const std::string& path) const {
+    const Scene& s = *m_scene;
+    write_vtk_frame(
+        path, m_sim->state(), t(),
+        FrameMesh{s.edges, s.edge_rest, s.triangles, s.system->pinned(), s.system->masses()});
+  }
+
+ private:
+  bool adaptive() const { return m_scene->integrator.adaptive; }
+  py::dict advance_by(double h) {
+    return finish_step([this, h] { return m_sim->advance(h); });
+  }
+  /// One step under the scene's error control, ending at t_end at the latest.
+  py::dict advance_controlled(double t_end) {
+    return finish_step([this, t_end] { return m_sim->advance_adaptive(t_end); });
+  }
+  /// Takes a step with `take` (GIL released); raises StepError if it failed, else returns its
+  /// summary.
+  template <class Take>
+  py::dict finish_step(Take take) {
+    StepSummary s;
+    m_sim->set_stable_buffers(m_live_views > 0);
+    {
+      py::gil_scoped_release release;
+      s = take();
+    }
+    const bool ok = s.status == Status::Converged ||
+                    (s.status == Status::NotConverged && m_scene->run.allow_not_converged);
+    if (!ok)
+      throw StepFailed(m_scene->file + ": step " + std::to_string(m_steps + 1) +
+                       " (t = " + shortest_number(m_sim->failed_t()) +
+                       ", h = " + shortest_number(m_sim->failed_h()) + "): " + to_string(s.status) +
+                       ": " + s.message);
+    ++m_steps;
+    py::dict d;
+    d["status"] = to_string(s.status);
+    d["iterations"] = s.iterations;
+    d["newton_iterations"] = s.newton_iterations;
+    d["residual"] = s.residual;
+    d["message"] = s.message;
+    return d;
+  }
+
+  std::shared_ptr<Scene> m_scene;
+  std::unique_ptr<Simulation> m_sim;
+  long long m_steps = 0;
+  std::string m_method;
+  /// Views of x and v alive in Python. While there is one, a step copies its result into the
+  /// state's buffers (Simulation::set_stable_buffers) so that the views follow it; without one, it
+  /// swaps them as hooke run does, which saves that copy (build/bench/hooke_bench_simulation
+  /// times a 10k-spring cloth step both ways).
+  long long m_live_views = 0;
+};
+
+}  // namespace
+
+void bind_simulation(py::module_& m) {
+  py::class_<PySimulation>(m, "Simulation")
+      .def(py::init<std::shared_ptr<Scene>>(), py::arg("scene"))
+      .def_property_readonly(
+          "system", [](const PySimulation& s) { return System(s.scene()); },
+          "the scene's mass-spring model as maths (forces, energy, stiffness, damping)")
+      .def("step", &PySimulation::step, py::arg("h") = py::none(),
+           "one step (the scene's dt unless h is given); returns its summary")
+      .def("advance", &PySimulation::advance, py::arg("t"),
+           "steps of dt until time t, the last one shortened to land on t")
+      .def("run", &PySimulation::run, py::arg("out") = py::none(), py::arg("force") = false,
+           "to the scene's duration, as hooke run steps it; with out=DIR, hooke run itself (from "
+           "t = 0, writing DIR's files), and the simulation continues from its end")
+      .def_property_readonly("t", &PySimulation::t)
+      .def_property_readonly("steps_taken", &PySimulation::steps_taken)
+      .def_property_readonly("method", &PySimulation::method)
+      .def_property_readonly(
+          "x", [](py::object self) { return self.cast<PySimulation&>().x(self); },
+          "positions (n, 3), a view of the solver's state (writable)")
+      .def_property_readonly(
+          "v", [](py::object self) { return self.cast<PySimulation&>().v(self); },
+          "velocities (n, 3), a view of the solver's state (writable)")
+      .def_property_readonly("kinetic_energy", &PySimulation::kinetic_energy)
+      .def_property_readonly("potential_energy", &PySimulation::potential_energy)
+      .def("stats", &PySimulation::stats, "the stepper's statistics")
+      .def("set_method", &PySimulation::set_method, py::arg("method"),
+           "continue from the current state with another method (the scene's options carry over "
+           "where it takes them)")
+      .def("save_checkpoint", &PySimulation::save_checkpoint, py::arg("path"),
+           "state, stepper history and step count, in hooke run's checkpoint format")
+      .def("load_checkpoint", &PySimulation::load_checkpoint, py::arg("path"),
+           "continue from a checkpoint of this scene and method (hooke run's checkpoint.bin too)")
+      .def("write_vtk", &PySimulation::write_vtk, py::arg("path"),
+           "the current state as a legacy VTK frame, as hooke run writes them");
+}
+
+}  // namespace hooke::python
