@@ -4,7 +4,7 @@
 
 #include <benchmark/benchmark.h>
 
-#include "hooke/thread_policy.hpp"
+#include "hooke/parallel/thread_policy.hpp"
 
 #define HOOKE_BENCHMARK_MAIN()                                          \
   int main(int argc, char** argv) {                                     \

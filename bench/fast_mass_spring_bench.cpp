@@ -22,7 +22,7 @@
 
 #include "bench/bench_main.hpp"
 #include "bench/cloth_fixture.hpp"
-#include "hooke/linear/cholmod_solver.hpp"
+#include "hooke/linear/cholmod/cholmod_solver.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
 
 namespace {

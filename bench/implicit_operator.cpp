@@ -1,5 +1,7 @@
 #include "bench/implicit_operator.hpp"
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 ImplicitOperator::ImplicitOperator(const MassSpringSystem& system) : m_sys(system) {

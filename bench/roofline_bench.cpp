@@ -21,9 +21,9 @@
 #include "bench/implicit_operator.hpp"
 #include "bench/triad.hpp"
 #include "hooke/integrators/reduced_matrix.hpp"
-#include "hooke/linear/cholmod_solver.hpp"
+#include "hooke/linear/cholmod/cholmod_solver.hpp"
+#include "hooke/linear/cholmod/supernodal_solve.hpp"
 #include "hooke/linear/iterative_common.hpp"
-#include "hooke/linear/supernodal_solve.hpp"
 #include "hooke/sparse/symmetric_product.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
 

@@ -38,6 +38,7 @@
 #include "bench/busy_core.hpp"
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/linear/conjugate_gradient.hpp"
+#include "hooke/parallel/loops.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"

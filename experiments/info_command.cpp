@@ -16,6 +16,7 @@
 #include "experiments/natural_frequency.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/integrators/stability.hpp"
+#include "hooke/parallel/loops.hpp"
 #include "hooke/registry.hpp"
 
 namespace hooke {

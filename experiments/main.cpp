@@ -23,7 +23,7 @@
 #include "experiments/cli.hpp"
 #include "experiments/run_group.hpp"
 #include "hooke/config.hpp"
-#include "hooke/thread_policy.hpp"
+#include "hooke/parallel/thread_policy.hpp"
 #include "problems/input_error.hpp"
 
 namespace hooke::cli {

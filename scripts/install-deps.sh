@@ -23,6 +23,7 @@ packages=(
   python3-matplotlib python3-numpy  # plots (run with /usr/bin/python3)
   python3-dev pybind11-dev          # the Python module (python/)
   python3-scipy python3-pytest      # its sparse Jacobians and its tests
+  universal-ctags                   # function lengths (scripts/check-layout.py, Layout.Check)
 )
 if [ "${1:-}" = "--paper" ]; then
   packages+=(pandoc)                # paper/paper.md -> out/paper/paper.html

@@ -7,11 +7,11 @@
 #include "hooke/integrators/step_doubling.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #if HOOKE_WITH_SUNDIALS
-#include "hooke/whole_step/cvode_stepper.hpp"
-#include "hooke/whole_step/ida_stepper.hpp"
+#include "hooke/whole_step/sundials/cvode_stepper.hpp"
+#include "hooke/whole_step/sundials/ida_stepper.hpp"
 #endif
 #if HOOKE_WITH_CERES
-#include "hooke/whole_step/ceres_implicit_stepper.hpp"
+#include "hooke/whole_step/ceres/ceres_implicit_stepper.hpp"
 #endif
 
 namespace hooke {

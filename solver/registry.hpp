@@ -14,10 +14,10 @@
 #include "hooke/sph/dfsph.hpp"
 #include "hooke/sph/iisph.hpp"
 #include "hooke/sph/wcsph.hpp"
-#include "hooke/whole_step/ceres_implicit_stepper.hpp"
-#include "hooke/whole_step/cvode_stepper.hpp"
+#include "hooke/whole_step/ceres/ceres_implicit_stepper.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
-#include "hooke/whole_step/ida_stepper.hpp"
+#include "hooke/whole_step/sundials/cvode_stepper.hpp"
+#include "hooke/whole_step/sundials/ida_stepper.hpp"
 #include "hooke/whole_step/vbd.hpp"
 #include "hooke/whole_step/xpbd.hpp"
 

@@ -5,6 +5,8 @@
 #include <sstream>
 #include <utility>
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 Simulation::Simulation(const MassSpringSystem& system, std::unique_ptr<Stepper> stepper,

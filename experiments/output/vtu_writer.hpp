@@ -4,7 +4,7 @@
 #include <vector>
 
 #include "experiments/output/vtk_writer.hpp"
-#include "hooke/model/local_index.hpp"
+#include "hooke/local_index.hpp"
 #include "hooke/model/state.hpp"
 
 namespace hooke {

@@ -32,7 +32,7 @@ import csv as _csv  # noqa: E402
 import os as _os  # noqa: E402
 import tempfile as _tempfile  # noqa: E402
 
-# hooke's wait policies for libgomp's and OpenBLAS's idle threads (solver/thread_policy.hpp),
+# hooke's wait policies for libgomp's and OpenBLAS's idle threads (solver/parallel/thread_policy.hpp),
 # which the libraries read when they are loaded: set here, before the compiled module loads them,
 # unless the user chose them (or another module already loaded the library, when this has no
 # effect).

@@ -2,7 +2,7 @@
 #include <vector>
 
 #include "hooke/core.hpp"
-#include "hooke/model/local_index.hpp"
+#include "hooke/local_index.hpp"
 
 namespace hooke {
 

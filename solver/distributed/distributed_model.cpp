@@ -7,7 +7,7 @@
 #include <cstdlib>
 #include <stdexcept>
 
-#include "hooke/linear/petsc_runtime.hpp"
+#include "hooke/linear/petsc/petsc_runtime.hpp"
 
 namespace hooke {
 

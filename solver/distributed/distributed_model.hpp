@@ -2,7 +2,7 @@
 #include <memory>
 #include <string>
 
-#include "hooke/model/local_index.hpp"
+#include "hooke/local_index.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/model/state.hpp"
 

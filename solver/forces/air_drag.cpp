@@ -1,5 +1,7 @@
 #include "hooke/forces/air_drag.hpp"
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 void AirDrag::add_forces(ConstRef /*x*/, ConstRef v, VecRef f) const {

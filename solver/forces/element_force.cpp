@@ -4,6 +4,8 @@
 #include <array>
 #include <cmath>
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 ElementTerms::ElementTerms(std::shared_ptr<const ElementSet> set, int matrices)

@@ -3,7 +3,7 @@
 #include <vector>
 
 #include "hooke/core.hpp"
-#include "hooke/model/local_index.hpp"
+#include "hooke/local_index.hpp"
 
 namespace hooke {
 

@@ -3,7 +3,7 @@
 #include <memory>
 
 #include "hooke/core.hpp"
-#include "hooke/model/local_index.hpp"
+#include "hooke/local_index.hpp"
 #include "hooke/sparse/block_pattern.hpp"
 
 namespace hooke {

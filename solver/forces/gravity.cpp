@@ -1,5 +1,7 @@
 #include "hooke/forces/gravity.hpp"
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 void Gravity::add_forces(ConstRef /*x*/, ConstRef /*v*/, VecRef f) const {

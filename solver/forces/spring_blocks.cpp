@@ -10,8 +10,8 @@
 #include "hooke/forces/spring_damper.hpp"
 
 // The AVX2 copy needs an x86 target (the ISA, __builtin_cpu_supports) and GCC's `#pragma GCC
-// target`, which clang ignores, as in solver/linear/supernodal_solve.cpp. Without FMA: the copies
-// then give the same bits (every operation is the same IEEE operation, only four at a time).
+// target`, which clang ignores, as in solver/linear/cholmod/supernodal_solve.cpp. Without FMA: the
+// copies then give the same bits (every operation is the same IEEE operation, only four at a time).
 #if HOOKE_X86_SIMD && (defined(__x86_64__) || defined(__i386__)) && defined(__GNUC__) && \
     !defined(__clang__)
 #define HOOKE_SPRING_BLOCKS_AVX2 1

@@ -4,7 +4,8 @@
 #include <vector>
 
 #include "hooke/core.hpp"
-#include "hooke/model/local_index.hpp"
+#include "hooke/local_index.hpp"
+#include "hooke/parallel/loops.hpp"
 #include "hooke/sparse/block_pattern.hpp"
 
 namespace hooke {

@@ -1,6 +1,7 @@
 #include "hooke/integrators/explicit_mass_spring_stepper.hpp"
 
 #include "hooke/integrators/step_controller.hpp"
+#include "hooke/parallel/loops.hpp"
 
 namespace hooke {
 

@@ -2,6 +2,8 @@
 
 #include <algorithm>
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 ExplicitRungeKutta::ExplicitRungeKutta(const char* name, std::vector<std::vector<double>> a,

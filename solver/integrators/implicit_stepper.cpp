@@ -8,7 +8,7 @@
 
 #include "hooke/integrators/step_controller.hpp"
 #include "hooke/linear/linear_registry.hpp"
-#include "hooke/thread_team.hpp"
+#include "hooke/parallel/thread_team.hpp"
 
 namespace hooke {
 

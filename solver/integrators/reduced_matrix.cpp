@@ -1,5 +1,7 @@
 #include "hooke/integrators/reduced_matrix.hpp"
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 ReducedMatrix::ReducedMatrix(const MassSpringSystem& system) {

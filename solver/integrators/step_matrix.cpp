@@ -1,5 +1,7 @@
 #include "hooke/integrators/step_matrix.hpp"
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 StepMatrix::StepMatrix(const MassSpringSystem& system)

@@ -5,8 +5,8 @@
 
 #include "hooke/linear/iterative_common.hpp"
 #include "hooke/linear/preconditioner.hpp"
+#include "hooke/parallel/thread_team.hpp"
 #include "hooke/sparse/symmetric_product.hpp"
-#include "hooke/thread_team.hpp"
 
 namespace hooke {
 

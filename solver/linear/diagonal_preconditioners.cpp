@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "hooke/linear/iterative_common.hpp"
+#include "hooke/parallel/loops.hpp"
 
 namespace hooke {
 

@@ -3,6 +3,8 @@
 #include <Eigen/LU>
 #include <array>
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke::linear_detail {
 
 std::vector<int> diagonal_positions(const SparseMatrix& A) {

@@ -7,12 +7,12 @@
 #include "hooke/linear/diagonal_preconditioners.hpp"
 #include "hooke/linear/stationary.hpp"
 #if HOOKE_WITH_CHOLMOD
-#include "hooke/linear/cholmod_solver.hpp"
-#include "hooke/linear/nodal_preconditioner.hpp"
-#include "hooke/linear/reused_factorization.hpp"
+#include "hooke/linear/cholmod/cholmod_solver.hpp"
+#include "hooke/linear/cholmod/nodal_preconditioner.hpp"
+#include "hooke/linear/cholmod/reused_factorization.hpp"
 #endif
 #if HOOKE_WITH_PETSC
-#include "hooke/linear/petsc_solver.hpp"
+#include "hooke/linear/petsc/petsc_solver.hpp"
 #endif
 
 namespace hooke {

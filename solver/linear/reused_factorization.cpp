@@ -1,4 +1,4 @@
-#include "hooke/linear/reused_factorization.hpp"
+#include "hooke/linear/cholmod/reused_factorization.hpp"
 
 #include "hooke/linear/iterative_common.hpp"
 

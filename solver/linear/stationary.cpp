@@ -4,6 +4,8 @@
 #include <cmath>
 #include <sstream>
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 using linear_detail::Clock;

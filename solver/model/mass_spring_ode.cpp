@@ -1,5 +1,7 @@
 #include "hooke/model/mass_spring_ode.hpp"
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 MassSpringOde::MassSpringOde(const MassSpringSystem& system)

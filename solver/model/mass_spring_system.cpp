@@ -6,7 +6,7 @@
 
 #include "hooke/forces/spring_blocks.hpp"
 #include "hooke/forces/spring_set.hpp"
-#include "hooke/sph/fluid_model.hpp"
+#include "hooke/parallel/loops.hpp"
 
 namespace hooke {
 
@@ -39,11 +39,6 @@ void MassSpringSystem::set_pin_motion(PinMotion motion) {
 void MassSpringSystem::set_fluid(std::shared_ptr<const FluidModel> fluid) {
   HOOKE_ASSERT(!m_finalized, "set_fluid after finalize");
   HOOKE_ASSERT(fluid != nullptr, "set_fluid without a fluid");
-  HOOKE_ASSERT(
-      fluid->num_particles() == num_particles(),
-      "a fluid of " << fluid->num_particles() << " particles for a system of " << num_particles());
-  for (Index i = fluid->num_fluid(); i < num_particles(); ++i)
-    HOOKE_ASSERT(m_pinned[size_t(i)], "boundary particle " << i << " is not pinned");
   m_fluid = std::move(fluid);
 }
 

@@ -6,7 +6,8 @@
 #include "hooke/constraints/constraint.hpp"
 #include "hooke/constraints/pin_motion.hpp"
 #include "hooke/forces/force.hpp"
-#include "hooke/model/local_index.hpp"
+#include "hooke/local_index.hpp"
+#include "hooke/model/distribution.hpp"
 #include "hooke/model/state.hpp"
 #include "hooke/sparse/block_pattern.hpp"
 
@@ -27,23 +28,6 @@ struct Jacobians {
   /// MassSpringSystem::assemble_jacobians's scratch: per thread, a ring of blocks of K and of D,
   /// all zero between assemblies (sized by make_jacobians; grown on first use by more threads).
   std::vector<std::vector<double>> scratch;
-};
-
-/// How one process's piece of a distributed system (issue 17) reaches the other processes:
-/// implemented over MPI in solver/distributed/ (DistributedModel). The piece's compute_forces()
-/// ends with complete(f), so its ghosts get the forces their owners computed (their own springs
-/// give them only in part); steppers and backends call the rest where a serial step takes a
-/// global view. Every call is collective: all processes of the run must make it together.
-class Distribution {
- public:
-  virtual ~Distribution() = default;
-  /// The piece's particles: owned, then ghosts (the global ids each local one stands for).
-  virtual const LocalIndex& index() const = 0;
-  /// v: a local 3n vector (owned particles, then ghosts); the ghosts' entries are replaced by
-  /// their owners' (after which every process holds the same values for a particle).
-  virtual void complete(VecRef v) const = 0;
-  /// The largest of every process's `value`.
-  virtual double max(double value) const = 0;
 };
 
 /// A mass-spring system: n particles with masses and pins, a list of forces and a list of post-step
@@ -70,7 +54,8 @@ class MassSpringSystem {
   /// Makes the system a fluid (before finalize only): its particles [0, fluid->num_fluid()) are
   /// fluid particles and the rest static boundary particles, which must be pinned; only the SPH
   /// methods (solver/sph/) step it. The system's forces (gravity, drag) act on the fluid as
-  /// external forces.
+  /// external forces. make_fluid_system (sph/fluid_system.hpp) builds such a system and checks
+  /// that the fluid's particle counts match it.
   void set_fluid(std::shared_ptr<const FluidModel> fluid);
   /// Builds the Jacobian block pattern and binds the forces to it. Call once, after all forces.
   void finalize();

@@ -1,5 +1,6 @@
 #pragma once
 #include "hooke/core.hpp"
+#include "hooke/parallel/loops.hpp"
 
 namespace hooke {
 

@@ -4,8 +4,9 @@
 #include <atomic>
 #include <thread>
 
-#include "hooke/helped_bins.hpp"
-#include "hooke/helper_thread.hpp"
+#include "hooke/parallel/helped_bins.hpp"
+#include "hooke/parallel/helper_thread.hpp"
+#include "hooke/parallel/loops.hpp"
 
 namespace hooke {
 

@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 namespace {

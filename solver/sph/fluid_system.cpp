@@ -20,6 +20,8 @@ FluidSystem make_fluid_system(const std::vector<Vec3>& fluid, const std::vector<
   const Vec masses = Vec::Constant(n, model->particle_mass());
   out.system = std::make_unique<MassSpringSystem>(masses, pinned);
   if (gravity != Vec3::Zero()) out.system->add_force(std::make_unique<Gravity>(masses, gravity));
+  HOOKE_ASSERT(model->num_particles() == n && model->num_fluid() == nf,
+               "a fluid of " << model->num_particles() << " particles for a system of " << n);
   out.system->set_fluid(std::move(model));
   out.system->finalize();
   return out;

@@ -5,6 +5,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 namespace {

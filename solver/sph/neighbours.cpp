@@ -5,6 +5,8 @@
 #include <cmath>
 #include <limits>
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 namespace {

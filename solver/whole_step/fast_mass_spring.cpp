@@ -8,9 +8,10 @@
 #include <thread>
 
 #include "hooke/forces/spring_blocks.hpp"
-#include "hooke/helped_bins.hpp"
-#include "hooke/helper_thread.hpp"
-#include "hooke/linear/cholmod_solver.hpp"
+#include "hooke/linear/cholmod/cholmod_solver.hpp"
+#include "hooke/parallel/helped_bins.hpp"
+#include "hooke/parallel/helper_thread.hpp"
+#include "hooke/parallel/loops.hpp"
 #include "hooke/whole_step/chebyshev.hpp"
 #include "hooke/whole_step/spring_potential_forces.hpp"
 

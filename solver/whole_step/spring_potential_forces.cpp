@@ -4,6 +4,8 @@
 #include <cmath>
 #include <vector>
 
+#include "hooke/parallel/loops.hpp"
+
 namespace hooke {
 
 std::string element_set_takers(const ElementSet& set) {

@@ -8,6 +8,7 @@
 #include <sstream>
 #include <stdexcept>
 
+#include "hooke/parallel/loops.hpp"
 #include "hooke/whole_step/chebyshev.hpp"
 
 namespace hooke {

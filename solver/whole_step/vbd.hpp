@@ -7,7 +7,7 @@
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "hooke/options.hpp"
-#include "hooke/thread_team.hpp"
+#include "hooke/parallel/thread_team.hpp"
 #include "hooke/whole_step/spring_potential_forces.hpp"
 
 namespace hooke {

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 
 #include "hooke/integrators/reduced_matrix.hpp"
+#include "hooke/parallel/loops.hpp"
 #include "support/random.hpp"
 #include "support/systems.hpp"
 

@@ -206,7 +206,7 @@ elseif(CASE STREQUAL "diverge_ode")
 
 elseif(CASE STREQUAL "info")
   # libgomp's and OpenBLAS's wait policies: hooke sets GOMP_SPINCOUNT and OPENBLAS_THREAD_TIMEOUT
-  # (solver/thread_policy.hpp) unless the user chose them, and says which it runs with.
+  # (solver/parallel/thread_policy.hpp) unless the user chose them, and says which it runs with.
   unset(ENV{OMP_WAIT_POLICY})
   set(ENV{GOMP_SPINCOUNT} 123)
   set(ENV{OPENBLAS_THREAD_TIMEOUT} 7)

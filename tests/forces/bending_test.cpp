@@ -18,6 +18,7 @@
 #include <vector>
 
 #include "hooke/forces/element_force.hpp"
+#include "hooke/parallel/loops.hpp"
 
 namespace hooke {
 namespace {

@@ -18,6 +18,7 @@
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/forces/spring_damper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "hooke/parallel/loops.hpp"
 #include "support/systems.hpp"
 
 namespace {

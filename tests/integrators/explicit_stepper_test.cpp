@@ -31,6 +31,7 @@
 #include "hooke/integrators/explicit_mass_spring_stepper.hpp"
 #include "hooke/model/mass_spring_ode.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "hooke/parallel/loops.hpp"
 #include "hooke/registry.hpp"
 #include "support/order.hpp"
 #include "support/registry.hpp"

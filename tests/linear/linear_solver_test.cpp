@@ -33,12 +33,13 @@
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/linear/conjugate_gradient.hpp"
 #if HOOKE_WITH_CHOLMOD
-#include "hooke/linear/cholmod_solver.hpp"
+#include "hooke/linear/cholmod/cholmod_solver.hpp"
 #endif
+#include "hooke/linear/cholmod/reused_factorization.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/linear/linear_solver.hpp"
-#include "hooke/linear/reused_factorization.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "hooke/parallel/loops.hpp"
 #include "hooke/registry.hpp"
 #include "support/random.hpp"
 #include "support/registry.hpp"

@@ -16,9 +16,9 @@
 #include <memory>
 
 #include "hooke/integrators/reduced_matrix.hpp"
-#include "hooke/linear/cholmod_solver.hpp"
+#include "hooke/linear/cholmod/cholmod_solver.hpp"
+#include "hooke/linear/cholmod/nodal_preconditioner.hpp"
 #include "hooke/linear/linear_registry.hpp"
-#include "hooke/linear/nodal_preconditioner.hpp"
 #include "hooke/model/mass_spring_system.hpp"
 #include "support/random.hpp"
 #include "support/systems.hpp"

@@ -19,7 +19,8 @@
 #include "support/registry.hpp"
 
 #if HOOKE_WITH_PETSC
-#include "hooke/linear/petsc_solver.hpp"
+#include "hooke/linear/petsc/petsc_solver.hpp"
+#include "hooke/parallel/loops.hpp"
 
 namespace {
 

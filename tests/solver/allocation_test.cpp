@@ -274,6 +274,7 @@ TEST(Allocation, JacobianAssemblyDoesNotAllocate) {
 
 #include "hooke/integrators/reduced_matrix.hpp"
 #include "hooke/linear/linear_registry.hpp"
+#include "hooke/parallel/loops.hpp"
 #ifdef _OPENMP
 #include <omp.h>
 #endif

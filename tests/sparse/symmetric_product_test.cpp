@@ -12,7 +12,8 @@
 #include <thread>
 #include <vector>
 
-#include "hooke/helped_bins.hpp"
+#include "hooke/parallel/helped_bins.hpp"
+#include "hooke/parallel/loops.hpp"
 #include "hooke/sparse/block_pattern.hpp"
 
 #ifdef _OPENMP

@@ -10,6 +10,8 @@
 #include <random>
 #include <vector>
 
+#include "hooke/parallel/loops.hpp"
+
 #ifdef _OPENMP
 #include <omp.h>
 #endif

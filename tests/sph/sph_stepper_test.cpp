@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "hooke/parallel/loops.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/sph/dfsph.hpp"
 #include "hooke/sph/iisph.hpp"

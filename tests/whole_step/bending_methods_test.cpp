@@ -20,7 +20,7 @@
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/registry.hpp"
 #if HOOKE_WITH_CERES
-#include "hooke/whole_step/ceres_implicit_stepper.hpp"
+#include "hooke/whole_step/ceres/ceres_implicit_stepper.hpp"
 #endif
 #if HOOKE_WITH_CHOLMOD
 #include "hooke/whole_step/fast_mass_spring.hpp"

@@ -27,7 +27,7 @@
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/registry.hpp"
-#include "hooke/whole_step/ceres_implicit_stepper.hpp"
+#include "hooke/whole_step/ceres/ceres_implicit_stepper.hpp"
 #include "support/backend_scenes.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"

@@ -24,7 +24,7 @@
 #include <string>
 
 #include "hooke/registry.hpp"
-#include "hooke/whole_step/cvode_stepper.hpp"
+#include "hooke/whole_step/sundials/cvode_stepper.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"
 #include "support/systems.hpp"

@@ -23,7 +23,7 @@
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/registry.hpp"
 #if HOOKE_WITH_CERES
-#include "hooke/whole_step/ceres_implicit_stepper.hpp"
+#include "hooke/whole_step/ceres/ceres_implicit_stepper.hpp"
 #endif
 #include "hooke/whole_step/spring_potential_forces.hpp"
 #include "hooke/whole_step/vbd.hpp"

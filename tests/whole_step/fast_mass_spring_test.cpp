@@ -26,7 +26,7 @@
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
 #include "hooke/forces/spring_damper.hpp"
-#include "hooke/helped_bins.hpp"
+#include "hooke/parallel/helped_bins.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"
 #include "support/backend_scenes.hpp"
@@ -34,7 +34,8 @@
 #include "support/random.hpp"
 #include "support/systems.hpp"
 #if HOOKE_WITH_CERES
-#include "hooke/whole_step/ceres_implicit_stepper.hpp"
+#include "hooke/parallel/loops.hpp"
+#include "hooke/whole_step/ceres/ceres_implicit_stepper.hpp"
 #endif
 
 namespace hooke {

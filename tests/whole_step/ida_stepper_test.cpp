@@ -22,8 +22,8 @@
 #include <random>
 #include <string>
 
-#include "hooke/whole_step/cvode_stepper.hpp"
-#include "hooke/whole_step/ida_stepper.hpp"
+#include "hooke/whole_step/sundials/cvode_stepper.hpp"
+#include "hooke/whole_step/sundials/ida_stepper.hpp"
 #include "support/finite_differences.hpp"
 #include "support/random.hpp"
 #include "support/systems.hpp"

@@ -15,6 +15,7 @@
 
 #include "hooke/forces/air_drag.hpp"
 #include "hooke/forces/hooke_spring.hpp"
+#include "hooke/parallel/loops.hpp"
 #include "hooke/registry.hpp"
 #include "support/backend_scenes.hpp"
 #include "support/random.hpp"

@@ -1,4 +1,4 @@
-#include "hooke/thread_team.hpp"
+#include "hooke/parallel/thread_team.hpp"
 
 #include <chrono>
 #include <cstdlib>

@@ -16,7 +16,7 @@
 #include <string>
 #include <type_traits>
 
-#include "hooke/whole_step/sundials_common.hpp"
+#include "hooke/whole_step/sundials/sundials_common.hpp"
 
 namespace hooke::sundials_detail {
 

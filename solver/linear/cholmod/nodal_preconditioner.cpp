@@ -1,4 +1,4 @@
-#include "hooke/linear/nodal_preconditioner.hpp"
+#include "hooke/linear/cholmod/nodal_preconditioner.hpp"
 
 #include <algorithm>
 #include <string>

@@ -1,4 +1,4 @@
-#include "hooke/linear/cholmod_solver.hpp"
+#include "hooke/linear/cholmod/cholmod_solver.hpp"
 
 #include <cholmod.h>
 

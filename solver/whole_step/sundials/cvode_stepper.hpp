@@ -6,7 +6,7 @@
 
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
-#include "hooke/whole_step/sundials_common.hpp"
+#include "hooke/whole_step/sundials/sundials_common.hpp"
 
 namespace hooke {
 

@@ -1,8 +1,8 @@
-// Claims of solver/helped_bins.hpp, driven from one thread playing both sides (the owner and the
-// helper) where the interleaving matters: a helper's claim of a stale round fails, a bin the owner
-// took over is never the helper's, the owner takes over a helper whose progress has stood still for
-// kStall, and waits for one whose work done outweighs a tick.
-#include "hooke/helped_bins.hpp"
+// Claims of solver/parallel/helped_bins.hpp, driven from one thread playing both sides (the owner
+// and the helper) where the interleaving matters: a helper's claim of a stale round fails, a bin
+// the owner took over is never the helper's, the owner takes over a helper whose progress has stood
+// still for kStall, and waits for one whose work done outweighs a tick.
+#include "hooke/parallel/helped_bins.hpp"
 
 #include <gtest/gtest.h>
 

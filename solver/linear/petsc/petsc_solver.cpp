@@ -1,4 +1,4 @@
-#include "hooke/linear/petsc_solver.hpp"
+#include "hooke/linear/petsc/petsc_solver.hpp"
 
 #include <petscksp.h>
 
@@ -11,7 +11,8 @@
 #include <type_traits>
 #include <vector>
 
-#include "hooke/linear/petsc_runtime.hpp"
+#include "hooke/linear/petsc/petsc_runtime.hpp"
+#include "hooke/parallel/loops.hpp"
 
 namespace hooke {
 

@@ -3,7 +3,7 @@
 #include <memory>
 #include <vector>
 
-#include "hooke/linear/cholmod_solver.hpp"
+#include "hooke/linear/cholmod/cholmod_solver.hpp"
 #include "hooke/linear/linear_solver.hpp"
 
 namespace hooke {

@@ -1,4 +1,4 @@
-#include "hooke/whole_step/ida_stepper.hpp"
+#include "hooke/whole_step/sundials/ida_stepper.hpp"
 
 #include <ida/ida.h>
 #include <ida/ida_ls.h>
@@ -11,7 +11,7 @@
 #include <type_traits>
 
 #include "hooke/model/mass_spring_ode.hpp"
-#include "hooke/whole_step/sundials_detail.hpp"
+#include "hooke/whole_step/sundials/sundials_detail.hpp"
 
 namespace hooke {
 

@@ -1,4 +1,4 @@
-#include "hooke/helper_thread.hpp"
+#include "hooke/parallel/helper_thread.hpp"
 
 #include <gtest/gtest.h>
 

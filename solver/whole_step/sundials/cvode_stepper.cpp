@@ -1,4 +1,4 @@
-#include "hooke/whole_step/cvode_stepper.hpp"
+#include "hooke/whole_step/sundials/cvode_stepper.hpp"
 
 #include <cvode/cvode.h>
 #include <cvode/cvode_ls.h>
@@ -13,7 +13,7 @@
 #include <type_traits>
 
 #include "hooke/model/mass_spring_ode.hpp"
-#include "hooke/whole_step/sundials_detail.hpp"
+#include "hooke/whole_step/sundials/sundials_detail.hpp"
 
 namespace hooke {
 

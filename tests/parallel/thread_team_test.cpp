@@ -1,17 +1,19 @@
-// Claims of solver/thread_team.hpp: AdaptiveTeam measures both team sizes first, all threads then
-// one (warm-up repetitions on each, not counted, then kFirstSamples each, of which the fastest
-// counts), then runs the faster one (all threads only when clearly faster), probes the other at
-// growing intervals up to every probe_every repetitions (two repetitions on all threads, the first
-// not counted), never counts a repetition on all threads that follows one on a single thread, and
-// follows a change of load (the second core becoming busy, then free again) within a few probes,
-// returning to all threads only on a fresh time of theirs; current() is all threads until both
-// sizes are measured, then the choice; inside a TeamStep on one thread the repetitions still
-// probe all threads; only one in kBusyProbes probes of all threads runs while the CPUs stood idle
-// less than kIdleToProbe CPUs on average over a window of at least kIdleWindow s, and read_idle
-// reads /proc/stat's idle ticks of the CPUs in this thread's affinity mask.
-#include "hooke/thread_team.hpp"
+// Claims of solver/parallel/thread_team.hpp: AdaptiveTeam measures both team sizes first, all
+// threads then one (warm-up repetitions on each, not counted, then kFirstSamples each, of which the
+// fastest counts), then runs the faster one (all threads only when clearly faster), probes the
+// other at growing intervals up to every probe_every repetitions (two repetitions on all threads,
+// the first not counted), never counts a repetition on all threads that follows one on a single
+// thread, and follows a change of load (the second core becoming busy, then free again) within a
+// few probes, returning to all threads only on a fresh time of theirs; current() is all threads
+// until both sizes are measured, then the choice; inside a TeamStep on one thread the repetitions
+// still probe all threads; only one in kBusyProbes probes of all threads runs while the CPUs stood
+// idle less than kIdleToProbe CPUs on average over a window of at least kIdleWindow s, and
+// read_idle reads /proc/stat's idle ticks of the CPUs in this thread's affinity mask.
+#include "hooke/parallel/thread_team.hpp"
 
 #include <gtest/gtest.h>
+
+#include "hooke/parallel/loops.hpp"
 
 #ifdef _OPENMP
 #include <omp.h>

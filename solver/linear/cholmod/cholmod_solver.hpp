@@ -3,8 +3,8 @@
 #include <string>
 #include <vector>
 
+#include "hooke/linear/cholmod/supernodal_solve.hpp"
 #include "hooke/linear/linear_solver.hpp"
-#include "hooke/linear/supernodal_solve.hpp"
 #include "hooke/options.hpp"
 
 namespace hooke {

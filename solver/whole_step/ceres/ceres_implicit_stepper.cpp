@@ -1,4 +1,4 @@
-#include "hooke/whole_step/ceres_implicit_stepper.hpp"
+#include "hooke/whole_step/ceres/ceres_implicit_stepper.hpp"
 
 #include <ceres/ceres.h>
 

@@ -1,4 +1,4 @@
-#include "hooke/thread_policy.hpp"
+#include "hooke/parallel/thread_policy.hpp"
 
 #include <cstdlib>
 

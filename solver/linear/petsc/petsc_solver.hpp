@@ -3,7 +3,7 @@
 #include <string>
 
 #include "hooke/linear/linear_solver.hpp"
-#include "hooke/model/mass_spring_system.hpp"
+#include "hooke/model/distribution.hpp"
 
 namespace hooke {
 

@@ -1,4 +1,4 @@
-#include "hooke/whole_step/sundials_common.hpp"
+#include "hooke/whole_step/sundials/sundials_common.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -8,6 +8,7 @@
 #endif
 
 #include "hooke/core.hpp"
+#include "hooke/parallel/loops.hpp"
 
 namespace hooke {
 

@@ -1,4 +1,4 @@
-#include "hooke/linear/supernodal_solve.hpp"
+#include "hooke/linear/cholmod/supernodal_solve.hpp"
 
 #include <algorithm>
 #include <atomic>
@@ -9,8 +9,9 @@
 
 #include "hooke/config.hpp"
 #include "hooke/core.hpp"
-#include "hooke/helped_bins.hpp"
-#include "hooke/helper_thread.hpp"
+#include "hooke/parallel/helped_bins.hpp"
+#include "hooke/parallel/helper_thread.hpp"
+#include "hooke/parallel/loops.hpp"
 
 // The AVX2 copy of the kernels (with FMA: every AVX2 CPU has it, but GCC's target "avx2" alone does
 // not fuse the kernels' multiply-adds, which then cost two instructions each) needs an x86 target
