@@ -33,6 +33,7 @@
 #include "hooke/sph/sph_stepper.hpp"
 #include "hooke/sph/surge_front.hpp"
 #include "problems/scene.hpp"
+#include "problems/scene_keys.hpp"
 
 namespace hooke {
 
@@ -160,11 +161,16 @@ void sweep_fluid_case(const FluidWorkPrecisionCase& c, const std::vector<std::st
                                       : std::vector<double>{10, 20, 31.3, 62.6, 125};
   const std::vector<double> tol = full ? std::vector<double>{3e-2, 1e-2, 3e-3, 1e-3, 3e-4, 1e-4}
                                        : std::vector<double>{1e-2, 3e-3, 1e-3, 3e-4};
-  if (wanted("wcsph"))
-    for (double v : c0) runs.push_back({"wcsph", "sound_speed", v});
-  for (const char* implicit : {"iisph", "dfsph"})
-    if (wanted(implicit))
-      for (double v : tol) runs.push_back({implicit, "tolerance", v});
+  // Every fluid method of the build, swept over what sets its work: the sound speed of a
+  // state-equation method, the density tolerance of a method with a pressure solve (its keys).
+  for (const MethodInfo& info : hooke::methods()) {
+    const std::string m = info.name;
+    if (info.family != std::string("sph") || !wanted(m)) continue;
+    if (find_scene_key("integrator.sound_speed", m))
+      for (double v : c0) runs.push_back({m, "sound_speed", v});
+    else if (find_scene_key("integrator.tolerance", m))
+      for (double v : tol) runs.push_back({m, "tolerance", v});
+  }
   const std::vector<FrontPoint> mm52 = experiment_front(scenes_dir, "MM52");
   for (const char* source : {"MM52", "KO96"})
     for (const FrontPoint& p :
@@ -176,7 +182,8 @@ void sweep_fluid_case(const FluidWorkPrecisionCase& c, const std::vector<std::st
     sets.push_back("integrator.method=" + run.method);
     sets.push_back("integrator.courant=0.4");
     sets.push_back("integrator." + run.parameter + "=" + exact_number(run.value));
-    if (run.method != "wcsph") sets.push_back("integrator.max_iterations=2000");
+    if (find_scene_key("integrator.max_iterations", run.method))
+      sets.push_back("integrator.max_iterations=2000");
     // Steps of 5 ms, split into CFL substeps: each method at its own stable step (IISPH's is
     // about 1.5 ms once the front runs at 3 m/s), the front sampled every 5 ms (0.044 in T).
     sets.push_back("time.dt=0.005");

@@ -12,8 +12,8 @@ namespace hooke {
 /// key the method does not take. A key that the other settings make ineffective (linear_tolerance
 /// with a direct linear_solver, chebyshev_rho without Chebyshev acceleration, ...) is refused when
 /// the scene or --set gives it, naming the setting and the fix; its default is neither refused nor
-/// recorded in the resolved scene. One reader per method (problems/method_readers.cpp); explicit
-/// methods take no keys and return empty options.
+/// recorded in the resolved scene. One reader per method family (problems/methods/<family>.cpp,
+/// listed in method_families()); explicit methods take no keys and return empty options.
 MethodOptions read_method_options(TableReader& integrator, const std::string& method);
 
 /// Reads integrator.adaptive and, when it is true, the error control's rtol, atol and max_dt

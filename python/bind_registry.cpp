@@ -16,6 +16,7 @@ void bind_registry(py::module_& m) {
                   : e.kind == MethodKind::Implicit  ? "implicit"
                   : e.kind == MethodKind::WholeStep ? "whole-step"
                                                     : "fluid";
+      d["family"] = e.family;
       d["description"] = e.description;
       out.append(d);
     }

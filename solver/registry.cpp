@@ -26,22 +26,22 @@ struct ExplicitEntry {
 // The one table of explicit methods; higher-level method kinds add their own tables below.
 const std::vector<ExplicitEntry>& explicit_table() {
   static const std::vector<ExplicitEntry> table = {
-      {{"forward-euler", MethodKind::Explicit, "forward Euler, order 1"},
+      {{"forward-euler", MethodKind::Explicit, "explicit", "forward Euler, order 1"},
        [] { return ExplicitRungeKutta::forward_euler(); }},
-      {{"symplectic-euler", MethodKind::Explicit,
+      {{"symplectic-euler", MethodKind::Explicit, "explicit",
         "symplectic (semi-implicit) Euler: v first, then x with the new v; order 1"},
        [] { return std::make_unique<SymplecticEuler>(); }},
-      {{"midpoint", MethodKind::Explicit, "explicit midpoint Runge-Kutta, order 2"},
+      {{"midpoint", MethodKind::Explicit, "explicit", "explicit midpoint Runge-Kutta, order 2"},
        [] { return ExplicitRungeKutta::midpoint(); }},
-      {{"trapezoid", MethodKind::Explicit, "explicit trapezoid (Heun), order 2"},
+      {{"trapezoid", MethodKind::Explicit, "explicit", "explicit trapezoid (Heun), order 2"},
        [] { return ExplicitRungeKutta::trapezoid(); }},
-      {{"rk4", MethodKind::Explicit, "classical Runge-Kutta, order 4"},
+      {{"rk4", MethodKind::Explicit, "explicit", "classical Runge-Kutta, order 4"},
        [] { return ExplicitRungeKutta::rk4(); }},
-      {{"dopri5", MethodKind::Explicit,
+      {{"dopri5", MethodKind::Explicit, "explicit",
         "Dormand-Prince 5(4) embedded pair (ode45, RK45), order 5 with an order-4 error estimate",
         4},
        [] { return ExplicitRungeKutta::dopri5(); }},
-      {{"bs32", MethodKind::Explicit,
+      {{"bs32", MethodKind::Explicit, "explicit",
         "Bogacki-Shampine 3(2) embedded pair (ode23, RK23), order 3 with an order-2 error "
         "estimate",
         2},
@@ -57,14 +57,14 @@ struct ImplicitEntry {
 
 const std::vector<ImplicitEntry>& implicit_table() {
   static const std::vector<ImplicitEntry> table = {
-      {{"implicit", MethodKind::Implicit,
+      {{"implicit", MethodKind::Implicit, "implicit",
         "beta-unified implicit step (beta = 1: backward Euler), Newton on a linear backend", 1},
        ImplicitScheme::Beta},
-      {{"implicit-midpoint", MethodKind::Implicit,
+      {{"implicit-midpoint", MethodKind::Implicit, "implicit",
         "implicit midpoint rule, Newton on a linear backend", 2},
        ImplicitScheme::Midpoint},
-      {{"bdf2", MethodKind::Implicit, "two-step BDF (variable step), Newton on a linear backend",
-        2},
+      {{"bdf2", MethodKind::Implicit, "implicit",
+        "two-step BDF (variable step), Newton on a linear backend", 2},
        ImplicitScheme::Bdf2},
   };
   return table;
@@ -75,15 +75,20 @@ struct WholeStepEntry {
   std::function<std::unique_ptr<Stepper>(const MassSpringSystem&, const MethodOptions&)> make;
   std::function<std::string(const MassSpringSystem&)> unsupported;
   const std::type_info* options_type;  ///< the Options type the stepper takes
+  /// For a method this build lacks (info.built false): the Debian package and the CMake option
+  /// that bring it.
+  const char* package = "";
+  const char* option = "";
 };
 
 /// The entry of a whole-step method whose stepper T is constructed from (system, T::Options).
-/// A method of order `doubled` > 0 comes wrapped in StepDoubling, which estimates its error for
-/// error control (and otherwise passes its steps through).
+/// A method with an error estimate (info.error_estimate_order > 0) comes wrapped in StepDoubling,
+/// which estimates its error for error control (and otherwise passes its steps through).
 template <class T>
-WholeStepEntry whole_step(const char* name, const char* description,
-                          std::string (*unsupported)(const MassSpringSystem&) = nullptr,
-                          int doubled = 0, MethodKind kind = MethodKind::WholeStep) {
+WholeStepEntry whole_step(const MethodInfo& info,
+                          std::string (*unsupported)(const MassSpringSystem&) = nullptr) {
+  const char* name = info.name;
+  const int doubled = info.error_estimate_order;
   auto make = [name, doubled](const MassSpringSystem& sys,
                               const MethodOptions& m) -> std::unique_ptr<Stepper> {
     const typename T::Options options = m.as<typename T::Options>(name);
@@ -91,76 +96,111 @@ WholeStepEntry whole_step(const char* name, const char* description,
     return std::make_unique<StepDoubling>(
         sys, [&sys, options] { return std::make_unique<T>(sys, options); }, doubled);
   };
-  return {{name, kind, description, doubled}, make, unsupported, &typeid(typename T::Options)};
+  return {info, make, unsupported, &typeid(typename T::Options)};
 }
 
-// Whole-step methods, each under its build option.
+/// The entry of a method this build lacks, with what brings it.
+[[maybe_unused]] WholeStepEntry unbuilt(const MethodInfo& info, const char* package,
+                                        const char* option) {
+  return {info, nullptr, nullptr, nullptr, package, option};
+}
+
+// The methods with an optional dependency, built or not (the catalog lists them either way).
+const MethodInfo kCvode{
+    "cvode",
+    MethodKind::WholeStep,
+    "sundials",
+    "SUNDIALS CVODE: adaptive BDF (or Adams) on x' = v, M v' = f, analytic Jacobian",
+    0,
+    true,
+    HOOKE_WITH_SUNDIALS != 0};
+const MethodInfo kIda{
+    "ida",
+    MethodKind::WholeStep,
+    "sundials",
+    "SUNDIALS IDA: adaptive BDF on the residual F(t, y, y') = 0, analytic Jacobian",
+    0,
+    true,
+    HOOKE_WITH_SUNDIALS != 0};
+const MethodInfo kCeres{"ceres-implicit",
+                        MethodKind::WholeStep,
+                        "ceres",
+                        "backward Euler solved exactly as nonlinear least squares with Ceres",
+                        1,
+                        false,
+                        HOOKE_WITH_CERES != 0};
+const MethodInfo kFastMassSpring{
+    "fast-mass-spring",
+    MethodKind::WholeStep,
+    "local-global",
+    "Liu et al. 2013 local/global backward Euler on a prefactored CHOLMOD matrix "
+    "(Chebyshev or L-BFGS acceleration)",
+    1,
+    false,
+    HOOKE_WITH_CHOLMOD != 0};
+
+// Whole-step methods, each optional one under its build option.
 const std::vector<WholeStepEntry>& whole_step_table() {
   static const std::vector<WholeStepEntry> table = {
 #if HOOKE_WITH_SUNDIALS
-    whole_step<CvodeStepper>(
-        "cvode", "SUNDIALS CVODE: adaptive BDF (or Adams) on x' = v, M v' = f, analytic Jacobian"),
-    whole_step<IdaStepper>(
-        "ida", "SUNDIALS IDA: adaptive BDF on the residual F(t, y, y') = 0, analytic Jacobian"),
+    whole_step<CvodeStepper>(kCvode),
+    whole_step<IdaStepper>(kIda),
+#else
+    unbuilt(kCvode, "libsundials-dev", "HOOKE_WITH_SUNDIALS"),
+    unbuilt(kIda, "libsundials-dev", "HOOKE_WITH_SUNDIALS"),
 #endif
 #if HOOKE_WITH_CERES
-    whole_step<CeresImplicitStepper>(
-        "ceres-implicit", "backward Euler solved exactly as nonlinear least squares with Ceres",
-        ceres_implicit_unsupported, 1),
+    whole_step<CeresImplicitStepper>(kCeres, ceres_implicit_unsupported),
+#else
+    unbuilt(kCeres, "libceres-dev", "HOOKE_WITH_CERES"),
 #endif
 #if HOOKE_WITH_CHOLMOD
-    whole_step<FastMassSpringStepper>(
-        "fast-mass-spring",
-        "Liu et al. 2013 local/global backward Euler on a prefactored CHOLMOD matrix "
-        "(Chebyshev or L-BFGS acceleration)",
-        fast_mass_spring_unsupported, 1),
+    whole_step<FastMassSpringStepper>(kFastMassSpring, fast_mass_spring_unsupported),
+#else
+    unbuilt(kFastMassSpring, "libsuitesparse-dev", "HOOKE_WITH_CHOLMOD"),
 #endif
     whole_step<VbdStepper>(
-        "vbd",
-        "vertex block descent (Chen et al. 2024): backward Euler by per-vertex Newton steps over a "
-        "graph colouring (Chebyshev acceleration)",
-        vbd_unsupported, 1),
-    whole_step<XpbdStepper>(
-        "xpbd",
-        "extended position-based dynamics with substeps (Macklin et al. 2019), compliance 1/k",
-        xpbd_unsupported, 1),
+        {"vbd", MethodKind::WholeStep, "vbd",
+         "vertex block descent (Chen et al. 2024): backward Euler by per-vertex Newton steps over "
+         "a graph colouring (Chebyshev acceleration)",
+         1},
+        vbd_unsupported),
+    whole_step<XpbdStepper>({"xpbd", MethodKind::WholeStep, "xpbd",
+                             "extended position-based dynamics with substeps (Macklin et al. "
+                             "2019), compliance 1/k",
+                             1},
+                            xpbd_unsupported),
     whole_step<WcsphStepper>(
-        "wcsph",
-        "weakly compressible SPH (Becker and Teschner 2007): Tait pressure, symplectic Euler, "
-        "CFL substeps; fluids only",
-        sph_unsupported, 0, MethodKind::Fluid),
+        {"wcsph", MethodKind::Fluid, "sph",
+         "weakly compressible SPH (Becker and Teschner 2007): Tait pressure, symplectic Euler, "
+         "CFL substeps; fluids only"},
+        sph_unsupported),
     whole_step<IisphStepper>(
-        "iisph",
-        "implicit incompressible SPH (Ihmsen et al. 2014): the pressure Poisson equation by "
-        "relaxed Jacobi to a density-error tolerance; fluids only",
-        sph_unsupported, 0, MethodKind::Fluid),
+        {"iisph", MethodKind::Fluid, "sph",
+         "implicit incompressible SPH (Ihmsen et al. 2014): the pressure Poisson equation by "
+         "relaxed Jacobi to a density-error tolerance; fluids only"},
+        sph_unsupported),
     whole_step<DfsphStepper>(
-        "dfsph",
-        "divergence-free SPH (Bender and Koschier 2015): IISPH's density solve after a solve that "
-        "makes the velocities divergence-free; fluids only",
-        sph_unsupported, 0, MethodKind::Fluid),
+        {"dfsph", MethodKind::Fluid, "sph",
+         "divergence-free SPH (Bender and Koschier 2015): IISPH's density solve after a solve "
+         "that makes the velocities divergence-free; fluids only"},
+        sph_unsupported),
   };
   return table;
 }
 
-/// The build option and Debian package of a known backend this build lacks, or "".
+/// "method 'cvode' is not built: install ..." for a method this build lacks, else "".
 std::string missing_backend(const std::string& name) {
-  if ((name == "cvode" || name == "ida") && !HOOKE_WITH_SUNDIALS)
-    return "method '" + name +
-           "' is not built: install libsundials-dev and reconfigure with "
-           "-DHOOKE_WITH_SUNDIALS=ON";
-  if (name == "fast-mass-spring" && !HOOKE_WITH_CHOLMOD)
-    return "method 'fast-mass-spring' is not built: install libsuitesparse-dev and reconfigure "
-           "with -DHOOKE_WITH_CHOLMOD=ON";
-  if (name == "ceres-implicit" && !HOOKE_WITH_CERES)
-    return "method 'ceres-implicit' is not built: install libceres-dev and reconfigure with "
-           "-DHOOKE_WITH_CERES=ON";
+  for (const auto& e : whole_step_table())
+    if (!e.info.built && name == e.info.name)
+      return "method '" + name + "' is not built: install " + e.package +
+             " and reconfigure with -D" + e.option + "=ON";
   return "";
 }
 
 }  // namespace
 
-const std::vector<MethodInfo>& methods() {
+const std::vector<MethodInfo>& method_catalog() {
   static const std::vector<MethodInfo> all = [] {
     std::vector<MethodInfo> v;
     for (const auto& e : explicit_table()) v.push_back(e.info);
@@ -169,6 +209,23 @@ const std::vector<MethodInfo>& methods() {
     return v;
   }();
   return all;
+}
+
+const std::vector<MethodInfo>& methods() {
+  static const std::vector<MethodInfo> built = [] {
+    std::vector<MethodInfo> v;
+    for (const MethodInfo& m : method_catalog())
+      if (m.built) v.push_back(m);
+    return v;
+  }();
+  return built;
+}
+
+std::vector<std::string> methods_of_family(const std::string& family) {
+  std::vector<std::string> names;
+  for (const MethodInfo& m : method_catalog())
+    if (family == m.family) names.push_back(m.name);
+  return names;
 }
 
 std::string fluid_method_names() {
@@ -222,7 +279,7 @@ std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringS
       return std::make_unique<ImplicitStepper>(system, e.scheme, std::move(solver), o);
     }
   for (const auto& e : whole_step_table())
-    if (name == e.info.name) {
+    if (e.info.built && name == e.info.name) {
       if (e.unsupported) {
         const std::string why = e.unsupported(system);
         if (!why.empty()) throw std::invalid_argument(why);

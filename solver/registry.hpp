@@ -84,11 +84,20 @@ class MethodOptions {
 struct MethodInfo {
   const char* name;  ///< registry name, as in scene files ("rk4")
   MethodKind kind;
+  /// The family whose scene keys and reader the method shares (problems/methods/<family>.cpp):
+  /// "explicit", "implicit", "sundials", "ceres", "local-global", "vbd", "xpbd" or "sph".
+  const char* family;
   const char* description;  ///< one line for --help and error messages
   /// Order q of the local error estimate the method makes for error control
   /// (Simulation::advance_adaptive; its error O(h^(q+1))); 0: it takes fixed steps only. CVODE
   /// and IDA control their error themselves and have 0 here.
   int error_estimate_order = 0;
+  /// True for a method that chooses its own steps to its own tolerances (CVODE, IDA): it takes
+  /// no error control of Simulation's (no integrator.adaptive).
+  bool controls_own_error = false;
+  /// False for a method this build lacks (its optional dependency is off): method_catalog()
+  /// lists it, methods() does not, and make_stepper says what to install.
+  bool built = true;
 };
 
 /// Thrown when a method name is not in the table (see UnknownName).
@@ -96,6 +105,11 @@ using UnknownMethod = UnknownName;
 
 /// Every method this build has, in table order.
 const std::vector<MethodInfo>& methods();
+/// Every method hooke knows, in table order, including those this build lacks (built false): what
+/// a scene may name, and what the scene keys document.
+const std::vector<MethodInfo>& method_catalog();
+/// The names of the catalog's methods of `family` (MethodInfo::family), in table order.
+std::vector<std::string> methods_of_family(const std::string& family);
 /// The entry for name; throws UnknownMethod.
 const MethodInfo& method_info(const std::string& name);
 /// Comma-separated list of method names, for messages.

@@ -4,12 +4,16 @@
 // their names when unknown, and keys of another method are refused naming the method.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <set>
 #include <sstream>
 #include <string>
 
 #include "hooke/config.hpp"
 #include "hooke/linear/linear_registry.hpp"
+#include "problems/methods/method_family.hpp"
 #include "problems/scene.hpp"
+#include "problems/scene_keys.hpp"
 
 namespace hooke {
 namespace {
@@ -207,7 +211,7 @@ SparseMatrix spd_matrix() {
   return d.sparseView();
 }
 
-// The readers' list of direct backends (problems/method_readers.cpp) against the backends
+// The readers' list of direct backends (problems/methods/reader_rules.cpp) against the backends
 // themselves: a direct backend solves without iterations (LinearSummary::iterations = 0), an
 // iterative one takes at least one from a cold start. linear_tolerance must be refused exactly
 // for the direct ones.
@@ -457,6 +461,62 @@ TEST(MethodReaders, OptionsForPassesASceneOptionsOnlyToMethodsOfTheSameType) {
   }
   EXPECT_TRUE(options_for("rk4", s.integrator.options).empty());
   EXPECT_TRUE(options_for("xpbd", s.integrator.options).empty());
+}
+
+// Issue 53 item 3: a method's scene knowledge lives in its family's file, and the method lists of
+// the key table come from the registry. Every family of the catalog has one entry, every method of
+// the catalog is a choice of integrator.method, and a family's [integrator] rows apply to methods
+// of that family only (a row of one family that named a method of another would make the other's
+// reader refuse a key the table documents for it).
+TEST(MethodFamilies, EveryCatalogFamilyHasOneEntryAndItsKeysNameOnlyItsMethods) {
+  std::set<std::string> families;
+  for (const MethodFamily& f : method_families()) {
+    EXPECT_TRUE(families.insert(f.family).second) << f.family << " listed twice";
+    EXPECT_FALSE(methods_of_family(f.family).empty()) << f.family << " has no method";
+  }
+  const SceneKey* method_key = find_scene_key("integrator.method", "");
+  ASSERT_NE(method_key, nullptr);
+  for (const MethodInfo& m : method_catalog()) {
+    EXPECT_EQ(families.count(m.family), 1u) << m.name << ": family " << m.family;
+    EXPECT_NE(std::find(method_key->choices.begin(), method_key->choices.end(), m.name),
+              method_key->choices.end())
+        << m.name;
+  }
+  size_t rows = 0;
+  for (const MethodFamily& f : method_families()) {
+    if (!f.add_keys) continue;
+    std::vector<SceneKey> table;
+    f.add_keys(table);
+    const std::vector<std::string> own = methods_of_family(f.family);
+    for (const SceneKey& k : table) {
+      ++rows;
+      EXPECT_EQ(k.name.rfind("integrator.", 0), 0u) << f.family << ": " << k.name;
+      ASSERT_FALSE(k.when.empty()) << f.family << ": " << k.name << " applies to every method";
+      for (const std::string& m : k.when)
+        EXPECT_NE(std::find(own.begin(), own.end(), m), own.end())
+            << f.family << ": " << k.name << " names " << m;
+    }
+  }
+  EXPECT_GT(rows, 50u);  // the families' rows were all visited
+}
+
+// The error control's rows list the methods the registry says read them: adaptive for every
+// method but the fluid ones and those with their own error control, rtol/atol/max_dt for those
+// with an error estimate; and a built method of each list reads them as listed.
+TEST(MethodFamilies, ErrorControlRowsFollowTheRegistry) {
+  for (const MethodInfo& m : method_catalog()) {
+    const bool reads = m.kind != MethodKind::Fluid && !m.controls_own_error;
+    EXPECT_EQ(find_scene_key("integrator.adaptive", m.name) != nullptr, reads) << m.name;
+    const SceneKey* rtol = find_scene_key("integrator.rtol", m.name);
+    if (m.error_estimate_order > 0) {
+      ASSERT_NE(rtol, nullptr) << m.name;
+      EXPECT_FALSE(rtol->needs.empty()) << m.name << ": the error control's rtol needs adaptive";
+    }
+  }
+  EXPECT_NO_THROW(load("method = \"bs32\"\nadaptive = true\nrtol = 1e-6\n"));
+  const InputError e = load_error("method = \"rk4\"\nadaptive = true\n");
+  EXPECT_EQ(e.key(), "integrator.adaptive");
+  EXPECT_NE(e.reason().find("dopri5"), std::string::npos) << e.reason();
 }
 
 }  // namespace

@@ -133,6 +133,7 @@ def test_every_registered_method_steps():
     assert all(m["description"] for m in hooke.methods())
     fluid = {m["name"] for m in hooke.methods() if m["kind"] == "fluid"}
     assert fluid == {"wcsph", "iisph", "dfsph"}
+    assert fluid == {m["name"] for m in hooke.methods() if m["family"] == "sph"}
     for name in names:
         sets = {"integrator.method": name, "time.dt": 1e-3}
         if name in fluid:  # they step fluids only: the dam break, with its CFL substeps
