@@ -4,7 +4,7 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "experiments/study_methods.hpp"
+#include "experiments/studies/study_methods.hpp"
 #include "problems/input_error.hpp"
 
 namespace hooke::cli {

@@ -16,9 +16,9 @@
 #include "experiments/cli.hpp"
 #include "experiments/natural_frequency.hpp"
 #include "experiments/plot_script.hpp"
-#include "experiments/run_command.hpp"
-#include "experiments/study_output.hpp"
-#include "experiments/trajectory.hpp"
+#include "experiments/run/run_command.hpp"
+#include "experiments/studies/study_output.hpp"
+#include "experiments/studies/trajectory.hpp"
 #include "hooke/integrators/stability.hpp"
 #include "hooke/registry.hpp"
 

@@ -21,25 +21,25 @@
 #include <iostream>
 
 #include "experiments/cli.hpp"
-#include "experiments/run_group.hpp"
+#include "experiments/run/run_group.hpp"
 #include "hooke/config.hpp"
 #include "hooke/parallel/thread_policy.hpp"
 #include "problems/input_error.hpp"
 
 namespace hooke::cli {
-Command add_run_command(CLI::App& app);               // run_command.cpp
-Command add_resume_command(CLI::App& app);            // run_command.cpp
+Command add_run_command(CLI::App& app);               // run/run_command.cpp
+Command add_resume_command(CLI::App& app);            // run/run_command.cpp
 Command add_scenes_command(CLI::App& app);            // info_command.cpp
 Command add_info_command(CLI::App& app);              // info_command.cpp
 Command add_keys_command(CLI::App& app);              // keys_command.cpp
-Command add_crosscheck_command(CLI::App& app);        // crosscheck_command.cpp
-Command add_step_convergence_command(CLI::App& app);  // step_convergence_command.cpp
-Command add_stability_command(CLI::App& app);         // stability_map.cpp
-Command add_workprecision_command(CLI::App& app);     // work_precision.cpp
-Command add_resolution_command(CLI::App& app);        // resolution_study.cpp
-Command add_scaling_command(CLI::App& app);           // scaling_study.cpp
+Command add_crosscheck_command(CLI::App& app);        // studies/crosscheck_command.cpp
+Command add_step_convergence_command(CLI::App& app);  // studies/step_convergence_command.cpp
+Command add_stability_command(CLI::App& app);         // studies/stability_command.cpp
+Command add_workprecision_command(CLI::App& app);     // studies/workprecision_command.cpp
+Command add_resolution_command(CLI::App& app);        // studies/resolution_command.cpp
+Command add_scaling_command(CLI::App& app);           // studies/scaling_command.cpp
 Command add_demo_command(CLI::App& app);              // demo_command.cpp
-Command add_energy_command(CLI::App& app);            // energy_drift.cpp
+Command add_energy_command(CLI::App& app);            // studies/energy_command.cpp
 }  // namespace hooke::cli
 
 int main(int argc, char** argv) {

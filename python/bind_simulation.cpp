@@ -10,10 +10,10 @@
 #include <utility>
 #include <vector>
 
-#include "experiments/checkpoint.hpp"
 #include "experiments/output/vtk_writer.hpp"
-#include "experiments/run_command.hpp"
-#include "experiments/run_output.hpp"
+#include "experiments/run/checkpoint.hpp"
+#include "experiments/run/run_command.hpp"
+#include "experiments/run/run_output.hpp"
 #include "hooke/config.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"

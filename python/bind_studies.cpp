@@ -6,10 +6,10 @@
 #include <vector>
 
 #include "experiments/cli.hpp"
-#include "experiments/crosscheck_command.hpp"
-#include "experiments/stability_map.hpp"
-#include "experiments/step_convergence_command.hpp"
-#include "experiments/work_precision.hpp"
+#include "experiments/studies/crosscheck_command.hpp"
+#include "experiments/studies/stability_map.hpp"
+#include "experiments/studies/step_convergence_command.hpp"
+#include "experiments/studies/work_precision.hpp"
 #include "python/bindings.hpp"
 
 namespace hooke::python {

@@ -7,6 +7,10 @@
    problems/, experiments/ or python/, and problems/ nothing of experiments/ or python/.
 2. Function length. No function in solver/, problems/, experiments/ or python/ is longer than
    100 lines (as Universal Ctags measures it: from its first line to its closing brace).
+3. Command files. A subcommand `hooke NAME` is defined (`Command add_NAME_command(CLI::App&)`)
+   in a file named for one of the commands it defines, `NAME_command.cpp`, and only there:
+   experiments/run/ for running a scene, experiments/studies/ for the studies, experiments/ for
+   the rest (CONTRIBUTING.md, "A CLI subcommand").
 
 Usage: check-layout.py [ROOT]   (ROOT: the source tree, default the parent of this script's
 folder). Prints every violation and exits 1 if there is one, 2 if it cannot check.
@@ -129,18 +133,38 @@ def check_function_length(root):
     return problems
 
 
+COMMAND = re.compile(r"^Command add_(\w+)_command\(CLI::App& \w+\) \{", re.M)
+
+
+def check_command_files(root):
+    problems = []
+    for path in source_files(root, "experiments"):
+        if not path.endswith(".cpp"):
+            continue
+        with open(path, encoding="utf-8") as f:
+            names = COMMAND.findall(f.read())
+        rel = os.path.relpath(path, root).replace(os.sep, "/")
+        base = os.path.basename(path)
+        if names and base not in {n + "_command.cpp" for n in names}:
+            problems.append(f"{rel} defines add_{names[0]}_command: name it {names[0]}_command.cpp")
+        if not names and base.endswith("_command.cpp"):
+            problems.append(f"{rel} is named as a command file but defines no add_*_command")
+    return problems
+
+
 def main():
     root = sys.argv[1] if len(sys.argv) > 1 else os.path.dirname(os.path.dirname(
         os.path.abspath(__file__)))
     layers = read_layers(root)
-    problems = check_layers(root, layers) + check_function_length(root)
+    problems = (check_layers(root, layers) + check_function_length(root) +
+                check_command_files(root))
     for p in problems:
         print(p)
     if problems:
         print(f"check-layout: {len(problems)} violation(s) of CONTRIBUTING.md's layout rules")
         return 1
     print(f"check-layout: {len(layers)} layers of solver/ respected; "
-          f"no function over {MAX_FUNCTION_LINES} lines")
+          f"no function over {MAX_FUNCTION_LINES} lines; every command in its NAME_command.cpp")
     return 0
 
 

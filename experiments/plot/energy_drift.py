@@ -1,4 +1,4 @@
-"""Plots the energy study written by `hooke energy` (experiments/energy_drift.cpp).
+"""Plots the energy study written by `hooke energy` (experiments/studies/energy_drift.cpp).
 
 Usage: /usr/bin/python3 experiments/plot/energy_drift.py OUT_DIR
 Reads OUT_DIR/energy.csv and OUT_DIR/energy_summary.csv; writes OUT_DIR/energy.png and

@@ -1,4 +1,4 @@
-"""Draws the picture of a finished `hooke run` (experiments/run_output.cpp).
+"""Draws the picture of a finished `hooke run` (experiments/run/run_output.cpp).
 
 Usage: /usr/bin/python3 experiments/plot/final.py OUT_DIR
 Reads OUT_DIR/final.vtk (the final state: positions, springs with their strain, pinned flags, the

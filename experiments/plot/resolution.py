@@ -1,4 +1,4 @@
-"""Plots the resolution study written by `hooke resolution` (experiments/resolution_study.cpp).
+"""Plots the resolution study written by `hooke resolution` (experiments/studies/resolution_study.cpp).
 
 Usage: /usr/bin/python3 experiments/plot/resolution.py OUT_DIR
 Reads OUT_DIR/resolution.csv (and OUT_DIR/cantilever.csv if there); writes OUT_DIR/resolution.png

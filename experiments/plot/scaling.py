@@ -1,4 +1,4 @@
-"""Plots the scaling study written by `hooke scaling` (experiments/scaling_study.cpp).
+"""Plots the scaling study written by `hooke scaling` (experiments/studies/scaling_study.cpp).
 
 Usage: /usr/bin/python3 experiments/plot/scaling.py OUT_DIR
 Reads OUT_DIR/scaling.csv; writes OUT_DIR/scaling.png (time per iteration and per step against

@@ -1,4 +1,4 @@
-"""Plots the stability map written by `hooke stability` (see experiments/stability_map.cpp).
+"""Plots the stability map written by `hooke stability` (see experiments/studies/stability_map.cpp).
 
 Usage: /usr/bin/python3 experiments/plot/stability.py OUT_DIR
 Reads OUT_DIR/stability.csv; writes, per case, OUT_DIR/stability_<case>.png (largest stable h

@@ -1,4 +1,4 @@
-"""Plots the work-precision diagrams written by `hooke workprecision` (experiments/work_precision.cpp).
+"""Plots the work-precision diagrams written by `hooke workprecision` (experiments/studies/work_precision.cpp).
 
 Usage: /usr/bin/python3 experiments/plot/work_precision.py OUT_DIR
 Reads OUT_DIR/workprecision.csv and OUT_DIR/reference.csv; writes, per case,

@@ -1,5 +1,5 @@
 // Tests of experiments/resolution_study.*: the period detector behind the resolution study.
-#include "experiments/resolution_study.hpp"
+#include "experiments/studies/resolution_study.hpp"
 
 #include <gtest/gtest.h>
 

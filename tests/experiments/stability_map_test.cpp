@@ -1,7 +1,7 @@
 // Tests of experiments/stability_map.*: the measured stability boundary of an explicit method on
 // the two-particle spring must match the theory h = y / omega_max, with y the method's stability
 // bound on the imaginary axis and omega_max computed from the system (not the formula sqrt(2k/m)).
-#include "experiments/stability_map.hpp"
+#include "experiments/studies/stability_map.hpp"
 
 #include <gtest/gtest.h>
 

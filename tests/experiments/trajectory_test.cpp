@@ -6,7 +6,7 @@
 // independent method) is within 10x of rtol max|x| + atol for rtol 1e-3 ... 1e-7 (the pairs) and
 // 1e-2 ... 1e-5 (the implicit family; atol = 1e-3 rtol x the scene's size, as the studies set
 // it), and the accepted steps fall as rtol loosens.
-#include "experiments/trajectory.hpp"
+#include "experiments/studies/trajectory.hpp"
 
 #include <gtest/gtest.h>
 
@@ -15,7 +15,7 @@
 #include <string>
 #include <vector>
 
-#include "experiments/work_precision.hpp"
+#include "experiments/studies/work_precision.hpp"
 #include "hooke/config.hpp"
 #include "hooke/registry.hpp"
 

@@ -4,10 +4,10 @@
 #include <utility>
 #include <vector>
 
-#include "experiments/checkpoint.hpp"
 #include "experiments/output/output_dir.hpp"
 #include "experiments/output/output_file.hpp"
 #include "experiments/output/vtk_writer.hpp"
+#include "experiments/run/checkpoint.hpp"
 #include "hooke/sph/fluid_model.hpp"
 #include "problems/scene.hpp"
 

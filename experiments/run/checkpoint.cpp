@@ -1,4 +1,4 @@
-#include "experiments/checkpoint.hpp"
+#include "experiments/run/checkpoint.hpp"
 
 #include <toml++/toml.h>
 

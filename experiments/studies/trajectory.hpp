@@ -17,7 +17,7 @@ struct Trajectory {
   bool diverged = false;       ///< stopped by a divergence rule (not by failing to start)
 };
 
-/// When a run counts as diverged (experiments/divergence.hpp computes energy_limit).
+/// When a run counts as diverged (experiments/run/divergence.hpp computes energy_limit).
 struct RunLimits {
   /// Total energy (J, kinetic + potential) above which the run has diverged.
   double energy_limit = std::numeric_limits<double>::infinity();

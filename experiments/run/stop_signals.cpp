@@ -1,4 +1,4 @@
-#include "experiments/stop_signals.hpp"
+#include "experiments/run/stop_signals.hpp"
 
 #include <signal.h>
 

@@ -4,7 +4,7 @@
 #include <utility>
 #include <vector>
 
-#include "experiments/study_methods.hpp"
+#include "experiments/studies/study_methods.hpp"
 #include "problems/scene.hpp"
 
 namespace hooke {

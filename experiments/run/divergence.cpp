@@ -1,4 +1,4 @@
-#include "experiments/divergence.hpp"
+#include "experiments/run/divergence.hpp"
 
 #include <algorithm>
 #include <cmath>

@@ -18,7 +18,7 @@
 //         matched mean
 //         density error) and DIR/front_<case>.png (Z(T) of each method at its scene settings,
 //         c0 = 31.3 m/s and tolerance 1e-3, beside both experiments).
-#include "experiments/fluid_work_precision.hpp"
+#include "experiments/studies/fluid_work_precision.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -27,7 +27,7 @@
 #include <sstream>
 #include <utility>
 
-#include "experiments/trajectory.hpp"
+#include "experiments/studies/trajectory.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/sph/sph_stepper.hpp"

@@ -22,31 +22,24 @@
 // Writes: DIR/energy.csv (label,method,h,t,relative_energy_error) and DIR/energy_summary.csv
 //         (label,method,h,periods,final_error,max_abs_error,drift_per_period,wall_s,status);
 //         experiments/plot/energy_drift.py draws DIR/energy.png and DIR/energy.md.
+#include "experiments/studies/energy_drift.hpp"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <iostream>
 
 #include "experiments/cli.hpp"
-#include "experiments/divergence.hpp"
 #include "experiments/natural_frequency.hpp"
 #include "experiments/plot_script.hpp"
-#include "experiments/study_methods.hpp"
-#include "experiments/study_output.hpp"
-#include "experiments/trajectory.hpp"
+#include "experiments/run/divergence.hpp"
+#include "experiments/studies/study_methods.hpp"
+#include "experiments/studies/study_output.hpp"
+#include "experiments/studies/trajectory.hpp"
 
 namespace hooke {
 
 namespace {
-
-struct EnergyOptions {
-  bool full = false;
-  std::vector<std::string> methods;
-  double periods = 0.0;  // 0: 1000 (5000 with --full)
-  int samples = 400;
-  std::string out_dir = "out/energy";
-  bool plot = true;
-};
 
 /// The study's methods: the study_methods() labels below, plus the converged midpoint rules.
 std::vector<StudyMethod> energy_methods() {
@@ -72,6 +65,8 @@ std::vector<StudyMethod> energy_methods() {
                  {"integrator.newton_iterations=20", "integrator.tolerance=1e-12"}});
   return out;
 }
+
+}  // namespace
 
 int run_energy(const EnergyOptions& o, const std::string& scenes_dir) {
   const auto start = Clock::now();
@@ -149,37 +144,4 @@ int run_energy(const EnergyOptions& o, const std::string& scenes_dir) {
   return 0;
 }
 
-}  // namespace
-
 }  // namespace hooke
-
-namespace hooke::cli {
-
-Command add_energy_command(CLI::App& app) {
-  struct Args {
-    std::string methods, out;
-    EnergyOptions e;
-  };
-  auto a = std::make_shared<Args>();
-  auto* cmd = app.add_subcommand(
-      "energy",
-      "Energy behaviour: total energy error over many periods of the chain without dampers, for "
-      "the explicit, symplectic, implicit and whole-step methods; writes energy.csv, "
-      "energy_summary.csv and energy.png");
-  cmd->add_flag("--full", a->e.full, "5000 periods of the fastest mode instead of 1000");
-  add_list(cmd, "--methods", a->methods,
-           "comma-separated study labels or method names (default: all of the study)");
-  cmd->add_option("--periods", a->e.periods, "periods of the fastest mode (default 1000)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--samples", a->e.samples, "energy samples per method (default 400)")
-      ->check(CLI::Range(1, 1000000));
-  add_out(cmd, a->out, "out/energy");
-  add_no_plot(cmd, a->e.plot);
-  return {cmd, [a] {
-            a->e.methods = split_list(a->methods);
-            if (!a->out.empty()) a->e.out_dir = a->out;
-            return run_energy(a->e, scenes_dir().string());
-          }};
-}
-
-}  // namespace hooke::cli

@@ -1,4 +1,4 @@
-#include "experiments/run_output.hpp"
+#include "experiments/run/run_output.hpp"
 
 #include <cstdio>
 #include <cstdlib>

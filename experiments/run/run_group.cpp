@@ -1,4 +1,4 @@
-#include "experiments/run_group.hpp"
+#include "experiments/run/run_group.hpp"
 
 #include <algorithm>
 #include <cstdlib>

@@ -6,7 +6,7 @@
 
 #include "experiments/output/output_dir.hpp"
 #include "experiments/output/output_file.hpp"
-#include "experiments/stop_signals.hpp"
+#include "experiments/run/stop_signals.hpp"
 
 namespace hooke {
 

@@ -1,4 +1,4 @@
-#include "experiments/study_output.hpp"
+#include "experiments/studies/study_output.hpp"
 
 #include <cstdio>
 

@@ -1,4 +1,4 @@
-#include "experiments/run_command.hpp"
+#include "experiments/run/run_command.hpp"
 
 #include <unistd.h>
 
@@ -11,12 +11,12 @@
 #include <limits>
 #include <memory>
 
-#include "experiments/checkpoint.hpp"
 #include "experiments/cli.hpp"
-#include "experiments/divergence.hpp"
-#include "experiments/run_group.hpp"
-#include "experiments/run_output.hpp"
-#include "experiments/stop_signals.hpp"
+#include "experiments/run/checkpoint.hpp"
+#include "experiments/run/divergence.hpp"
+#include "experiments/run/run_group.hpp"
+#include "experiments/run/run_output.hpp"
+#include "experiments/run/stop_signals.hpp"
 #include "hooke/config.hpp"
 #include "hooke/constraints/strain_limit.hpp"
 #include "hooke/linear/linear_registry.hpp"

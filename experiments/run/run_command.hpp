@@ -2,7 +2,7 @@
 #include <functional>
 #include <string>
 
-#include "experiments/stop_signals.hpp"
+#include "experiments/run/stop_signals.hpp"
 #include "hooke/simulation.hpp"
 #include "problems/scene.hpp"
 

@@ -29,7 +29,7 @@
 //         error), DIR/step_convergence.md (iterations and wall time to reach objective error 1e-6
 //         per method, then the error after 10, 30 and 100 ms) and DIR/step_convergence.png
 //         (through experiments/plot/step_convergence.py).
-#include "experiments/step_convergence_command.hpp"
+#include "experiments/studies/step_convergence_command.hpp"
 
 #include <chrono>
 #include <cmath>
@@ -42,8 +42,8 @@
 
 #include "experiments/cli.hpp"
 #include "experiments/plot_script.hpp"
-#include "experiments/study_output.hpp"
-#include "experiments/trajectory.hpp"
+#include "experiments/studies/study_output.hpp"
+#include "experiments/studies/trajectory.hpp"
 #include "hooke/config.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/whole_step/fast_mass_spring.hpp"

@@ -1,22 +1,23 @@
 // hooke workprecision: which method reaches a given accuracy fastest?
 //
-// Question: for each method of the study (experiments/study_methods.hpp), how does the position
-// error at the final time, and over the trajectory, fall with the wall time spent, as the time
-// step h (or, for the adaptive CVODE and IDA and hooke's error-controlled methods, such as
+// Question: for each method of the study (experiments/studies/study_methods.hpp), how does the
+// position error at the final time, and over the trajectory, fall with the wall time spent, as the
+// time step h (or, for the adaptive CVODE and IDA and hooke's error-controlled methods, such as
 // dopri5-adaptive, the tolerance rtol) is varied?
 // Scenes (work_precision_cases): the chain (chain.toml: 30 particles, k = 500, pinned at one end),
 // the hanging cloth (hanging_cloth_16 at 8 x 8, 16 x 16 with --full) and the stiff cloth (the same
 // with structural k = 1e6).
 // Reference: CVODE BDF at rtol 1e-10 (KLU, analytic Jacobian), stepping between the samples. Its
 // own error is estimated as the larger difference from CVODE at rtol 1e-9 and from IDA (another
-// formulation and code) at 1e-10, and reported beside every table (experiments/trajectory.cpp).
-// Adaptive methods run at rtol with atol = 1e-3 rtol x the scene's size (as the reference).
-// Errors: at each of `samples` equally spaced times, the RMS over particles of |x_i - x_ref_i|
-// (and the max); "final" is the last sample, "traj" the maximum over samples. Step sizes are
-// rounded so that every sample time falls on a step. A run that diverges (the `hooke run` energy
-// rule) or fails is kept in the CSV with its status and no error. A method that cannot load or does
-// not support a case is skipped on it; one whose run takes over 60 s skips the rest of its sweep.
-// Run:    hooke workprecision [--full] [--cases chain,...] [--methods rk4,...] [--rtols 1e-3,...]
+// formulation and code) at 1e-10, and reported beside every table
+// (experiments/studies/trajectory.cpp). Adaptive methods run at rtol with atol = 1e-3 rtol x the
+// scene's size (as the reference). Errors: at each of `samples` equally spaced times, the RMS over
+// particles of |x_i - x_ref_i| (and the max); "final" is the last sample, "traj" the maximum over
+// samples. Step sizes are rounded so that every sample time falls on a step. A run that diverges
+// (the `hooke run` energy rule) or fails is kept in the CSV with its status and no error. A method
+// that cannot load or does not support a case is skipped on it; one whose run takes over 60 s skips
+// the rest of its sweep. Run:    hooke workprecision [--full] [--cases chain,...] [--methods
+// rk4,...] [--rtols 1e-3,...]
 //                             [--reference-rtol R] [--samples S] [--duration T] [--out DIR]
 //                             [--no-plot]
 // Wall time: the median of `repeat` runs (default 3; the errors are those of the first, the runs
@@ -29,7 +30,7 @@
 //         err_rms_final,err_rms_traj,err_max_traj,how) and, through
 //         experiments/plot/work_precision.py, DIR/workprecision_<case>.png and .md, and for the
 //         tolerance sweeps DIR/tolerance_<case>.png (achieved error against requested rtol).
-#include "experiments/work_precision.hpp"
+#include "experiments/studies/work_precision.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -41,11 +42,11 @@
 #include <utility>
 
 #include "experiments/cli.hpp"
-#include "experiments/divergence.hpp"
-#include "experiments/fluid_work_precision.hpp"
 #include "experiments/plot_script.hpp"
-#include "experiments/study_output.hpp"
-#include "experiments/trajectory.hpp"
+#include "experiments/run/divergence.hpp"
+#include "experiments/studies/fluid_work_precision.hpp"
+#include "experiments/studies/study_output.hpp"
+#include "experiments/studies/trajectory.hpp"
 #include "hooke/registry.hpp"
 
 namespace hooke {
@@ -293,52 +294,3 @@ int run_work_precision(const WorkPrecisionOptions& options, const std::string& s
 }
 
 }  // namespace hooke
-
-namespace hooke::cli {
-
-Command add_workprecision_command(CLI::App& app) {
-  struct Args {
-    std::string cases, methods, rtols, out;
-    WorkPrecisionOptions wp;
-  };
-  auto a = std::make_shared<Args>();
-  auto* cmd = app.add_subcommand(
-      "workprecision",
-      "Work-precision: error against a CVODE reference versus wall time for every "
-      "method over a range of h (rtol for cvode, ida and the error-controlled *-adaptive "
-      "methods); writes workprecision.csv, reference.csv, workprecision_<case>.png and "
-      "tolerance_<case>.png");
-  cmd->add_flag("--full", a->wp.full,
-                "paper size: 16 x 16 cloths, 6 step sizes 1e-2..3e-5, longer runs");
-  add_list(cmd, "--cases", a->cases,
-           "comma-separated: chain,hanging_cloth,stiff_cloth,dam_break_2d (with --full also "
-           "dam_break_2d_fine; default: all)");
-  add_list(
-      cmd, "--methods", a->methods,
-      "comma-separated study labels or method names, wcsph, iisph and dfsph for the fluid cases "
-      "(default: all)");
-  add_list(cmd, "--rtols", a->rtols,
-           "comma-separated tolerances of cvode, ida and the *-adaptive methods (default "
-           "1e-3,1e-5,1e-7)");
-  cmd->add_option("--reference-rtol", a->wp.reference_rtol, "CVODE reference rtol (default 1e-10)");
-  cmd->add_option("--samples", a->wp.samples, "trajectory samples (default 10)");
-  cmd->add_option("--duration", a->wp.duration,
-                  "simulated time of every case, s (default: each case's own, 0.2-1 s)")
-      ->check(CLI::PositiveNumber);
-  cmd->add_option("--repeat", a->wp.repeat,
-                  "runs per point, the wall time their median (default 3)")
-      ->check(CLI::Range(1, 1000));
-  add_out(cmd, a->out, "out/workprecision");
-  add_no_plot(cmd, a->wp.plot);
-  return {cmd, [a] {
-            a->wp.cases = split_list(a->cases);
-            a->wp.methods = split_list(a->methods);
-            a->wp.rtols = numbers(a->rtols, "--rtols");
-            if (!(a->wp.reference_rtol > 0.0))
-              throw InputError("<command line>", "--reference-rtol", "must be > 0");
-            if (!a->out.empty()) a->wp.out_dir = a->out;
-            return run_work_precision(a->wp, scenes_dir().string());
-          }};
-}
-
-}  // namespace hooke::cli

@@ -1,32 +1,30 @@
 // hooke stability: which method is stable at which time step for which stiffness?
 //
-// Question: for each method of the study (experiments/study_methods.hpp) and each stiffness k,
-// what is the largest time step h at which a run stays stable?
-// Scenes (stability_cases): the two-particle spring (exact solution; omega = sqrt(2k/m)), the
-// hanging cloth (hanging_cloth_16, 8 x 8 by default, 16 x 16 with --full) and a hard case, the
-// same cloth with flexion springs as stiff as the structural ones.
-// Criterion (classify_run): a run of max(T, 100 h) simulated seconds (T = 1 s for the two-particle
-// spring; 0.2 s for the cloths, 0.5 s with --full) is unstable if the stepper
-// fails, the state becomes non-finite, the total energy exceeds E0 + 10 x the scene's energy scale
-// (the rule of `hooke run`, experiments/divergence.hpp), or a spring's strain exceeds 10 (1 for
-// the two-particle spring: its particles meet, which the exact motion never does).
-// Search (find_stability_boundary): scan down from h = 1e-1 by half decades to 1e-5, then bisect
-// the bracket in log h (4 times by default: 2^-4 of a half decade, about 7%).
-// Theory: for explicit methods, h < y / omega_max with y the method's stability bound on the
-// imaginary axis (solver/integrators/stability.hpp) and omega_max the largest natural frequency
-// of the scene linearised at its initial state (experiments/natural_frequency.hpp, eigenvalues of
-// M^-1/2 K M^-1/2 by Lanczos); both are computed, not assumed.
-// Run:    hooke stability [--full] [--cases two_particle,...] [--methods rk4,...] [--out DIR]
-// Bending: the strand cantilever (strand_cantilever) with rod bending at 41 and 81 particles
-// (and 161 with --full) over EI, so the explicit limit's slope in the spacing can be read (2).
-// Fluids: the 2D dam break (dam_break_2d) by WCSPH without CFL substeps over its speed of sound
-// c0 (the map's k for that case), against Monaghan's CFL step 0.4 dx / (c0 + sqrt(2 g H)); a run
-// fails when the stepper stops it (a particle moving more than the kernel support in a step, or a
-// density error above 50%).
-// Writes: DIR/stability.csv (case,label,method,k,omega_max,h_theory,h_stable,h_unstable,bound,
+// Question: for each method of the study (experiments/studies/study_methods.hpp) and each stiffness
+// k, what is the largest time step h at which a run stays stable? Scenes (stability_cases): the
+// two-particle spring (exact solution; omega = sqrt(2k/m)), the hanging cloth (hanging_cloth_16, 8
+// x 8 by default, 16 x 16 with --full) and a hard case, the same cloth with flexion springs as
+// stiff as the structural ones. Criterion (classify_run): a run of max(T, 100 h) simulated seconds
+// (T = 1 s for the two-particle spring; 0.2 s for the cloths, 0.5 s with --full) is unstable if the
+// stepper fails, the state becomes non-finite, the total energy exceeds E0 + 10 x the scene's
+// energy scale (the rule of `hooke run`, experiments/run/divergence.hpp), or a spring's strain
+// exceeds 10 (1 for the two-particle spring: its particles meet, which the exact motion never
+// does). Search (find_stability_boundary): scan down from h = 1e-1 by half decades to 1e-5, then
+// bisect the bracket in log h (4 times by default: 2^-4 of a half decade, about 7%). Theory: for
+// explicit methods, h < y / omega_max with y the method's stability bound on the imaginary axis
+// (solver/integrators/stability.hpp) and omega_max the largest natural frequency of the scene
+// linearised at its initial state (experiments/natural_frequency.hpp, eigenvalues of M^-1/2 K
+// M^-1/2 by Lanczos); both are computed, not assumed. Run:    hooke stability [--full] [--cases
+// two_particle,...] [--methods rk4,...] [--out DIR] Bending: the strand cantilever
+// (strand_cantilever) with rod bending at 41 and 81 particles (and 161 with --full) over EI, so the
+// explicit limit's slope in the spacing can be read (2). Fluids: the 2D dam break (dam_break_2d) by
+// WCSPH without CFL substeps over its speed of sound c0 (the map's k for that case), against
+// Monaghan's CFL step 0.4 dx / (c0 + sqrt(2 g H)); a run fails when the stepper stops it (a
+// particle moving more than the kernel support in a step, or a density error above 50%). Writes:
+// DIR/stability.csv (case,label,method,k,omega_max,h_theory,h_stable,h_unstable,bound,
 //         runs,wall_s,reason,parameter) and, through experiments/plot/stability.py,
 //         DIR/stability_<case>.png and DIR/stability_<case>.md.
-#include "experiments/stability_map.hpp"
+#include "experiments/studies/stability_map.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -39,11 +37,11 @@
 #include <sstream>
 
 #include "experiments/cli.hpp"
-#include "experiments/divergence.hpp"
 #include "experiments/natural_frequency.hpp"
 #include "experiments/plot_script.hpp"
-#include "experiments/study_output.hpp"
-#include "experiments/trajectory.hpp"
+#include "experiments/run/divergence.hpp"
+#include "experiments/studies/study_output.hpp"
+#include "experiments/studies/trajectory.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/integrators/stability.hpp"
 #include "hooke/registry.hpp"
@@ -292,61 +290,3 @@ int run_stability(const StabilityOptions& options, const std::string& scenes_dir
 }
 
 }  // namespace hooke
-
-namespace hooke::cli {
-
-Command add_stability_command(CLI::App& app) {
-  struct Args {
-    std::string cases, methods, k, out;
-    StabilityOptions stab;
-  };
-  auto a = std::make_shared<Args>();
-  StabilitySettings& st = a->stab.settings;
-  auto* cmd = app.add_subcommand(
-      "stability",
-      "Stability map: the largest stable time step per stiffness k and method, with the "
-      "theoretical explicit limits; writes stability.csv and stability_<case>.png");
-  cmd->add_flag("--full", a->stab.full, "paper size: 16 x 16 cloth, k in half decades");
-  add_list(cmd, "--cases", a->cases,
-           "comma-separated: two_particle,hanging_cloth,stiff_flexion,dam_break_2d,"
-           "bending_strand_41,bending_strand_81 (and bending_strand_161 with --full; default: "
-           "all)");
-  add_list(cmd, "--methods", a->methods,
-           "comma-separated study labels or method names (default: all)");
-  add_list(cmd, "--k", a->k,
-           "comma-separated stiffness values in N/m, for dam_break_2d speeds of sound in m/s, "
-           "for the bending cases EI in N m^2 (default 1e1..1e7 by decades; dam_break_2d: 10, "
-           "40, 160 m/s; bending: 1e-5, 1e-4, 1e-3 N m^2)");
-  cmd->add_option("--h-min", st.h_min, "smallest step tried (s, default 1e-5)");
-  cmd->add_option("--h-max", st.h_max, "largest step tried (s, default 1e-1)");
-  cmd->add_option("--bisections", st.bisections, "bisections of the bracket in log h (default 4)");
-  cmd->add_option("--strain-bound", st.strain_bound,
-                  "unstable above this spring strain (default 10; the two-particle case uses 1)");
-  cmd->add_option("--growth-limit", st.growth_limit,
-                  "unstable when E > E0 + this x the energy scale (default 10)");
-  add_out(cmd, a->out, "out/stability");
-  add_no_plot(cmd, a->stab.plot);
-  cmd->footer(
-      "A run of max(T, 100 h) simulated seconds (T = 1 s for two_particle, 0.2 s for the cloths, "
-      "0.5 s with --full) is "
-      "unstable if the step fails, the state becomes non-finite, the total energy exceeds E0 + "
-      "growth-limit x the energy scale of `hooke run` (every spring stretched by its rest length, "
-      "plus kinetic energy and gravity's work over the initial extent), or a spring's strain "
-      "exceeds "
-      "strain-bound (1 for two_particle: its particles meet). h is scanned down from h-max by half "
-      "decades to the first stable run, then the "
-      "bracket is bisected. The theoretical explicit limit is y / omega_max (see `hooke info`); "
-      "for dam_break_2d (WCSPH, k = c0) the CFL step 0.4 dx / (c0 + sqrt(2 g H)).");
-  return {cmd, [a] {
-            a->stab.cases = split_list(a->cases);
-            a->stab.methods = split_list(a->methods);
-            a->stab.k = numbers(a->k, "--k");
-            const StabilitySettings& s = a->stab.settings;
-            if (!(s.h_min > 0.0 && s.h_min < s.h_max))
-              throw InputError("<command line>", "--h-min", "need 0 < h-min < h-max");
-            if (!a->out.empty()) a->stab.out_dir = a->out;
-            return run_stability(a->stab, scenes_dir().string());
-          }};
-}
-
-}  // namespace hooke::cli

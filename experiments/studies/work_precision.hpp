@@ -2,7 +2,7 @@
 #include <string>
 #include <vector>
 
-#include "experiments/study_methods.hpp"
+#include "experiments/studies/study_methods.hpp"
 
 namespace hooke {
 

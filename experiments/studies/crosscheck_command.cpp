@@ -12,7 +12,7 @@
 // limiting) are applied after every step by every method, and the reference then steps at dt as
 // well so that they act at the same times.
 // Writes OUT/crosscheck.csv and OUT/crosscheck.md and prints the Markdown table.
-#include "experiments/crosscheck_command.hpp"
+#include "experiments/studies/crosscheck_command.hpp"
 
 #include <cmath>
 #include <filesystem>
@@ -21,10 +21,10 @@
 #include <sstream>
 
 #include "experiments/cli.hpp"
-#include "experiments/divergence.hpp"
-#include "experiments/study_methods.hpp"
-#include "experiments/study_output.hpp"
-#include "experiments/trajectory.hpp"
+#include "experiments/run/divergence.hpp"
+#include "experiments/studies/study_methods.hpp"
+#include "experiments/studies/study_output.hpp"
+#include "experiments/studies/trajectory.hpp"
 #include "hooke/registry.hpp"
 
 namespace hooke {

@@ -1,6 +1,6 @@
 // Runs of one method over a scene, sampled for comparison, and the CVODE reference they are
 // compared with: shared by `hooke crosscheck`, `hooke workprecision` and `hooke stability`.
-#include "experiments/trajectory.hpp"
+#include "experiments/studies/trajectory.hpp"
 
 #include <algorithm>
 #include <chrono>
@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <sstream>
 
-#include "experiments/divergence.hpp"
+#include "experiments/run/divergence.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
 

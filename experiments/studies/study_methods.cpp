@@ -1,4 +1,4 @@
-#include "experiments/study_methods.hpp"
+#include "experiments/studies/study_methods.hpp"
 
 #include <algorithm>
 #include <sstream>
