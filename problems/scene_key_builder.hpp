@@ -70,6 +70,19 @@ struct SceneKeyBuilder {
   }
 };
 
+/// The items of v with sep between them ("a, b, c" for sep ", "): the lists of key meanings.
+inline std::string join(const std::vector<std::string>& v, const std::string& sep) {
+  std::string s;
+  for (const auto& e : v) s += (s.empty() ? "" : sep) + e;
+  return s;
+}
+
+/// "a", "a and b", "a, b and c".
+inline std::string and_list(const std::vector<std::string>& names) {
+  if (names.size() < 2) return join(names, ", ");
+  return join({names.begin(), names.end() - 1}, ", ") + " and " + names.back();
+}
+
 /// The largest step counts a key takes (2^62).
 constexpr double kMaxSteps = 4611686018427387904.0;
 

@@ -698,12 +698,6 @@ bool applies(const SceneKey& k, const std::string& variant) {
 /// The section of a dotted name: everything before the last dot.
 std::string section_of(const std::string& name) { return name.substr(0, name.rfind('.')); }
 
-std::string join(const std::vector<std::string>& v, const std::string& sep) {
-  std::string s;
-  for (const auto& e : v) s += (s.empty() ? "" : sep) + e;
-  return s;
-}
-
 /// "mesh.type = grid, cantilever" for a key with variants; "" otherwise.
 std::string applies_text(const SceneKey& k) {
   if (k.when.empty()) return "";

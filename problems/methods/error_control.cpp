@@ -24,19 +24,6 @@ std::vector<std::string> catalog_names(const std::function<bool(const MethodInfo
   return names;
 }
 
-/// "a, b, c".
-std::string join_names(const std::vector<std::string>& names) {
-  std::string s;
-  for (const auto& n : names) s += (s.empty() ? "" : ", ") + n;
-  return s;
-}
-
-/// "a", "a and b", "a, b and c".
-std::string and_list(const std::vector<std::string>& names) {
-  if (names.size() < 2) return join_names(names);
-  return join_names({names.begin(), names.end() - 1}) + " and " + names.back();
-}
-
 /// "seven" for 7 (the small counts a meaning names), else the digits.
 std::string number_word(size_t n) {
   static const char* const words[] = {"zero", "one",   "two",   "three", "four", "five",
@@ -70,7 +57,7 @@ void add_integrator_keys(std::vector<SceneKey>& t) {
           .in(methods_reading_adaptive())
           .def("false")
           .meaning("error-controlled steps (methods with a local error estimate: " +
-                   join_names(estimating) + "; " + and_list(doubled) +
+                   join(estimating, ", ") + "; " + and_list(doubled) +
                    " by step doubling): time.dt is the first step, rtol and atol bound each "
                    "step's local error"));
   add(K("integrator.rtol", T::Number)
@@ -122,17 +109,17 @@ bool read_error_control(TableReader& r, const std::string& method, ErrorControl&
     return false;
   }
   if (info.error_estimate_order == 0) {
-    std::string with;
-    for (const MethodInfo& m : methods())
-      if (m.error_estimate_order > 0) with += (with.empty() ? "" : ", ") + std::string(m.name);
-    std::vector<std::string> own;
-    for (const MethodInfo& m : methods())
+    std::vector<std::string> with, own;  // of this build
+    for (const MethodInfo& m : methods()) {
+      if (m.error_estimate_order > 0) with.push_back(m.name);
       if (m.controls_own_error) own.push_back(m.name);
+    }
     r.fail("adaptive",
            "method '" + method +
                "' makes no local error estimate to choose its steps by; methods that "
                "do: " +
-               with + (own.empty() ? "" : " (" + and_list(own) + " control their error always)"));
+               join(with, ", ") +
+               (own.empty() ? "" : " (" + and_list(own) + " control their error always)"));
   }
   c.rtol = r.number("rtol", c.rtol);
   c.atol = r.number("atol", c.atol);
