@@ -20,16 +20,19 @@
 namespace hooke {
 
 long long TimeSettings::steps() const {
-  if (duration <= 0.0) return 0;
-  return static_cast<long long>(std::ceil(duration / dt * (1.0 - 1e-12)));
+  StepPlan plan;
+  plan.end = duration;
+  plan.dt = dt;
+  return plan.steps();
 }
 
-double Scene::next_stop(double t) const {
-  const double dt = output.interval;
-  if (!(dt > 0.0)) return time.duration;
-  const double slack = 1e-9 * std::max(dt, time.dt);
-  const double k = std::floor((t + slack) / dt) + 1.0;
-  return std::min(time.duration, k * dt);
+StepPlan Scene::step_plan() const {
+  StepPlan plan;
+  plan.end = time.duration;
+  plan.dt = time.dt;
+  plan.adaptive = integrator.adaptive;
+  plan.frame_interval = output.interval;
+  return plan;
 }
 
 namespace {

@@ -12,6 +12,7 @@
 #include "hooke/model/ode_system.hpp"
 #include "hooke/model/state.hpp"
 #include "hooke/registry.hpp"
+#include "hooke/step_plan.hpp"
 #include "problems/input_error.hpp"
 
 namespace hooke {
@@ -30,15 +31,8 @@ struct IntegratorSettings {
 struct TimeSettings {
   double dt = 1e-3;       ///< step size h (s), > 0
   double duration = 1.0;  ///< simulated time (s), >= 0; the last step is shortened to land on it
-  /// Number of steps needed to reach duration with steps of at most dt.
+  /// Number of steps needed to reach duration with steps of at most dt (StepPlan::steps()).
   long long steps() const;
-  /// The nominal time at the end of step `step` (0: the start): step dt, and duration for the
-  /// last step; the simulation's own clock accumulates h and may differ in the last bits.
-  double time_at(long long step) const { return step >= steps() ? duration : double(step) * dt; }
-  /// Size of step `step` (1-based) starting at time t: exactly dt, except the last step, which
-  /// lands on duration. Every other step has the same h bit for bit, so methods that cache
-  /// h-dependent work (factorizations, BDF history) never see rounding-level changes of h.
-  double step_size(long long step, double t) const { return step == steps() ? duration - t : dt; }
 };
 
 /// [output]: where and how often to write.
@@ -111,11 +105,11 @@ struct Scene {
   bool is_ode() const { return ode != nullptr; }
   /// A [fluid] scene: its system's particles are the fluid's, then its boundary particles.
   bool is_fluid() const { return system != nullptr && system->fluid() != nullptr; }
-  /// Where a step under error control (integrator.adaptive) that starts at t must end at the
-  /// latest: the next frame time (a multiple of output.interval, a time within 1e-9 of an
-  /// interval past t counting as reached) or the duration. `hooke run` and the Python module's
-  /// run() land on the same times, so both take the same steps.
-  double next_stop(double t) const;
+  /// The scene's steps from t = 0 to time.duration (StepPlan): of time.dt, or under error
+  /// control (integrator.adaptive) landing on every frame time (a multiple of output.interval)
+  /// and the duration. `hooke run`, the Python module and the studies run it, so all take the
+  /// same steps.
+  StepPlan step_plan() const;
 };
 
 /// Loads and validates a scene file, applying "section.key=value" overrides first. Throws

@@ -62,27 +62,17 @@ class PySimulation {
     return advance_by(size);
   }
   /// Steps of dt until time t, the last one shortened to land on t exactly (under error control:
-  /// the controller's steps, the last one landing on t).
+  /// the controller's steps, landing on the scene's frame times on the way and on t).
   void advance(double t_end) {
-    if (adaptive()) {
-      // Through the frame times hooke run lands on (Scene::next_stop), so that run() takes its
-      // steps.
-      while (t() < t_end) {
-        if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between steps
-        const double stop = m_scene->next_stop(t());  // the duration once past the frames
-        advance_controlled(stop > t() ? std::min(t_end, stop) : t_end);
-      }
+    StepPlan plan = m_scene->step_plan();
+    plan.start = t();
+    plan.end = t_end;
+    // Nothing to do when t_end is here already (to round-off, for a time reached by steps of
+    // dt: the plan's steps() would make it a sliver).
+    const double dt = m_scene->time.dt;
+    if (adaptive() ? !(t() < t_end) : !(t_end - t() > 1e-12 * std::max(dt, std::abs(t_end))))
       return;
-    }
-    const double dt = m_scene->time.dt, left = t_end - t();
-    // Nothing to do when t_end is here already, to round-off (a time reached by steps of dt).
-    if (!(left > 1e-12 * std::max(dt, std::abs(t_end)))) return;
-    // As TimeSettings::steps(): the last step is shortened, never a sliver after a full one.
-    const long long n = static_cast<long long>(std::ceil(left / dt * (1.0 - 1e-12)));
-    for (long long k = 1; k <= n; ++k) {
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between steps
-      advance_by(k == n ? t_end - t() : dt);
-    }
+    run_plan(plan, 1);
   }
   /// To the scene's duration, with the step sizes of `hooke run` (the last one shortened). With
   /// `out`, it is `hooke run` itself (run_scene: the same files, messages and exit rules) from
@@ -90,11 +80,7 @@ class PySimulation {
   void run(std::optional<std::string> out, bool force) {
     if (out) return run_with_files(*out, force);
     if (adaptive()) return advance(m_scene->time.duration);
-    const long long total = m_scene->time.steps();
-    while (m_steps < total) {
-      if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C between steps
-      advance_by(m_scene->time.step_size(m_steps + 1, t()));
-    }
+    run_plan(m_scene->step_plan(), m_steps + 1);  // the scene's steps, from the next one on
   }
 
   const std::shared_ptr<Scene>& scene() const { return m_scene; }
@@ -236,12 +222,13 @@ class PySimulation {
     s.t = c.state.t;
     m_steps = c.step;
   }
-  /// The current state as a VTK frame (the format of hooke run's frames).
-  void write_vtk(const std::string& path) const {
+  /// The current state as a VTK frame (the format of hooke run's frames, with the stepper's
+  /// fields: a fluid's density and pressure).
+  void write_vtk(const std::string& path) {
     const Scene& s = *m_scene;
-    write_vtk_frame(
-        path, m_sim->state(), t(),
-        FrameMesh{s.edges, s.edge_rest, s.triangles, s.system->pinned(), s.system->masses()});
+    write_vtk_frame(path, m_sim->state(), t(),
+                    FrameMesh{s.edges, s.edge_rest, s.triangles, s.system->pinned(),
+                              s.system->masses(), m_sim->stepper().output_fields(m_sim->state())});
   }
 
  private:
@@ -252,6 +239,33 @@ class PySimulation {
   /// One step under the scene's error control, ending at t_end at the latest.
   py::dict advance_controlled(double t_end) {
     return finish_step([this, t_end] { return m_sim->advance_adaptive(t_end); });
+  }
+  /// Runs the plan from the current state, its steps numbered from `first`
+  /// (Simulation::advance_to), with the GIL released except between steps, where Ctrl-C stops it;
+  /// raises StepError if a step fails.
+  void run_plan(const StepPlan& plan, long long first) {
+    if (PyErr_CheckSignals() != 0) throw py::error_already_set();  // Ctrl-C before the first
+    m_sim->set_stable_buffers(m_live_views > 0);
+    bool interrupted = false;
+    PlanOutcome out;
+    {
+      py::gil_scoped_release release;
+      out = m_sim->advance_to(plan, first, [&](const StepEvent&) {
+        ++m_steps;
+        py::gil_scoped_acquire gil;
+        interrupted = PyErr_CheckSignals() != 0;  // Ctrl-C between steps
+        return !interrupted;
+      });
+    }
+    if (interrupted) throw py::error_already_set();
+    if (out.end == PlanOutcome::End::Failed) throw failure(out.summary);
+  }
+  /// StepError for a failed step (the one after the m_steps taken).
+  StepFailed failure(const StepSummary& s) const {
+    return StepFailed(m_scene->file + ": step " + std::to_string(m_steps + 1) +
+                      " (t = " + shortest_number(m_sim->failed_t()) +
+                      ", h = " + shortest_number(m_sim->failed_h()) + "): " + to_string(s.status) +
+                      ": " + s.message);
   }
   /// Takes a step with `take` (GIL released); raises StepError if it failed, else returns its
   /// summary.
@@ -265,11 +279,7 @@ class PySimulation {
     }
     const bool ok = s.status == Status::Converged ||
                     (s.status == Status::NotConverged && m_scene->run.allow_not_converged);
-    if (!ok)
-      throw StepFailed(m_scene->file + ": step " + std::to_string(m_steps + 1) +
-                       " (t = " + shortest_number(m_sim->failed_t()) +
-                       ", h = " + shortest_number(m_sim->failed_h()) + "): " + to_string(s.status) +
-                       ": " + s.message);
+    if (!ok) throw failure(s);
     ++m_steps;
     py::dict d;
     d["status"] = to_string(s.status);

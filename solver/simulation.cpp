@@ -22,6 +22,32 @@ Simulation::Simulation(const MassSpringSystem& system, std::unique_ptr<Stepper> 
 
 StepSummary Simulation::advance(double h) { return advance_halving(h, 0); }
 
+PlanOutcome Simulation::advance_to(const StepPlan& plan, long long first,
+                                   const StepObserver& after_step) {
+  HOOKE_ASSERT(!plan.adaptive || m_controller,
+               "an error-controlled plan without set_error_control");
+  PlanOutcome out;
+  for (long long step = first; !plan.done(step - 1, m_state.t); ++step) {
+    const double t_start = m_state.t;
+    const auto t0 = Clock::now();
+    out.summary = plan.adaptive ? advance_adaptive(plan.next_stop(t_start))
+                                : advance(plan.step_size(step, t_start));
+    const double wall = seconds_since(t0);
+    out.step = step;
+    if (!accepted(out.summary)) {
+      out.end = PlanOutcome::End::Failed;
+      return out;
+    }
+    const StepEvent event{step, t_start, wall, out.summary, plan.done(step, m_state.t)};
+    if (!after_step(event)) {
+      out.end = PlanOutcome::End::Stopped;
+      return out;
+    }
+  }
+  out.end = PlanOutcome::End::Finished;
+  return out;
+}
+
 StepSummary Simulation::advance_halving(double h, int depth) {
   const double t_end = m_state.t + h;
   StepSummary s = advance_once(h);

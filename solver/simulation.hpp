@@ -5,8 +5,30 @@
 #include "hooke/integrators/step_controller.hpp"
 #include "hooke/integrators/stepper.hpp"
 #include "hooke/model/mass_spring_system.hpp"
+#include "hooke/step_plan.hpp"
 
 namespace hooke {
+
+/// One step of a run, as Simulation::advance_to() reports it after taking it.
+struct StepEvent {
+  long long step;  ///< its number (1-based; under error control, accepted steps are counted)
+  double t_start;  ///< the time it started at (s); it ended at Simulation::state().t
+  double wall;     ///< wall-clock time it took, retries included (s)
+  const StepSummary& summary;
+  bool last;  ///< the plan's last step (StepPlan::done)
+};
+
+/// How Simulation::advance_to() ended.
+struct PlanOutcome {
+  enum class End {
+    Finished,  ///< the plan's last step was taken
+    Failed,    ///< a step failed (summary: the failure's; see Simulation::advance())
+    Stopped,   ///< the observer asked to stop after `step` (the last one too)
+  };
+  End end = End::Finished;
+  long long step = 0;  ///< the last step taken, or the one that failed
+  StepSummary summary;
+};
 
 /// One mass-spring run without any I/O: a read-only system, a stepper and the current state.
 /// advance(h) takes one step, applies the system's constraints and checks that the new state is
@@ -40,6 +62,14 @@ class Simulation {
   /// summary of the accepted attempt has the iterations of all attempts summed. Fails (state
   /// unchanged, Status::Fatal) when the step would fall below ErrorControl::min_dt.
   StepSummary advance_adaptive(double t_end);
+  /// Called after each step advance_to() takes; false stops the run after it.
+  using StepObserver = std::function<bool(const StepEvent&)>;
+  /// Runs the plan from the current state, taking steps numbered first, first + 1, ... until
+  /// the plan is done (StepPlan::done), a step fails, or after_step returns false. A fixed step
+  /// is advance(plan.step_size(step, t)); under error control (plan.adaptive, after
+  /// set_error_control) a step is advance_adaptive(plan.next_stop(t)). The one scene loop: hooke
+  /// run, the Python module and the studies all run scenes through it.
+  PlanOutcome advance_to(const StepPlan& plan, long long first, const StepObserver& after_step);
   /// Steps accepted and attempts rejected by advance_adaptive(); the step it tries next (s).
   long long accepted_steps() const { return m_accepted; }
   long long rejected_steps() const { return m_rejected; }

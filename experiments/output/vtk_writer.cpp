@@ -65,9 +65,7 @@ void write_vtk_frame(const std::string& path, const State& s, double t, const Fr
   for (Index i = 0; i < n; ++i)
     out.be<double>(0.5 * mesh.masses[i] * s.v.segment<3>(3 * i).squaredNorm());
   const double nan = std::numeric_limits<double>::quiet_NaN();
-  for (const auto& [name, field] :
-       {std::pair<const char*, const Vec*>{"density", mesh.density}, {"pressure", mesh.pressure}}) {
-    if (field == nullptr) continue;
+  for (const auto& [name, field] : mesh.fields) {
     out.text(std::string("\nSCALARS ") + name + " double 1\nLOOKUP_TABLE default\n");
     for (Index i = 0; i < n; ++i) out.be<double>(i < field->size() ? (*field)[i] : nan);
   }

@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "hooke/integrators/stepper.hpp"
 #include "hooke/model/state.hpp"
 
 namespace hooke {
@@ -14,17 +15,16 @@ struct FrameMesh {
   const std::vector<std::array<int, 3>>& triangles;  ///< cloth surface (may be empty)
   const std::vector<char>& pinned;                   ///< per particle
   const Vec& masses;                                 ///< per particle (kg)
-  /// A fluid's fields, or null: density (kg/m^3) and pressure (Pa) of the first entries
-  /// (the fluid particles; the boundary particles after them get NaN).
-  const Vec* density = nullptr;
-  const Vec* pressure = nullptr;
+  /// The stepper's per-particle fields (Stepper::output_fields: an SPH fluid's density and
+  /// pressure), each as a point array; particles past a field's values get NaN.
+  std::vector<ParticleField> fields = {};
 };
 
 /// Writes one frame as a legacy binary VTK POLYDATA file (ParaView, VisIt): the time as field
 /// data; particle positions; the springs as LINES and the cloth's surface triangles as POLYGONS
 /// (so a viewer can shade it); per cell, the strain (l - L) / L of each spring (NaN on the
 /// triangles, which are not springs); per particle, the velocity, a pinned flag and the kinetic
-/// energy m |v|^2 / 2 (J), and for a fluid its density and pressure (NaN on boundary particles).
+/// energy m |v|^2 / 2 (J), and the stepper's fields (a fluid's density and pressure).
 /// Throws OutputError if the file cannot be written.
 /// t: the time written (the step's nominal time; s.t is not used).
 void write_vtk_frame(const std::string& path, const State& s, double t, const FrameMesh& mesh);

@@ -22,7 +22,6 @@
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
 #include "hooke/simulation.hpp"
-#include "hooke/sph/sph_stepper.hpp"
 
 namespace hooke {
 
@@ -117,24 +116,15 @@ class MassSpringRun {
 
  private:
   int run_steps();
-  /// One step: of the scene's fixed size, or under error control (ending at most at the next
-  /// frame time or the duration).
-  StepSummary take_step(long long step);
-  /// True after the run's last step.
-  bool done(long long step) const {
-    return m_adaptive ? m_sim.state().t >= m_scene.time.duration : step >= m_steps;
-  }
   /// " of N" for a run of N fixed steps, "" under error control (for messages).
   std::string of_steps() const { return m_adaptive ? "" : " of " + std::to_string(m_steps); }
   static std::unique_ptr<Stepper> make_scene_stepper(const Scene& scene,
                                                      const MassSpringSystem& system);
   void restore(const Checkpoint& c);
-  /// After a successful step: log row, divergence check, frame, progress, stop request and
-  /// periodic checkpoint. Returns an exit code to stop with, or -1 to go on.
-  int after_step(long long step, const StepSummary& sum);
-  /// [output] interval: true (once) when t reached or passed the next multiple of the interval
-  /// (to round-off: a step landing on it counts), and the next one is then the first above t.
-  bool interval_frame_due(double t);
+  /// After a successful step: the not-converged warning, log row, divergence check, frame,
+  /// progress, stop request and periodic checkpoint. Returns an exit code to stop with, or -1 to
+  /// go on.
+  int after_step(const StepEvent& step);
   /// Frame `step` (if [output] vtk) of this process's state: the whole state in a serial run,
   /// written by RunOutput; in an MPI run, each process writes its piece and rank 0 the .pvtu that
   /// lists them. Collective.
@@ -144,12 +134,6 @@ class MassSpringRun {
   int stop(long long step, int sig);
   void checkpoint(long long step);
   int finish();
-  /// A fluid's fields at state s for a frame (densities at s, the last step's pressures), or
-  /// null for a scene without fluid.
-  const RunOutput::FluidFields* fluid_fields(const State& s);
-  /// The figures of the last step for log.csv (a fluid scene), or null; at step 0 the densities
-  /// of the initial state.
-  const FluidStepStats* fluid_stats(long long step, const State& s);
 
   const Scene& m_scene;
   const MassSpringSystem& m_sys;  // the whole system (its energies are logged on rank 0)
@@ -157,6 +141,7 @@ class MassSpringRun {
   RunGroup& m_group;
   const std::string m_dir;
   const std::string m_label;  // backend_label(scene)
+  const StepPlan m_plan;      // the scene's steps
   const bool m_adaptive;      // integrator.adaptive: steps chosen by error control
   const long long m_steps;    // the fixed steps' count; -1 under error control
   Simulation m_sim;
@@ -166,7 +151,7 @@ class MassSpringRun {
   const StrainLimit* m_strain_limit = nullptr;
   long long m_strain_exceeded = 0, m_worst_strain_step = 0;
   double m_worst_strain = 0.0;
-  long long m_next_frame = 1;  // [output] interval: the next frame is at m_next_frame * interval
+  long long m_next_frame = 1;  // [output] interval: the next frame (StepPlan::frame_due)
   double m_wall = 0.0;
   double m_last_h = 0.0;  // size of the last step (s): a log column under error control
   std::unique_ptr<RunOutput> m_out;
@@ -174,12 +159,7 @@ class MassSpringRun {
   double m_E0 = 0.0, m_scale = 0.0, m_E_limit = 0.0;
   Progress m_progress;
   Clock::time_point m_last_checkpoint = Clock::now();
-  // Fluid scenes: the stepper's figures, and densities for frames at the frame's own state.
-  const SphStepper* m_sph = nullptr;
-  std::unique_ptr<NeighbourSearch> m_frame_search;
-  Vec m_frame_rho;
-  RunOutput::FluidFields m_fields;
-  FluidStepStats m_start_stats;
+  const bool m_fluid;  // a fluid scene: its solves are pressure solves
 };
 
 std::unique_ptr<Stepper> MassSpringRun::make_scene_stepper(const Scene& scene,
@@ -202,11 +182,13 @@ MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const R
       m_group(group),
       m_dir(dir),
       m_label(backend_label(scene)),
-      m_adaptive(scene.integrator.adaptive),
-      m_steps(m_adaptive ? -1 : scene.time.steps()),
+      m_plan(scene.step_plan()),
+      m_adaptive(m_plan.adaptive),
+      m_steps(m_adaptive ? -1 : m_plan.steps()),
       m_sim(group.stepped(m_sys), make_scene_stepper(scene, group.stepped(m_sys)),
             group.local_state(resume ? resume->state : scene.initial)),
-      m_progress(options.progress && group.root(), m_steps, scene.time.duration) {
+      m_progress(options.progress && group.root(), m_steps, scene.time.duration),
+      m_fluid(scene.is_fluid()) {
   if (m_adaptive) m_sim.set_error_control(scene.integrator.error_control, scene.time.dt);
   m_sim.set_accept_not_converged(scene.run.allow_not_converged);
   m_sim.set_max_step_halvings(scene.run.max_step_halvings);
@@ -227,7 +209,11 @@ MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const R
   if (resume) restore(*resume);  // checks the checkpoint before any file is touched
   group.on_root([&] {
     if (!locked) locked = std::make_unique<OutputDir>(dir, "hooke run " + scene.file);
-    m_out = std::make_unique<RunOutput>(scene, std::move(locked), resume, options.force);
+    std::vector<std::string> columns;  // the stepper's figures, log.csv's last columns
+    for (const StepFigure& f : m_sim.stepper().step_figures(m_sim.state()))
+      columns.emplace_back(f.name);
+    m_out = std::make_unique<RunOutput>(scene, std::move(locked), resume, options.force,
+                                        std::move(columns));
   });
   const State& s0 = scene.initial;
   m_E0 = m_sys.kinetic_energy(s0.v) + m_sys.potential_energy(s0.x);
@@ -244,34 +230,6 @@ MassSpringRun::MassSpringRun(const Scene& scene, const std::string& dir, const R
   }
   for (const auto& c : m_sys.constraints())
     if (const auto* limit = dynamic_cast<const StrainLimit*>(c.get())) m_strain_limit = limit;
-  if (const FluidModel* fluid = m_sys.fluid()) {
-    m_sph = dynamic_cast<const SphStepper*>(&m_sim.stepper());
-    HOOKE_ASSERT(m_sph != nullptr, "a fluid scene stepped by " << m_sim.stepper().name());
-    m_frame_search = std::make_unique<NeighbourSearch>(fluid->support());
-    m_frame_rho = Vec::Zero(fluid->num_fluid());
-  }
-}
-
-const RunOutput::FluidFields* MassSpringRun::fluid_fields(const State& s) {
-  if (!m_sph) return nullptr;
-  const FluidModel& fluid = *m_sys.fluid();
-  if (m_frame_search->update(s.x, fluid.num_fluid()) == Status::Converged)
-    fluid.compute_density(*m_frame_search, s.x, m_sys.masses(), m_frame_rho);
-  else
-    m_frame_rho.setConstant(std::numeric_limits<double>::quiet_NaN());
-  m_fields = {&m_frame_rho, &m_sph->pressures()};
-  return &m_fields;
-}
-
-const FluidStepStats* MassSpringRun::fluid_stats(long long step, const State& s) {
-  if (!m_sph) return nullptr;
-  if (step > 0) return &m_sph->last_fluid_stats();
-  fluid_fields(s);
-  m_start_stats = {};
-  const auto [max_error, mean_error] = density_errors(m_frame_rho, m_sys.fluid()->rest_density());
-  m_start_stats.max_density_error = max_error;
-  m_start_stats.mean_density_error = mean_error;
-  return &m_start_stats;
 }
 
 void MassSpringRun::restore(const Checkpoint& c) {
@@ -313,7 +271,7 @@ void MassSpringRun::restore(const Checkpoint& c) {
                      "is at step " + std::to_string(c.step) + " but the scene has only " +
                          std::to_string(m_steps) + " steps");
   m_first_step = c.step + 1;
-  interval_frame_due(c.state.t);  // the frames up to the checkpoint were written before it
+  m_plan.frame_due(c.state.t, m_next_frame);  // the frames up to the checkpoint were written
   m_not_converged = c.not_converged;
   m_sim.set_halved_steps(c.halved_steps);
   m_wall = c.wall;
@@ -354,53 +312,47 @@ int MassSpringRun::run_steps() {
     const RunOutput::ControlColumns start;
     const State& s = m_group.whole(m_sim.state());
     m_group.on_root([&] {
-      m_out->log_row(0, s, 0, 0.0, m_wall, m_adaptive ? &start : nullptr, fluid_stats(0, s));
+      m_out->log_row(0, s, 0, 0.0, m_wall, m_adaptive ? &start : nullptr,
+                     m_sim.stepper().step_figures(s));
     });
     write_frame(0);
   }
   const StopSignals stop_signals;
-  for (long long step = m_first_step; !done(step - 1); ++step) {
-    m_step = step;
-    const double t_start = m_sim.state().t;
-    const auto t0 = Clock::now();
-    const StepSummary sum = take_step(step);
-    m_wall += seconds_since(t0);
-    m_last_h = m_sim.state().t - t_start;
-    const bool accepted = sum.status == Status::Converged ||
-                          (sum.status == Status::NotConverged && m_scene.run.allow_not_converged);
-    if (!accepted) return report_failure(step, sum);
-    if (sum.status == Status::NotConverged && m_not_converged++ == 0 && m_group.root()) {
-      m_progress.done();
-      std::fprintf(stderr,
-                   "warning: %s: step %lld (t = %.9g, %s): %s (continuing, "
-                   "run.allow_not_converged = true; counted below)\n",
-                   m_scene.file.c_str(), step, t_start, m_label.c_str(), sum.message.c_str());
-    }
-    if (const int code = after_step(step, sum); code >= 0) return code;
+  int code = -1;
+  m_step = m_first_step;
+  const PlanOutcome out = m_sim.advance_to(m_plan, m_first_step, [&](const StepEvent& step) {
+    code = after_step(step);
+    m_step = step.step + 1;  // the step being taken next (for the retry notes and messages)
+    return code < 0;
+  });
+  m_step = out.step;
+  switch (out.end) {
+    case PlanOutcome::End::Failed:
+      return report_failure(out.step, out.summary);
+    case PlanOutcome::End::Stopped:
+      return code;
+    case PlanOutcome::End::Finished:
+      break;
   }
   return finish();
 }
 
-StepSummary MassSpringRun::take_step(long long step) {
-  if (!m_adaptive) return m_sim.advance(m_scene.time.step_size(step, m_sim.state().t));
-  // Land on every frame time, so that frames show the state at their time.
-  return m_sim.advance_adaptive(m_scene.next_stop(m_sim.state().t));
-}
-
-bool MassSpringRun::interval_frame_due(double t) {
-  const double dt = m_scene.output.interval;
-  if (dt <= 0.0) return false;
-  const double slack = 1e-9 * std::max(dt, m_scene.time.dt);
-  if (t + slack < double(m_next_frame) * dt) return false;
-  while (double(m_next_frame) * dt <= t + slack) ++m_next_frame;
-  return true;
-}
-
-int MassSpringRun::after_step(long long step, const StepSummary& sum) {
-  const bool last = done(step);
+int MassSpringRun::after_step(const StepEvent& event) {
+  const long long step = event.step;
+  const StepSummary& sum = event.summary;
+  m_wall += event.wall;
+  m_last_h = m_sim.state().t - event.t_start;
+  if (sum.status == Status::NotConverged && m_not_converged++ == 0 && m_group.root()) {
+    m_progress.done();
+    std::fprintf(stderr,
+                 "warning: %s: step %lld (t = %.9g, %s): %s (continuing, "
+                 "run.allow_not_converged = true; counted below)\n",
+                 m_scene.file.c_str(), step, event.t_start, m_label.c_str(), sum.message.c_str());
+  }
+  const bool last = event.last;
   const bool log = step % m_scene.output.log_every == 0 || last;
   const bool frame = (m_scene.output.every > 0 && step % m_scene.output.every == 0) || last ||
-                     interval_frame_due(m_sim.state().t);
+                     m_plan.frame_due(m_sim.state().t, m_next_frame);
   // The whole state, where rank 0 logs it from (a serial run's own); an MPI run's processes write
   // their own pieces of a frame.
   const State& s =
@@ -411,7 +363,7 @@ int MassSpringRun::after_step(long long step, const StepSummary& sum) {
     double E = 0.0;
     m_group.on_root([&] {
       E = m_out->log_row(step, s, sum.iterations, sum.residual, m_wall,
-                         m_adaptive ? &control : nullptr, fluid_stats(step, s));
+                         m_adaptive ? &control : nullptr, m_sim.stepper().step_figures(s));
     });
     E = m_group.from_root(E);
     if (!(E <= m_E_limit)) return report_divergence(step, E);
@@ -449,7 +401,7 @@ int MassSpringRun::report_failure(long long step, const StepSummary& failed) {
       "step %lld failed (t = %.9g, h = %.6g, %s, %d %s iterations, residual %.3g): "
       "%s: %s",
       step, m_sim.failed_t(), m_sim.failed_h(), m_label.c_str(), sum.iterations,
-      m_sph ? "pressure" : "linear", sum.residual, to_string(sum.status), sum.message.c_str());
+      m_fluid ? "pressure" : "linear", sum.residual, to_string(sum.status), sum.message.c_str());
   if (!m_group.root()) return 3;
   m_out->failed(what);
   std::fprintf(stderr,
@@ -457,7 +409,7 @@ int MassSpringRun::report_failure(long long step, const StepSummary& failed) {
                "  kept: %s/log.csv and the frames written so far; fixes: %sa smaller time.dt, "
                "run.max_step_halvings > 0%s\n",
                m_scene.file.c_str(), what.c_str(), m_dir.c_str(),
-               m_sph ? "integrator.courant = 0.4 or less (CFL substeps), " : "",
+               m_fluid ? "integrator.courant = 0.4 or less (CFL substeps), " : "",
                sum.status == Status::NotConverged
                    ? ", a looser tolerance, more iterations, or run.allow_not_converged = true"
                    : "");
@@ -466,9 +418,9 @@ int MassSpringRun::report_failure(long long step, const StepSummary& failed) {
 
 void MassSpringRun::write_frame(long long step) {
   const State& s = m_sim.state();
-  if (!m_group.distributed()) return m_out->frame(step, s, fluid_fields(s));
+  if (!m_group.distributed()) return m_out->frame(step, s, m_sim.stepper().output_fields(s));
   if (!m_piece) return;  // [output] vtk = false
-  const double t = m_adaptive ? s.t : m_scene.time.time_at(step);
+  const double t = m_adaptive ? s.t : m_plan.time_at(step);
   m_group.on_every([&] {
     write_vtu_piece(RunOutput::frame_piece_path(m_dir, step, m_group.rank()), s, t, *m_piece);
   });
@@ -563,7 +515,7 @@ int MassSpringRun::finish() {
                    m_worst_strain_step, m_strain_limit->passes());
   }
   if (m_options.on_finished) m_options.on_finished(m_sim);
-  m_group.on_root([&] { written = m_out->finish(s, summary, fluid_fields(s)); });
+  m_group.on_root([&] { written = m_out->finish(s, summary, m_sim.stepper().output_fields(s)); });
   if (!m_group.root()) return 0;
   if (m_adaptive) {  // in CVODE's style: what the error control did
     const ErrorControl& c = m_scene.integrator.error_control;
@@ -595,7 +547,8 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
   const Index d = ode.dimension();
   Vec X = scene.ode_initial, X1(d), exact(d);
   double t = 0.0;
-  const long long N = scene.time.steps();
+  const StepPlan plan = scene.step_plan();
+  const long long N = plan.steps();
   OutputFile log = OutputFile::stream(folder.file("log.csv"));
   auto row = [&](long long step) {
     scene.ode_exact(t, exact);
@@ -610,7 +563,7 @@ int run_ode(Scene& scene, const std::string& dir, const RunOptions& options) {
     row(0);
     Progress progress(options.progress, N, scene.time.duration);
     for (long long step = 1; step <= N; ++step) {
-      const double t_next = t + scene.time.step_size(step, t);
+      const double t_next = t + plan.step_size(step, t);
       method->step(ode, t, t_next - t, X, X1);
       X.swap(X1);
       t = t_next;

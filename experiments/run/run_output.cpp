@@ -3,7 +3,6 @@
 #include <cstdio>
 #include <cstdlib>
 #include <filesystem>
-#include <limits>
 #include <sstream>
 
 #include "experiments/output/png_writer.hpp"
@@ -67,11 +66,12 @@ void write_final_csv(const std::string& path, const State& s, Index n) {
 }  // namespace
 
 RunOutput::RunOutput(const Scene& scene, std::unique_ptr<OutputDir> dir, const Checkpoint* resume,
-                     bool force)
+                     bool force, std::vector<std::string> figure_columns)
     : m_scene(scene),
       m_dir(std::move(dir)),
       m_frames_dir(m_dir->file("frames")),
-      m_exact(scene.initial) {
+      m_exact(scene.initial),
+      m_figure_columns(std::move(figure_columns)) {
   if (resume) {
     m_log = reopen_log(m_dir->file("log.csv"), *resume);
     m_frames = resume->frames;
@@ -103,12 +103,11 @@ void RunOutput::start_fresh(bool force) {
   m_dir->set_status("running");
   write_resolved_scene(m_scene, m_dir->file("scene.toml"));
   m_log = std::make_unique<OutputFile>(OutputFile::stream(m_dir->file("log.csv")));
-  m_log->print("step,t,kinetic,potential,total,max_strain,iterations,residual,wall_time%s%s%s\n",
+  m_log->print("step,t,kinetic,potential,total,max_strain,iterations,residual,wall_time%s%s",
                m_scene.exact ? ",error" : "",
-               m_scene.integrator.adaptive ? ",h,accepted,rejected" : "",
-               m_scene.is_fluid()
-                   ? ",max_density_error,mean_density_error,pressure_iterations,substeps,front,lost"
-                   : "");
+               m_scene.integrator.adaptive ? ",h,accepted,rejected" : "");
+  for (const std::string& column : m_figure_columns) m_log->print(",%s", column.c_str());
+  m_log->print("\n");
 }
 
 void RunOutput::prepare_frames(const Checkpoint* resume) {
@@ -135,10 +134,12 @@ void RunOutput::prepare_frames(const Checkpoint* resume) {
 }
 
 double RunOutput::log_row(long long step, const State& s, int iterations, double residual,
-                          double wall, const ControlColumns* control, const FluidStepStats* fluid) {
+                          double wall, const ControlColumns* control,
+                          const std::vector<StepFigure>& figures) {
   HOOKE_ASSERT((control != nullptr) == m_scene.integrator.adaptive,
                "error-control columns exactly for adaptive scenes");
-  HOOKE_ASSERT((fluid != nullptr) == m_scene.is_fluid(), "fluid columns exactly for fluid scenes");
+  HOOKE_ASSERT(figures.size() == m_figure_columns.size(),
+               figures.size() << " step figures for " << m_figure_columns.size() << " columns");
   const MassSpringSystem& sys = *m_scene.system;
   const double K = sys.kinetic_energy(s.v), U = sys.potential_energy(s.x);
   m_log->print("%lld,%.17g,%.17g,%.17g,%.17g,%.17g,%d,%.6g,%.6g", step, s.t, K, U, K + U,
@@ -148,24 +149,22 @@ double RunOutput::log_row(long long step, const State& s, int iterations, double
     m_log->print(",%.17g", (s.x - m_exact.x).lpNorm<Eigen::Infinity>());
   }
   if (control) m_log->print(",%.17g,%lld,%lld", control->h, control->accepted, control->rejected);
-  if (fluid) {
-    double front = -std::numeric_limits<double>::infinity();
-    for (Index i = 0; i < m_scene.system->fluid()->num_fluid(); ++i)
-      front = std::max(front, s.x[3 * i]);
-    m_log->print(",%.6g,%.6g,%d,%d,%.17g,%lld", fluid->max_density_error, fluid->mean_density_error,
-                 fluid->pressure_iterations, fluid->substeps, front, fluid->lost);
+  for (size_t k = 0; k < figures.size(); ++k) {
+    HOOKE_ASSERT(m_figure_columns[k] == figures[k].name,
+                 "step figure " << figures[k].name << " in column " << m_figure_columns[k]);
+    m_log->print(",%.*g", figures[k].digits, figures[k].value);
   }
   m_log->print("\n");
   return K + U;
 }
 
-void RunOutput::frame(long long step, const State& s, const FluidFields* fluid) {
+void RunOutput::frame(long long step, const State& s, const std::vector<ParticleField>& fields) {
   if (!m_scene.output.vtk) return;
   const std::string name = frame_stem(step) + ".vtk";
   // Frames of fixed steps carry the step's nominal time (0.1, not a sum of steps
   // 0.10000000000000002); error control lands on its frame times exactly.
-  const double t = m_scene.integrator.adaptive ? s.t : m_scene.time.time_at(step);
-  write_vtk_frame(m_frames_dir + "/" + name, s, t, frame_mesh(fluid));
+  const double t = m_scene.integrator.adaptive ? s.t : m_scene.step_plan().time_at(step);
+  write_vtk_frame(m_frames_dir + "/" + name, s, t, frame_mesh(fields));
   m_frames.emplace_back(t, std::string("frames/") + name);
   write_pvd(m_dir->file("frames.pvd"), m_frames);
 }
@@ -236,18 +235,17 @@ bool RunOutput::failed(const std::string& why) noexcept {
   return m_dir->mark_failed(why);
 }
 
-FrameMesh RunOutput::frame_mesh(const FluidFields* fluid) const {
+FrameMesh RunOutput::frame_mesh(const std::vector<ParticleField>& fields) const {
   return FrameMesh{m_scene.edges,
                    m_scene.edge_rest,
                    m_scene.triangles,
                    m_scene.system->pinned(),
                    m_scene.system->masses(),
-                   fluid ? fluid->density : nullptr,
-                   fluid ? fluid->pressure : nullptr};
+                   fields};
 }
 
 std::vector<std::string> RunOutput::finish(const State& s, const std::string& summary,
-                                           const FluidFields* fluid) {
+                                           const std::vector<ParticleField>& fields) {
   std::vector<std::string> written = {"scene.toml", "log.csv"};
   m_log->commit();
   if (m_scene.output.vtk) written.insert(written.end(), {"frames/", "frames.pvd"});
@@ -255,7 +253,7 @@ std::vector<std::string> RunOutput::finish(const State& s, const std::string& su
     // The final state as a frame (ParaView opens it too), drawn by experiments/plot/final.py with
     // matplotlib: axes in metres, the time, a strain colour bar, the colliders. Without Python or
     // matplotlib, the built-in renderer still leaves a picture.
-    write_vtk_frame(m_dir->file("final.vtk"), s, s.t, frame_mesh(fluid));
+    write_vtk_frame(m_dir->file("final.vtk"), s, s.t, frame_mesh(fields));
     written.push_back("final.vtk");
     if (run_plot_script("final.py", m_dir->path(), false) != 0) {
       std::fprintf(stderr,

@@ -8,7 +8,7 @@
 #include "experiments/output/output_file.hpp"
 #include "experiments/output/vtk_writer.hpp"
 #include "experiments/run/checkpoint.hpp"
-#include "hooke/sph/fluid_model.hpp"
+#include "hooke/integrators/stepper.hpp"
 #include "problems/scene.hpp"
 
 namespace hooke {
@@ -40,9 +40,10 @@ class RunOutput {
   /// scene must outlive the object. resume: the checkpoint a resumed run continues from, or
   /// null. force: a fresh run may replace a resumable checkpoint. Throws InputError for a folder
   /// that holds a checkpoint (fresh run, not forced) or a log.csv shorter than the checkpoint says;
-  /// OutputError when a file cannot be written.
+  /// OutputError when a file cannot be written. figure_columns: the names of the stepper's step
+  /// figures (Stepper::step_figures), log.csv's last columns.
   RunOutput(const Scene& scene, std::unique_ptr<OutputDir> dir, const Checkpoint* resume,
-            bool force);
+            bool force, std::vector<std::string> figure_columns = {});
 
   const std::string& dir() const { return m_dir->path(); }
   std::string checkpoint_path() const { return m_dir->file("checkpoint.bin"); }
@@ -56,21 +57,17 @@ class RunOutput {
     double h = 0.0;
     long long accepted = 0, rejected = 0;
   };
-  /// What a fluid run adds to its frames: the density at the frame's state (kg/m^3) and the
-  /// pressures of the last step (Pa), one entry per fluid particle.
-  struct FluidFields {
-    const Vec* density = nullptr;
-    const Vec* pressure = nullptr;
-  };
   /// Appends the log row of `step` at state s; returns the total energy (J) it logged. control:
-  /// the error control's columns, given exactly for adaptive scenes. fluid: the step's figures,
-  /// given exactly for fluid scenes, in columns max_density_error, mean_density_error,
-  /// pressure_iterations, substeps, front (the largest x of a fluid particle, m) and lost (fluid
-  /// particles that have left the walls' domain so far, SphStepper).
+  /// the error control's columns, given exactly for adaptive scenes. figures: the stepper's
+  /// figures of the step (Stepper::step_figures), one per figure column, in their order (an SPH
+  /// stepper's: max_density_error, mean_density_error, pressure_iterations, substeps, front and
+  /// lost).
   double log_row(long long step, const State& s, int iterations, double residual, double wall,
-                 const ControlColumns* control = nullptr, const FluidStepStats* fluid = nullptr);
-  /// Writes frame `step` (if [output] vtk) and rewrites frames.pvd; fluid: a fluid's fields.
-  void frame(long long step, const State& s, const FluidFields* fluid = nullptr);
+                 const ControlColumns* control = nullptr,
+                 const std::vector<StepFigure>& figures = {});
+  /// Writes frame `step` (if [output] vtk) and rewrites frames.pvd; fields: the stepper's
+  /// (Stepper::output_fields).
+  void frame(long long step, const State& s, const std::vector<ParticleField>& fields = {});
   /// Where process `rank` of an MPI run writes its piece of frame `step` (write_vtu_piece) in the
   /// run folder `dir`: DIR/frames/frame_STEP_RANK.vtu.
   static std::string frame_piece_path(const std::string& dir, long long step, int rank);
@@ -104,11 +101,11 @@ class RunOutput {
   /// removes the checkpoint (nothing is left to resume) and marks the folder finished. Returns the
   /// names of the files the run wrote, for the end-of-run line.
   std::vector<std::string> finish(const State& s, const std::string& summary,
-                                  const FluidFields* fluid = nullptr);
+                                  const std::vector<ParticleField>& fields = {});
 
  private:
   void start_fresh(bool force);
-  FrameMesh frame_mesh(const FluidFields* fluid) const;
+  FrameMesh frame_mesh(const std::vector<ParticleField>& fields) const;
   void prepare_frames(const Checkpoint* resume);
 
   const Scene& m_scene;
@@ -117,6 +114,7 @@ class RunOutput {
   std::vector<std::pair<double, std::string>> m_frames;
   std::unique_ptr<OutputFile> m_log;
   State m_exact;  // scratch for the exact solution's column
+  const std::vector<std::string> m_figure_columns;
 };
 
 }  // namespace hooke

@@ -30,6 +30,7 @@
 #include "experiments/studies/trajectory.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/registry.hpp"
+#include "hooke/simulation.hpp"
 #include "hooke/sph/sph_stepper.hpp"
 #include "hooke/sph/surge_front.hpp"
 #include "problems/scene.hpp"
@@ -115,20 +116,17 @@ FluidRunFigures run_fluid_case(const Scene& scene) {
     if (const auto* gravity = dynamic_cast<const Gravity*>(force.get()))
       g = gravity->acceleration().norm();
   const double a = hi - lo + dx, T_scale = g > 0.0 ? std::sqrt(2.0 * g / a) : NAN;
-  auto stepper = make_stepper(scene.integrator.method, *scene.system, scene.integrator.options);
-  const auto& sph = dynamic_cast<const SphStepper&>(*stepper);
-  State s = scene.initial, next = scene.initial;
-  const long long N = scene.time.steps();
-  f.front.reserve(size_t(N));
+  // The scene's steps through Simulation, as hooke run takes them (constraints, finiteness check).
+  Simulation sim(*scene.system,
+                 make_stepper(scene.integrator.method, *scene.system, scene.integrator.options),
+                 scene.initial);
+  const auto& sph = dynamic_cast<const SphStepper&>(sim.stepper());
+  const StepPlan plan = scene.step_plan();
+  f.front.reserve(size_t(plan.steps()));
   double sum_mean = 0.0;
   const auto start = Clock::now();
-  for (long long k = 1; k <= N; ++k) {
-    const StepSummary r = stepper->step(s, scene.time.step_size(k, s.t), next);
-    if (step_failed(r)) {
-      f.status = csv_quoted(r.message);
-      break;
-    }
-    std::swap(s, next);
+  const PlanOutcome out = sim.advance_to(plan, 1, [&](const StepEvent&) {
+    const State& s = sim.state();
     const FluidStepStats& st = sph.last_fluid_stats();
     ++f.steps;
     f.substeps += st.substeps;
@@ -138,7 +136,9 @@ FluidRunFigures run_fluid_case(const Scene& scene) {
     double front = -INFINITY;
     for (Index i = 0; i < nf; ++i) front = std::max(front, s.x[3 * i]);
     f.front.push_back({s.t * T_scale, (front + dx / 2 - lo + dx / 2) / a});
-  }
+    return true;
+  });
+  if (out.end == PlanOutcome::End::Failed) f.status = csv_quoted(out.summary.message);
   f.wall = seconds_since(start);
   f.mean_density_error = f.steps > 0 ? sum_mean / double(f.steps) : NAN;
   return f;

@@ -14,8 +14,6 @@
 
 namespace hooke {
 
-namespace {}
-
 Trajectory run_trajectory(const Scene& scene, const std::string& method,
                           const MethodOptions& options, const std::vector<long long>& sample_steps,
                           bool step_between_samples, const RunLimits& limits) {
@@ -29,13 +27,15 @@ Trajectory run_trajectory(const Scene& scene, const std::string& method,
     return tr;
   }
   Simulation sim(sys, std::move(stepper), scene.initial);
-  // Error-controlled scenes (integrator.adaptive) step to each sample time under their control.
-  const bool adaptive = scene.integrator.adaptive;
-  if (adaptive) sim.set_error_control(scene.integrator.error_control, scene.time.dt);
-  const long long N = scene.time.steps();
-  auto time_of = [&](long long step) {
-    return step == N ? scene.time.duration : double(step) * scene.time.dt;
-  };
+  // The scene's steps; error-controlled scenes (integrator.adaptive) land on the sample times
+  // instead of the frame times.
+  StepPlan plan = scene.step_plan();
+  const bool adaptive = plan.adaptive;
+  if (adaptive) {
+    sim.set_error_control(scene.integrator.error_control, scene.time.dt);
+    plan.frame_interval = 0.0;
+    for (long long k : sample_steps) plan.stop_times.push_back(plan.time_at(k));
+  }
   const auto t0 = Clock::now();
   auto stop = [&](const std::string& why) {
     tr.status = why;
@@ -63,31 +63,34 @@ Trajectory run_trajectory(const Scene& scene, const std::string& method,
     return "";
   };
   long long not_converged = 0, step = 0;
+  std::string why;  // a broken limit between samples
+  auto failed = [&](const StepSummary& s) {
+    std::ostringstream os;
+    os << "failed at t = " << sim.state().t << ": " << s.message;
+    return stop(os.str());
+  };
   for (long long target : sample_steps) {
-    while (step < target) {
-      const long long next = step_between_samples || adaptive ? target : step + 1;
-      const double t = sim.state().t;
-      const StepSummary s = adaptive               ? sim.advance_adaptive(time_of(next))
-                            : step_between_samples ? sim.advance(time_of(next) - t)
-                                                   : sim.advance(scene.time.step_size(next, t));
-      if (s.status == Status::BrokeDown || s.status == Status::Fatal) {
-        std::ostringstream os;
-        os << "failed at t = " << sim.state().t << ": " << s.message;
-        return stop(os.str());
-      }
+    if (step < target && step_between_samples && !adaptive) {  // one step straight to the sample
+      const StepSummary s = sim.advance(plan.time_at(target) - sim.state().t);
+      if (step_failed(s)) return failed(s);
       not_converged += s.status == Status::NotConverged;
-      if (adaptive && sim.state().t < time_of(next)) {  // an accepted step short of the sample
-        tr.steps = sim.accepted_steps();
-        if (limits.check_every > 0 && tr.steps % limits.check_every == 0)
-          if (std::string why = check(sim.state()); !why.empty()) return stop(why);
-        continue;
-      }
-      step = next;
-      tr.steps = adaptive ? sim.accepted_steps() : step;
-      if (limits.check_every > 0 && step % limits.check_every == 0 && step != target)
-        if (std::string why = check(sim.state()); !why.empty()) return stop(why);
+      tr.steps = step = target;
+    } else if (step < target) {
+      const double t_sample = plan.time_at(target);
+      const PlanOutcome out = sim.advance_to(plan, step + 1, [&](const StepEvent& e) {
+        not_converged += e.summary.status == Status::NotConverged;
+        const bool reached = adaptive ? sim.state().t >= t_sample : e.step >= target;
+        tr.steps = adaptive ? sim.accepted_steps() : e.step;
+        if (!reached && limits.check_every > 0 && tr.steps % limits.check_every == 0)
+          why = check(sim.state());
+        return !reached && why.empty();
+      });
+      if (out.end == PlanOutcome::End::Failed) return failed(out.summary);
+      if (!why.empty()) return stop(why);
+      step = target;
     }
-    if (std::string why = check(sim.state()); !why.empty()) return stop(why);
+    why = check(sim.state());
+    if (!why.empty()) return stop(why);
     tr.samples.push_back(sim.state());
   }
   tr.wall = seconds_since(t0);

@@ -56,6 +56,22 @@ inline bool step_failed(const StepSummary& s) {
   return s.status == Status::BrokeDown || s.status == Status::Fatal;
 }
 
+/// A per-particle quantity a stepper publishes for a run's frames (Stepper::output_fields): its
+/// name (a VTK point array) and values for the first values->size() particles (an SPH stepper's
+/// fluid particles; the particles after them show NaN).
+struct ParticleField {
+  const char* name;
+  const Vec* values;
+};
+
+/// A figure of a step for a run's log (Stepper::step_figures): its log.csv column, its value and
+/// the significant digits it is written with (17 for counts, which then print as integers).
+struct StepFigure {
+  const char* name;
+  double value;
+  int digits;
+};
+
 /// Advances a mass-spring state by one step of size h. Implementations hold a reference to their
 /// (read-only) system and own all their scratch; step() must not allocate once warmed up.
 /// Constraints (colliders, strain limiting) are not applied here: Simulation applies them.
@@ -90,6 +106,18 @@ class Stepper {
     const StepperStats s = stats();
     return s.steps == 0 ? std::string() : format_stats(s);
   }
+
+  // Output. What a stepper knows of a state beyond x and v (an SPH fluid's densities and
+  // pressures), published so that a run's writers need not know the concrete stepper.
+
+  /// The last step's figures for a run's log at state s, the state that step ended in; before
+  /// the first step, those of the initial state s (counts 0). The same names in the same order on
+  /// every call (they are log.csv's columns). Empty by default.
+  virtual std::vector<StepFigure> step_figures(const State& /*s*/) { return {}; }
+  /// The per-particle fields of state s, the state the last step ended in (or the initial one),
+  /// for a run's frames; the values stay valid until the next step or call. Computing them must
+  /// not change the steps that follow. Empty by default.
+  virtual std::vector<ParticleField> output_fields(const State& /*s*/) { return {}; }
 
   // Checkpoints. A step may depend on more than its start state: a multistep history (BDF2's
   // previous state) or a warm start (an iterative linear backend's previous correction). A

@@ -1,8 +1,11 @@
 #include "hooke/sph/sph_stepper.hpp"
 
+#include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
+#include <tuple>
 
 namespace hooke {
 
@@ -123,6 +126,39 @@ std::string SphStepper::report() const {
   if (m_last.lost > 0)
     os << "; " << m_last.lost << " fluid particles lost (left the walls' domain)";
   return os.str();
+}
+
+void SphStepper::output_densities(const State& s) {
+  // The next step updates the search at the same positions again: an update depends on the
+  // positions only, so this one leaves the steps unchanged.
+  m_output_rho.resize(m_fluid.num_fluid());
+  if (m_search.update(s.x, m_fluid.num_fluid()) == Status::Converged)
+    m_fluid.compute_density(m_search, s.x, m_system.masses(), m_output_rho);
+  else
+    m_output_rho.setConstant(std::numeric_limits<double>::quiet_NaN());
+}
+
+std::vector<StepFigure> SphStepper::step_figures(const State& s) {
+  FluidStepStats st = m_last;
+  if (m_stats.steps == 0) {  // the initial state's densities
+    output_densities(s);
+    st = {};
+    std::tie(st.max_density_error, st.mean_density_error) =
+        density_errors(m_output_rho, m_fluid.rest_density());
+  }
+  double front = -std::numeric_limits<double>::infinity();
+  for (Index i = 0; i < m_fluid.num_fluid(); ++i) front = std::max(front, s.x[3 * i]);
+  return {{"max_density_error", st.max_density_error, 6},
+          {"mean_density_error", st.mean_density_error, 6},
+          {"pressure_iterations", double(st.pressure_iterations), 17},
+          {"substeps", double(st.substeps), 17},
+          {"front", front, 17},
+          {"lost", double(st.lost), 17}};
+}
+
+std::vector<ParticleField> SphStepper::output_fields(const State& s) {
+  output_densities(s);
+  return {{"density", &m_output_rho}, {"pressure", &m_p}};
 }
 
 bool SphStepper::prepare(ConstRef x, StepSummary& s) {

@@ -51,6 +51,12 @@ class SphStepper : public Stepper {
   bool lost(ConstRef x, Index i) const;
   StepperStats stats() const override { return m_stats; }
   std::string report() const override;
+  /// max_density_error, mean_density_error (of the last step, or of s before the first),
+  /// pressure_iterations, substeps, front (the largest x of a fluid particle in s, m) and lost.
+  std::vector<StepFigure> step_figures(const State& s) override;
+  /// density (at s, by this stepper's neighbour search; NaN if it fails) and pressure (of the
+  /// last substep), num_fluid entries each.
+  std::vector<ParticleField> output_fields(const State& s) override;
 
  protected:
   /// Throws std::invalid_argument if sph_unsupported(system) is not "". courant: the CFL number
@@ -88,6 +94,11 @@ class SphStepper : public Stepper {
   mutable bool m_domain_known = false;
   FluidStepStats m_last;
   StepperStats m_stats;
+  Vec m_output_rho;  // num_fluid: densities at the state of output_fields() and step_figures()
+
+ private:
+  /// m_output_rho = the densities at s (NaN if the neighbour search fails there).
+  void output_densities(const State& s);
 };
 
 }  // namespace hooke

@@ -32,6 +32,7 @@ class FailsAboveStep final : public Stepper {
   const char* name() const override { return "fails-above-step"; }
   StepSummary step(const State& s0, double h, State& s1) override {
     ++calls;
+    sizes.push_back(h);
     StepSummary r;
     if (h > m_h_max) {
       r.status = Status::NotConverged;
@@ -47,6 +48,7 @@ class FailsAboveStep final : public Stepper {
     return r;
   }
   int calls = 0;
+  std::vector<double> sizes;  // h of every call
 
  private:
   const MassSpringSystem& m_sys;
@@ -345,6 +347,145 @@ TEST(SimulationAdaptive, GivesUpBelowTheSmallestStepWithTheStateUnchanged) {
   EXPECT_EQ(sim.state(), before);
   EXPECT_GE(sim.rejected_steps(), 1);
   EXPECT_EQ(sim.accepted_steps(), 0);
+}
+
+// The plan of fixed steps: every step is dt bit for bit but the last, which lands on the end;
+// a duration one rounding short of a whole number of steps takes no sliver step after them.
+TEST(StepPlan, FixedStepsAreDtButTheLastWhichLandsOnTheEnd) {
+  StepPlan plan;
+  plan.dt = 0.001;
+  plan.end = 0.0105;
+  EXPECT_EQ(plan.steps(), 11);
+  EXPECT_EQ(plan.step_size(10, 0.01), 0.001);
+  EXPECT_EQ(plan.step_size(11, 0.01), 0.0105 - 0.01);
+  EXPECT_EQ(plan.time_at(3), 3 * 0.001);
+  EXPECT_EQ(plan.time_at(11), 0.0105);
+  plan.end = 10 * 0.1;  // 1.0, with dt 0.1: 10 steps, not 11
+  plan.dt = 0.1;
+  EXPECT_EQ(plan.steps(), 10);
+  plan.start = 0.25;  // a plan from t = 0.25: 8 steps to 1.0, the last of 0.05
+  EXPECT_EQ(plan.steps(), 8);
+  EXPECT_EQ(plan.time_at(2), 0.25 + 2 * 0.1);
+  plan.start = plan.end;
+  EXPECT_EQ(plan.steps(), 0);
+  EXPECT_TRUE(plan.done(0, plan.end));
+}
+
+TEST(StepPlan, StopsAreTheNextFrameTimeStopTimeOrTheEnd) {
+  StepPlan plan;
+  plan.dt = 0.01;
+  plan.end = 1.0;
+  plan.adaptive = true;
+  EXPECT_EQ(plan.next_stop(0.3), 1.0);
+  plan.frame_interval = 0.25;
+  EXPECT_EQ(plan.next_stop(0.0), 0.25);
+  EXPECT_EQ(plan.next_stop(0.3), 0.5);
+  EXPECT_EQ(plan.next_stop(0.5 - 1e-13), 0.75) << "within round-off of a frame time counts";
+  EXPECT_EQ(plan.next_stop(0.9), 1.0);
+  plan.stop_times = {0.1, 0.6};
+  EXPECT_EQ(plan.next_stop(0.0), 0.1);
+  EXPECT_EQ(plan.next_stop(0.55), 0.6);
+  long long next_frame = 1;
+  EXPECT_FALSE(plan.frame_due(0.2, next_frame));
+  EXPECT_TRUE(plan.frame_due(0.25, next_frame));
+  EXPECT_FALSE(plan.frame_due(0.3, next_frame));
+  EXPECT_TRUE(plan.frame_due(0.8, next_frame)) << "a step past two frame times: one frame";
+  EXPECT_EQ(next_frame, 4);
+  EXPECT_FALSE(plan.done(99, 0.99));
+  EXPECT_TRUE(plan.done(0, 1.0));
+}
+
+// advance_to takes the plan's step sizes, numbers the steps, marks the last one, and a run
+// stopped by its observer and continued from the next step ends in the same bits as one run
+// through.
+TEST(Simulation, AdvanceToTakesThePlansStepsAndContinuesWhereItStopped) {
+  const test::TwoParticleSpring sp(1e3);
+  StepPlan plan;
+  plan.dt = 0.001;
+  plan.end = 0.0105;
+  auto run = [&](long long stop_after, std::vector<double>& sizes) {
+    auto stepper = std::make_unique<FailsAboveStep>(*sp.system, 1.0);
+    FailsAboveStep* raw = stepper.get();
+    Simulation sim(*sp.system, std::move(stepper), sp.initial(0.1));
+    std::vector<long long> steps;
+    long long lasts = 0;
+    auto observe = [&](const StepEvent& e) {
+      steps.push_back(e.step);
+      lasts += e.last;
+      EXPECT_EQ(e.summary.iterations, 1);
+      EXPECT_GE(e.wall, 0.0);
+      return e.step != stop_after;
+    };
+    PlanOutcome out = sim.advance_to(plan, 1, observe);
+    if (stop_after > 0) {
+      EXPECT_EQ(out.end, PlanOutcome::End::Stopped);
+      EXPECT_EQ(out.step, stop_after);
+      out = sim.advance_to(plan, stop_after + 1, observe);
+    }
+    EXPECT_EQ(out.end, PlanOutcome::End::Finished);
+    EXPECT_EQ(out.step, 11);
+    EXPECT_EQ(lasts, 1);
+    std::vector<long long> expected(11);
+    for (long long k = 0; k < 11; ++k) expected[size_t(k)] = k + 1;
+    EXPECT_EQ(steps, expected);
+    EXPECT_NEAR(sim.state().t, 0.0105, 1e-15);
+    sizes = raw->sizes;
+    return sim.state();
+  };
+  std::vector<double> sizes, sizes_stopped;
+  const State through = run(-1, sizes), stopped = run(4, sizes_stopped);
+  ASSERT_EQ(sizes.size(), 11u);
+  for (size_t k = 0; k < 10; ++k) EXPECT_EQ(sizes[k], 0.001) << "step " << k + 1;
+  EXPECT_NEAR(sizes[10], 0.0005, 1e-15);
+  EXPECT_EQ(sizes_stopped, sizes);
+  EXPECT_EQ(stopped, through);
+}
+
+// A failed step ends advance_to with its number and summary, the state where the step before
+// left it.
+TEST(Simulation, AdvanceToStopsAtAFailedStep) {
+  const test::TwoParticleSpring sp(1e3);
+  StepPlan plan;
+  plan.dt = 0.002;
+  plan.end = 0.01;
+  Simulation sim(*sp.system, std::make_unique<FailsAboveStep>(*sp.system, 0.0015), sp.initial(0.1));
+  sim.set_accept_not_converged(false);
+  int observed = 0;
+  const PlanOutcome out = sim.advance_to(plan, 1, [&](const StepEvent&) {
+    ++observed;
+    return true;
+  });
+  EXPECT_EQ(out.end, PlanOutcome::End::Failed);
+  EXPECT_EQ(out.step, 1);
+  EXPECT_EQ(out.summary.status, Status::NotConverged);
+  EXPECT_EQ(observed, 0);
+  EXPECT_EQ(sim.state().t, 0.0);
+}
+
+// Under error control the steps land on every frame time and on the end, exactly.
+TEST(SimulationAdaptive, AdvanceToLandsOnEveryFrameTime) {
+  const test::TwoParticleSpring sp(1e3);
+  Simulation sim(*sp.system, make_stepper("dopri5", *sp.system), sp.initial(0.1));
+  sim.set_error_control(tolerances(1e-6), 1e-4);
+  StepPlan plan;
+  plan.dt = 1e-4;
+  plan.end = 0.1;
+  plan.adaptive = true;
+  plan.frame_interval = 0.03;
+  std::vector<double> ends;
+  long long steps = 0;
+  const PlanOutcome out = sim.advance_to(plan, 1, [&](const StepEvent& e) {
+    ends.push_back(sim.state().t);
+    steps = e.step;
+    return true;
+  });
+  ASSERT_EQ(out.end, PlanOutcome::End::Finished) << out.summary.message;
+  EXPECT_EQ(steps, sim.accepted_steps());
+  EXPECT_GT(steps, 4);
+  for (double frame : {1 * 0.03, 2 * 0.03, 3 * 0.03, 0.1})
+    EXPECT_NE(std::find(ends.begin(), ends.end(), frame), ends.end())
+        << "no step ends at " << frame;
+  EXPECT_EQ(sim.state().t, 0.1);
 }
 
 }  // namespace

@@ -172,5 +172,50 @@ TEST(SphStepper, AParticleThatLeavesTheWallsIsLostAndStopsWhereItIs) {
   }
 }
 
+// What a stepper publishes for output (Stepper::output_fields, step_figures) leaves its steps
+// unchanged (it updates the stepper's own neighbour search): a run that asks for them after every
+// step ends in the same bits as one that never does. The densities are those of the state asked
+// about, as a fresh neighbour search gives them; before the first step the figures are the
+// initial state's.
+TEST(SphStepper, OutputFieldsAreTheStatesAndLeaveTheStepsUnchanged) {
+  for (const char* method : {"wcsph", "iisph", "dfsph"}) {
+    State end[2];
+    for (int ask : {0, 1}) {
+      auto scene = test::tank_2d(0.01, 0.4, 0.4, 0.2, 0.3, FluidOptions{});
+      auto stepper = make(method, *scene.system);
+      const FluidModel& fluid = stepper->fluid();
+      const std::vector<StepFigure> start = stepper->step_figures(scene.state);
+      ASSERT_EQ(start.size(), 6u);
+      EXPECT_STREQ(start[0].name, "max_density_error");
+      EXPECT_EQ(start[2].value, 0.0) << "no pressure iterations before the first step";
+      int checked = 0;
+      auto observe = [&](const State& s) {
+        if (ask == 0) return;
+        const std::vector<ParticleField> fields = stepper->output_fields(s);
+        const std::vector<StepFigure> figures = stepper->step_figures(s);
+        ASSERT_EQ(fields.size(), 2u);
+        EXPECT_STREQ(fields[0].name, "density");
+        NeighbourSearch search(fluid.support());
+        ASSERT_EQ(search.update(s.x, fluid.num_fluid()), Status::Converged);
+        Vec rho(fluid.num_fluid());
+        fluid.compute_density(search, s.x, scene.system->masses(), rho);
+        EXPECT_EQ(*fields[0].values, rho) << method;
+        EXPECT_EQ(figures[0].value, stepper->last_fluid_stats().max_density_error);
+        EXPECT_EQ(figures[3].value, stepper->last_fluid_stats().substeps);
+        ++checked;
+      };
+      const double h = std::string(method) == "wcsph" ? 5e-5 : 1e-3;
+      ASSERT_EQ(test::run_fluid(*stepper, scene.state, h, 40 * h, observe).status,
+                Status::Converged)
+          << method;
+      if (ask == 1) {
+        EXPECT_EQ(checked, 40) << method;
+      }
+      end[ask] = scene.state;
+    }
+    EXPECT_TRUE(end[0] == end[1]) << method << ": asking for the output changed the steps";
+  }
+}
+
 }  // namespace
 }  // namespace hooke
