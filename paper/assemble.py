@@ -158,6 +158,23 @@ def bending_findings(out):
         f.write(text)
 
 
+def dips_findings(out):
+    """The single-k dips runs of build.sh: the largest spring strain and total energy over each."""
+    table = []
+    for k in ("1e3", "1e4", "1e5"):
+        for beta in ("0.5", "1"):
+            run = os.path.join(out, "dips", f"k{k}-beta{beta}")
+            rows = read_csv(os.path.join(run, "log.csv"))
+            finished = os.path.exists(os.path.join(run, "final.csv"))
+            table.append([k, "1/2" if beta == "0.5" else "1 (backward Euler)",
+                          g3(max(num(r["max_strain"]) for r in rows)),
+                          g3(max(num(r["total"]) for r in rows)),
+                          "finished" if finished else f"stopped at t = {g3(num(rows[-1]['t']))} s"])
+    text = markdown_table(["k (N/m)", "beta", "largest strain", "largest total energy (J)", "run"], table)
+    with open(os.path.join(out, "findings_dips.md"), "w") as f:
+        f.write(text)
+
+
 def timings(out):
     rows = read_csv(os.path.join(out, "timings.csv"))
     with open(os.path.join(out, "timings.md"), "w") as f:
@@ -224,6 +241,7 @@ def main(source, out):
     tolerance_findings(out)
     resolution_findings(out)
     bending_findings(out)
+    dips_findings(out)
     timings(out)
     lines = []
     with open(source) as f:

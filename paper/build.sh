@@ -37,6 +37,22 @@ echo "paper: hooke workprecision --duration 2 (error control) ..."
   --repeat 1 --out "$out/tolerance-2s"
 echo "workprecision --duration 2,$(( ($(date +%s%N) - t0) / 1000000 ))e-3" >> "$out/timings.csv"
 run resolution
+# The runs behind the stability section's "single-k dips": beta = 1/2 and backward Euler (beta 1)
+# on the 8 x 8 cloth at h = 0.1 s over 10 s, at three stiffnesses (shear 0.2 k, flexion 0.02 k).
+# A run that stops (exit 3) is listed as stopped; assemble.py reads the log.csv files.
+t0=$(date +%s%N)
+echo "paper: hooke run hanging_cloth_16 (8 x 8, h = 0.1 s, beta 1/2 and 1) ..."
+for k in 1e3 1e4 1e5; do
+  for beta in 0.5 1; do
+    "$hooke" run "$here/../problems/scenes/hanging_cloth_16.toml" --out "$out/dips/k$k-beta$beta" \
+      --no-progress --set mesh.nx=8 --set mesh.ny=8 --set springs.structural_stiffness=$k \
+      --set springs.shear_stiffness="$(awk "BEGIN{print 0.2 * $k}")" \
+      --set springs.flexion_stiffness="$(awk "BEGIN{print 0.02 * $k}")" \
+      --set integrator.method=implicit --set integrator.beta=$beta --set time.dt=0.1 \
+      --set time.duration=10 --set output.vtk=false --set output.png=false > /dev/null || true
+  done
+done
+echo "dips (6 runs),$(( ($(date +%s%N) - t0) / 1000000 ))e-3" >> "$out/timings.csv"
 run step-convergence
 # One step of the 256 x 256 backward-Euler target as it is (its own stiffness and dt).
 t0=$(date +%s%N)
