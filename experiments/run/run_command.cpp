@@ -279,8 +279,9 @@ void MassSpringRun::restore(const Checkpoint& c) {
   if (restarted && m_group.root())
     std::fprintf(stderr,
                  "note: %s keeps an internal history that this checkpoint does not hold: it "
-                 "restarts at step %lld, so the result agrees with an uninterrupted run to the "
-                 "solver's tolerance, not bit for bit\n",
+                 "restarts at step %lld as a new stepper would (a multistep method from a "
+                 "one-step start), so the result agrees with an uninterrupted run only to the "
+                 "method's accuracy, not bit for bit\n",
                  method.c_str(), c.step);
   else if (!m_sim.stepper().exact_resume() && m_group.root())
     std::fprintf(stderr,

@@ -30,8 +30,12 @@
 #              BDF2 and backward Euler on PETSc stopped on 2 processes (each writing its piece of
 #              the checkpoint: local state and stepper history) resume on 2 to the uninterrupted
 #              2-process run's final.csv within 1e-6 m, saying they are not bit for bit (the
-#              PETSc hierarchy is rebuilt); with a damaged piece, the resume says so
-#              and continues from the whole state.
+#              PETSc hierarchy is rebuilt), and on 1 process (which holds no piece) saying they
+#              restart their history, and then farther from it than 1e-6 m; with a damaged piece,
+#              the resume says so and continues from the whole state.
+#   signals    SIGTERM to one process of a 2-process run, or to mpirun: every process stops at
+#              one step with one checkpoint, says so once, and the run resumes from it; one
+#              process signalled exits 143, mpirun signalled exits 1.
 set -uo pipefail
 CASE=${1:?case} HOOKE=${2:?hooke binary} MPIRUN=${3:?mpirun} SCENES=${4:?scenes dir} OUT=${5:?scratch dir}
 rm -rf "$OUT" && mkdir -p "$OUT"
@@ -282,6 +286,26 @@ resume)
       fail "$m on petsc resumed without saying it is not bit for bit: $(cat "$OUT/$m.resume.err")"
     close_x "$OUT/$m.whole" "$OUT/$m.stopped" 1e-6
   done
+  # On another process count the pieces do not fit: BDF2 resumed on one process continues from
+  # the whole state and restarts its history with a backward Euler step, says so, and ends
+  # measurably elsewhere (the 1e-6 m above does separate a kept history from a lost one).
+  args=(run "$SCENES/hanging_cloth_16.toml" --set integrator.method=bdf2 --set time.dt=0.02
+        --set time.duration=0.2 --set integrator.linear_solver=petsc
+        --set integrator.linear_tolerance=1e-8)
+  run 2 "$OUT/bdf2.one" "${args[@]}" --stop-after 4
+  expect_rc 130 "bdf2 --stop-after on 2 processes" "$OUT/bdf2.one"
+  "$HOOKE" resume "$OUT/bdf2.one" --no-progress > /dev/null 2> "$OUT/bdf2.one.resume.err"
+  rc=$?
+  expect_rc 0 "bdf2 resumed on 1 process" "$OUT/bdf2.one.resume"
+  grep -q "keeps an internal history that this checkpoint does not hold: it restarts at step 4 as a new stepper would" \
+    "$OUT/bdf2.one.resume.err" || fail "bdf2 resumed on 1 process: $(cat "$OUT/bdf2.one.resume.err")"
+  ok
+  far=$(awk -F, 'NR == FNR { if (FNR > 1) for (c = 2; c <= 4; c++) a[FNR, c] = $c; next }
+    FNR > 1 { for (c = 2; c <= 4; c++) { d = a[FNR, c] - $c; if (d < 0) d = -d; if (d > m) m = d } }
+    END { print (m > 1e-6) ? "yes" : "no " m }' "$OUT/bdf2.whole/final.csv" "$OUT/bdf2.one/final.csv")
+  [ "$far" = yes ] ||
+    fail "bdf2 resumed without its history ends within 1e-6 m ($far): the check above cannot tell"
+  ok
   # A damaged piece is not used: the run resumes from checkpoint.bin's whole state and says why.
   run 2 "$OUT/damaged" "${args[@]}" --stop-after 4
   expect_rc 130 "--stop-after on 2 processes" "$OUT/damaged"
@@ -292,6 +316,62 @@ resume)
   grep -q "checkpoint.4.1-of-2.bin: checkpoint: corrupt (checksum mismatch); resuming from the whole state" \
     "$OUT/damaged.resume.err" || fail "damaged piece: $(cat "$OUT/damaged.resume.err")"
   ok
+  ;;
+signals)
+  # A signal reaches one process of a run, or mpirun: every process stops at the same step with
+  # one complete checkpoint (the pieces of that step, then checkpoint.bin), says where, and the
+  # run resumes from it. A process signalled alone exits 143 as a serial run would, and mpirun
+  # passes that code on; mpirun signalled itself forwards the signal and exits 1.
+  args=(run "$SCENES/hanging_cloth_16.toml" --set integrator.method=rk4 --set time.dt=1e-4
+        --set time.duration=1000 --set output.vtk=false --set output.png=false
+        --set output.log_every=1)
+  # started DIR: waits (at most 120 s) until the run in DIR has logged 20 steps.
+  started() {
+    local i
+    for i in $(seq 1200); do
+      [ -f "$1/log.csv" ] && [ "$(wc -l < "$1/log.csv")" -gt 20 ] && return 0
+      sleep 0.1
+    done
+    fail "the run in $1 logged no 20 steps in 120 s: $(tail -c 600 "$1.err")"
+  }
+  stopped_at() {  # stopped_at DIR WHAT SIGNAL: one checkpoint of one step, status stopped, message
+    [ -f "$1/checkpoint.bin" ] && [ ! -e "$1/final.csv" ] || fail "$2: no checkpoint, or a final.csv"
+    grep -q "^stopped" "$1/status.txt" || fail "$2: status.txt says $(cat "$1/status.txt")"
+    grep -q "interrupted by $3 at step" "$1.err" || fail "$2: stderr: $(tail -c 600 "$1.err")"
+    [ "$(grep -c "interrupted by $3 at step" "$1.err")" = 1 ] ||
+      fail "$2: the interruption reported more than once: $(cat "$1.err")"
+    ok
+  }
+  # SIGTERM to the process of rank 1 only.
+  "$MPIRUN" -q -n 2 "$HOOKE" "${args[@]}" --out "$OUT/rank" --no-progress > "$OUT/rank.out" \
+    2> "$OUT/rank.err" &
+  launcher=$!
+  started "$OUT/rank"
+  ranks=$(pgrep -f -- "--out $OUT/rank --no-progress" | grep -vx "$launcher" | sort -n)
+  [ "$(echo "$ranks" | wc -l)" = 2 ] || fail "found processes '$ranks' of the run, not two"
+  kill -TERM "$(echo "$ranks" | tail -1)"
+  wait "$launcher"
+  rc=$?
+  expect_rc 143 "one process signalled" "$OUT/rank"
+  stopped_at "$OUT/rank" "one process signalled" SIGTERM
+  step=$(grep -o "interrupted by SIGTERM at step [0-9]*" "$OUT/rank.err" | grep -o "[0-9]*$")
+  "$MPIRUN" -q -n 2 "$HOOKE" resume "$OUT/rank" --no-progress --stop-after $((step + 5)) \
+    > /dev/null 2> "$OUT/rank.resume.err"
+  rc=$?
+  expect_rc 130 "resume after a signal, stopped again 5 steps later" "$OUT/rank.resume"
+  [ "$(tail -1 "$OUT/rank/log.csv" | cut -d, -f1)" = $((step + 5)) ] ||
+    fail "the resumed run did not continue from step $step: $(tail -2 "$OUT/rank/log.csv")"
+  ok
+  # SIGTERM to mpirun.
+  "$MPIRUN" -q -n 2 "$HOOKE" "${args[@]}" --out "$OUT/launcher" --no-progress > "$OUT/launcher.out" \
+    2> "$OUT/launcher.err" &
+  launcher=$!
+  started "$OUT/launcher"
+  kill -TERM "$launcher"
+  wait "$launcher"
+  rc=$?
+  expect_rc 1 "mpirun signalled" "$OUT/launcher"
+  stopped_at "$OUT/launcher" "mpirun signalled" SIGTERM
   ;;
 *)
   fail "unknown case $CASE"
