@@ -303,40 +303,234 @@ class PySimulation {
 
 }  // namespace
 
+// The docstrings (numpydoc: shapes and units), in the order the bindings use them.
+constexpr const char* kSimulationDoc = R"doc(A scene's run, stepped as `hooke run` steps it.
+
+It starts at t = 0 from the scene's initial state, with the scene's method, its [integrator]
+options and error control (integrator.adaptive) and its [run] settings
+(run.allow_not_converged, run.max_step_halvings). x and v are numpy views of the solver's
+state that follow every step. A failed step raises StepError and leaves the state at the last
+accepted step; Ctrl-C stops run() and advance() between steps (KeyboardInterrupt).
+
+Parameters
+----------
+scene : Scene
+    A mass-spring or [fluid] scene.
+
+Raises
+------
+ValueError
+    For an [ode] scene, which has no mass-spring system to simulate.
+InputError
+    If the scene's method cannot be set up for its system (key integrator.method).)doc";
+
+constexpr const char* kStepDoc = R"doc(Take one step and return its summary.
+
+Parameters
+----------
+h : float, optional
+    Step size (s), > 0. None: the scene's dt, or under error control (integrator.adaptive)
+    the controller's step, ending at the scene's duration at the latest while t is before
+    it. A given h is one step of that size, error control or not.
+
+Returns
+-------
+dict
+    'status' ('converged', or 'not-converged' for a step that missed its tolerance and that
+    run.allow_not_converged accepts), 'iterations' (linear solver iterations, summed over
+    Newton), 'newton_iterations' (0 for explicit methods), 'residual' (final residual norm
+    of the step's solve; 0 if none) and 'message' (str; empty unless the step missed its
+    tolerance).
+
+Raises
+------
+ValueError
+    If h is not > 0.
+StepError
+    If the step fails (not converged, a breakdown, a non-finite state); the state stays at
+    the last accepted step.)doc";
+
+constexpr const char* kAdvanceDoc = R"doc(Step until time t, landing on it exactly.
+
+Steps of dt, the last one shortened to land on t; under error control (integrator.adaptive),
+the controller's steps, landing on the scene's frame times (multiples of output.interval) on
+the way and on t. Nothing happens when t is not after the current time.
+
+Parameters
+----------
+t : float
+    The time to reach (s), absolute: not a duration.
+
+Raises
+------
+StepError
+    If a step fails; the state stays at the last accepted step.
+KeyboardInterrupt
+    On Ctrl-C, between steps.)doc";
+
+constexpr const char* kRunDoc = R"doc(Run to the scene's duration with the steps `hooke run` takes.
+
+Without out, it steps on from the current state, the last step shortened to land on the
+duration: from t = 0, the same states as `hooke run`, bit for bit. With out, it is `hooke
+run` itself, from t = 0, writing its files (scene.toml, log.csv, final.csv, status.txt, and
+frames and final.png as [output] says) into out, with its messages; the simulation then
+continues from the state that run ended in.
+
+Parameters
+----------
+out : str, optional
+    The output folder, as `hooke run --out DIR` takes it.
+force : bool, optional
+    With out: start over in a folder that holds a resumable checkpoint (deleting it), as
+    `hooke run --force` does.
+
+Raises
+------
+StepError
+    If a step fails (the state stays at the last accepted step); with out, if the run
+    stops with a non-zero exit code (out keeps what it wrote).
+ValueError
+    If out is given and this simulation has taken steps (use a new Simulation).
+InputError
+    With out, for a folder that holds a resumable checkpoint, unless force.
+KeyboardInterrupt
+    On Ctrl-C, between steps (with out, after the run writes its checkpoint).)doc";
+
+constexpr const char* kStepsTakenDoc =
+    R"doc(Steps taken so far (int): accepted steps under error control.
+
+After load_checkpoint, the checkpoint's count; after run(out=...), that run's.)doc";
+
+constexpr const char* kXDoc =
+    R"doc(Positions (m), an (n, 3) float64 view of the solver's state, n particles.
+
+The view follows every step and is writable: a write takes effect at the next step (bdf2
+then steps from a history that no longer matches it). It keeps the simulation alive.)doc";
+
+constexpr const char* kVDoc =
+    R"doc(Velocities (m/s), an (n, 3) float64 view of the solver's state, n particles.
+
+The view follows every step and is writable: a write takes effect at the next step. It
+keeps the simulation alive.)doc";
+
+constexpr const char* kStatsDoc = R"doc(The stepper's statistics.
+
+The stepper's counts and times are cumulative since the method was set (set_method starts
+them again); a field a method has no use for is 0.
+
+Returns
+-------
+dict
+    Counts (int): 'steps' (the stepper's steps), 'internal_steps' (CVODE's and IDA's own
+    steps), 'iterations' (outer iterations: Newton, local/global, ...),
+    'linear_iterations' (of iterative linear solvers) and 'factorizations'; 'last_residual'
+    (float: the last step's solve residual); wall times (float, s): 'assembly_seconds',
+    'analyze_seconds', 'factor_seconds', 'solve_seconds' and 'total_seconds' (inside the
+    steps). Under error control (integrator.adaptive) also the controller's 'accepted'
+    steps and 'rejected' attempts (int) and 'next_h' (float, s: the step it tries next),
+    which carry on over set_method.)doc";
+
+constexpr const char* kSetMethodDoc = R"doc(Continue from the current state with another method.
+
+The scene's [integrator] options carry over where the method takes them, as `hooke
+crosscheck` passes them; under error control the counts and the next step carry on and the
+controller takes the new method's order.
+
+Parameters
+----------
+method : str
+    A registry name (hooke.methods()).
+
+Raises
+------
+InputError
+    If the method is unknown, cannot step this scene's system, makes no local error estimate
+    while the scene runs under error control, or cannot be set up (key integrator.method).)doc";
+
+constexpr const char* kSaveCheckpointDoc =
+    R"doc(Write the state, the stepper's history and the step count to a checkpoint file.
+
+The format is `hooke run`'s (DIR/checkpoint.bin); load_checkpoint continues from it bit for
+bit, except for methods whose solver state a checkpoint cannot hold (cvode, ida, pcg-cholmod,
+petsc: they rebuild it and agree to their tolerance, as `hooke resume` says). The file is written atomically (a temporary file renamed over path).
+
+Parameters
+----------
+path : str
+    The file to write.
+
+Raises
+------
+RuntimeError
+    If the file cannot be written.)doc";
+
+constexpr const char* kLoadCheckpointDoc =
+    R"doc(Continue from a checkpoint of this scene and method.
+
+A file of save_checkpoint, or `hooke run`'s DIR/checkpoint.bin: x, v, t, steps_taken, the
+stepper's history and the error control's state are restored (into the buffers the views of
+x and v show).
+
+Parameters
+----------
+path : str
+    The checkpoint file.
+
+Raises
+------
+InputError
+    If the file is missing, truncated or corrupt, or was written by another hooke version,
+    for another scene (a key differs, output.dir aside) or initial state, or by another
+    method (set_method first).)doc";
+
+constexpr const char* kWriteVtkDoc =
+    R"doc(Write the current state as a legacy VTK frame, as `hooke run` writes its frames.
+
+Positions, the springs and the cloth's triangles, each spring's strain, and per particle
+the velocity, the pinned flag, the kinetic energy and the stepper's fields (a fluid's
+density and pressure).
+
+Parameters
+----------
+path : str
+    The file to write.
+
+Raises
+------
+RuntimeError
+    If the file cannot be written.)doc";
+
 void bind_simulation(py::module_& m) {
-  py::class_<PySimulation>(m, "Simulation")
-      .def(py::init<std::shared_ptr<Scene>>(), py::arg("scene"))
+  py::class_<PySimulation>(m, "Simulation", kSimulationDoc)
+      .def(py::init<std::shared_ptr<Scene>>(), py::arg("scene"),
+           "A simulation of the scene from its initial state at t = 0.")
       .def_property_readonly(
           "system", [](const PySimulation& s) { return System(s.scene()); },
-          "the scene's mass-spring model as maths (forces, energy, stiffness, damping)")
-      .def("step", &PySimulation::step, py::arg("h") = py::none(),
-           "one step (the scene's dt unless h is given); returns its summary")
-      .def("advance", &PySimulation::advance, py::arg("t"),
-           "steps of dt until time t, the last one shortened to land on t")
+          "The scene's model as maths (a System): forces, energy, stiffness and damping.")
+      .def("step", &PySimulation::step, py::arg("h") = py::none(), kStepDoc)
+      .def("advance", &PySimulation::advance, py::arg("t"), kAdvanceDoc)
       .def("run", &PySimulation::run, py::arg("out") = py::none(), py::arg("force") = false,
-           "to the scene's duration, as hooke run steps it; with out=DIR, hooke run itself (from "
-           "t = 0, writing DIR's files), and the simulation continues from its end")
-      .def_property_readonly("t", &PySimulation::t)
-      .def_property_readonly("steps_taken", &PySimulation::steps_taken)
-      .def_property_readonly("method", &PySimulation::method)
+           kRunDoc)
+      .def_property_readonly("t", &PySimulation::t, "The current time (float, s).")
+      .def_property_readonly("steps_taken", &PySimulation::steps_taken, kStepsTakenDoc)
       .def_property_readonly(
-          "x", [](py::object self) { return self.cast<PySimulation&>().x(self); },
-          "positions (n, 3), a view of the solver's state (writable)")
+          "method", &PySimulation::method,
+          "The registry name of the method stepping the simulation (str): the scene's, or "
+          "the last set_method's.")
       .def_property_readonly(
-          "v", [](py::object self) { return self.cast<PySimulation&>().v(self); },
-          "velocities (n, 3), a view of the solver's state (writable)")
-      .def_property_readonly("kinetic_energy", &PySimulation::kinetic_energy)
-      .def_property_readonly("potential_energy", &PySimulation::potential_energy)
-      .def("stats", &PySimulation::stats, "the stepper's statistics")
-      .def("set_method", &PySimulation::set_method, py::arg("method"),
-           "continue from the current state with another method (the scene's options carry over "
-           "where it takes them)")
-      .def("save_checkpoint", &PySimulation::save_checkpoint, py::arg("path"),
-           "state, stepper history and step count, in hooke run's checkpoint format")
-      .def("load_checkpoint", &PySimulation::load_checkpoint, py::arg("path"),
-           "continue from a checkpoint of this scene and method (hooke run's checkpoint.bin too)")
-      .def("write_vtk", &PySimulation::write_vtk, py::arg("path"),
-           "the current state as a legacy VTK frame, as hooke run writes them");
+          "x", [](py::object self) { return self.cast<PySimulation&>().x(self); }, kXDoc)
+      .def_property_readonly(
+          "v", [](py::object self) { return self.cast<PySimulation&>().v(self); }, kVDoc)
+      .def_property_readonly("kinetic_energy", &PySimulation::kinetic_energy,
+                             "The kinetic energy 1/2 v^T M v of the current state (float, J).")
+      .def_property_readonly(
+          "potential_energy", &PySimulation::potential_energy,
+          "The potential energy of the current positions (float, J), as System.energy gives it.")
+      .def("stats", &PySimulation::stats, kStatsDoc)
+      .def("set_method", &PySimulation::set_method, py::arg("method"), kSetMethodDoc)
+      .def("save_checkpoint", &PySimulation::save_checkpoint, py::arg("path"), kSaveCheckpointDoc)
+      .def("load_checkpoint", &PySimulation::load_checkpoint, py::arg("path"), kLoadCheckpointDoc)
+      .def("write_vtk", &PySimulation::write_vtk, py::arg("path"), kWriteVtkDoc);
 }
 
 }  // namespace hooke::python

@@ -26,7 +26,8 @@ void bind_studies(py::module_& m) {
         py::gil_scoped_release release;
         return run_crosscheck(*scene, o);
       },
-      py::arg("scene"), py::arg("methods"), py::arg("reference_rtol"), py::arg("out"));
+      py::arg("scene"), py::arg("methods"), py::arg("reference_rtol"), py::arg("out"),
+      "`hooke crosscheck` into the folder out; returns its exit code (see hooke.crosscheck).");
   m.def(
       "_stability",
       [](std::vector<std::string> cases, std::vector<std::string> methods, std::vector<double> k,
@@ -42,7 +43,8 @@ void bind_studies(py::module_& m) {
         return run_stability(o, cli::scenes_dir().string());
       },
       py::arg("cases"), py::arg("methods"), py::arg("k"), py::arg("full"), py::arg("plot"),
-      py::arg("out"));
+      py::arg("out"),
+      "`hooke stability` into the folder out; returns its exit code (see hooke.stability).");
   m.def(
       "_workprecision",
       [](std::vector<std::string> cases, std::vector<std::string> methods, int repeat, bool full,
@@ -58,7 +60,9 @@ void bind_studies(py::module_& m) {
         return run_work_precision(o, cli::scenes_dir().string());
       },
       py::arg("cases"), py::arg("methods"), py::arg("repeat"), py::arg("full"), py::arg("plot"),
-      py::arg("out"));
+      py::arg("out"),
+      "`hooke workprecision` into the folder out; returns its exit code (see "
+      "hooke.workprecision).");
   m.def(
       "_step_convergence",
       [](const std::string& scene_path, bool full, const std::string& out) {
@@ -68,7 +72,9 @@ void bind_studies(py::module_& m) {
         py::gil_scoped_release release;
         return run_step_convergence(scene_path, o);
       },
-      py::arg("scene_path"), py::arg("full"), py::arg("out"));
+      py::arg("scene_path"), py::arg("full"), py::arg("out"),
+      "`hooke step-convergence` into the folder out; returns its exit code (see "
+      "hooke.step_convergence).");
 }
 
 }  // namespace hooke::python

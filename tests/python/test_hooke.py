@@ -9,7 +9,9 @@ HOOKE_SCENES (problems/scenes); by hand: PYTHONPATH=build/python /usr/bin/python
 tests/python.
 """
 import csv
+import inspect
 import os
+import re
 import signal
 import subprocess
 
@@ -162,6 +164,35 @@ def test_the_namespace_is_the_api():
     public = {name for name in dir(hooke) if not name.startswith("_")}
     assert not {"os", "csv", "tempfile"} & public
     assert set(hooke.__all__) <= public
+
+
+def documentation(obj, name):
+    """obj's own documentation: for a function of the compiled module, what pybind11 puts after
+    the signature line it writes first; for a class, property or Python function, its docstring."""
+    doc = obj.__doc__ or ""
+    if inspect.isclass(obj) or inspect.isfunction(obj) or isinstance(obj, property):
+        return doc.strip()
+    first, _, rest = doc.partition("\n")
+    assert first.startswith(name + "("), (name, first)  # pybind11's signature line
+    return rest.strip()
+
+
+def test_every_public_name_is_documented_and_listed_in_help():
+    undocumented = []
+    for name in hooke.__all__:
+        obj = getattr(hooke, name)
+        if not documentation(obj, name):
+            undocumented.append(name)
+        if inspect.isclass(obj):  # its own public methods and properties, not inherited ones
+            for member in vars(obj):
+                if not member.startswith("_") and not documentation(getattr(obj, member), member):
+                    undocumented.append(f"{name}.{member}")
+    assert not undocumented, f"no docstring: {', '.join(undocumented)}"
+    # help(hooke) lists the API: every name of __all__ starts a line of the docstring's API section.
+    api = hooke.__doc__.partition("\nAPI\n---\n")[2]
+    assert api, "hooke.__doc__ has no API section"
+    unlisted = [name for name in hooke.__all__ if not re.search(rf"^{name}\b", api, re.M)]
+    assert not unlisted, f"not in hooke.__doc__'s API section: {', '.join(unlisted)}"
 
 
 def test_bad_input_raises_input_error_with_hookes_message():
