@@ -94,11 +94,12 @@ class SphStepper : public Stepper {
   mutable bool m_domain_known = false;
   FluidStepStats m_last;
   StepperStats m_stats;
-  Vec m_output_rho;  // num_fluid: densities at the state of output_fields() and step_figures()
 
  private:
   /// m_output_rho = the densities at s (NaN if the neighbour search fails there).
   void output_densities(const State& s);
+
+  Vec m_output_rho;  // num_fluid: densities at the state of output_fields() and step_figures()
 };
 
 }  // namespace hooke
