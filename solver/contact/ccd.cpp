@@ -61,4 +61,28 @@ double edge_edge_ccd(const Vec3& a0, const Vec3& a1, const Vec3& b0, const Vec3&
       });
 }
 
+double point_plane_ccd(const Vec3& p, const Vec3& dp, const Vec3& origin, const Vec3& normal,
+                       const Vec3& d_origin, double thickness, double scale) {
+  const double d0 = (p - origin).dot(normal), rate = (dp - d_origin).dot(normal);
+  if (!(d0 > thickness)) return 0.0;
+  const double floor = thickness + (1.0 - scale) * (d0 - thickness);
+  // d(t) = d0 + t rate stays above the floor until t = (d0 - floor) / -rate.
+  if (!(rate < 0.0)) return 1.0;
+  return std::min(1.0, (d0 - floor) / -rate);
+}
+
+double point_sphere_ccd(const Vec3& p, const Vec3& dp, const Vec3& c, double r, const Vec3& dc,
+                        double thickness, double scale) {
+  const Vec3 q = p - c, v = dp - dc;
+  const double d0 = q.norm(), surface = r + thickness;
+  if (!(d0 > surface)) return 0.0;
+  const double R = surface + (1.0 - scale) * (d0 - surface);
+  // |q + t v|^2 = R^2: a t^2 + 2 b t + (|q|^2 - R^2) = 0 with a = |v|^2, b = q.v; the first root.
+  const double a = v.squaredNorm(), b = q.dot(v), k = q.squaredNorm() - R * R;
+  const double disc = b * b - a * k;
+  if (!(a > 0.0) || !(b < 0.0) || disc < 0.0) return 1.0;  // not approaching, or passing by
+  // The smaller root, in the form that does not cancel: k / (-b + sqrt(disc)).
+  return std::min(1.0, k / (-b + std::sqrt(disc)));
+}
+
 }  // namespace hooke::contact

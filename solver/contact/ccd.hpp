@@ -23,4 +23,15 @@ double edge_edge_ccd(const Vec3& a0, const Vec3& a1, const Vec3& b0, const Vec3&
                      const Vec3& da0, const Vec3& da1, const Vec3& db0, const Vec3& db1,
                      double thickness = 0.0, double scale = 0.9);
 
+/// The same fraction, exactly, for a point moving from p to p + t dp against a plane (through
+/// `origin`, unit normal `normal`, the side it points to being outside) that moves by d_origin:
+/// the signed distance is linear in t, so the bound is its own root.
+double point_plane_ccd(const Vec3& p, const Vec3& dp, const Vec3& origin, const Vec3& normal,
+                       const Vec3& d_origin, double thickness = 0.0, double scale = 0.9);
+/// The same fraction, exactly, for a point moving from p to p + t dp against a sphere (centre c,
+/// radius r) whose centre moves by dc: the first root of |p - c + t (dp - dc)| = r + thickness +
+/// (1 - scale) (d0 - r - thickness), a quadratic.
+double point_sphere_ccd(const Vec3& p, const Vec3& dp, const Vec3& c, double r, const Vec3& dc,
+                        double thickness = 0.0, double scale = 0.9);
+
 }  // namespace hooke::contact

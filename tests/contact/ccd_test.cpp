@@ -212,5 +212,44 @@ TEST(ContactCcd, RepeatedCcdMakesProgressTowardTheContact) {
   EXPECT_GT(done, 0.5 - 1e-8);
 }
 
+// Against a plane and a sphere the safe fraction is exact: the distance at it is the floor
+// thickness + (1 - scale) (d0 - thickness), and a point moving away or passing by gets 1.
+TEST(ContactCcd, PlanesAndSpheresGiveTheExactSafeFraction) {
+  const Vec3 up(0, 0, 1), zero = Vec3::Zero();
+  // A point 1 m above the ground falling 2 m: contact at 0.5, the floor 0.1 m reached at 0.45.
+  EXPECT_NEAR(point_plane_ccd(Vec3(0, 0, 1), Vec3(0, 0, -2), zero, up, zero), 0.45, 1e-15);
+  // The ground rising 1 m meanwhile: contact at 1/3, the floor at 0.3.
+  EXPECT_NEAR(point_plane_ccd(Vec3(0, 0, 1), Vec3(0, 0, -2), zero, up, Vec3(0, 0, 1)), 0.3, 1e-15);
+  EXPECT_EQ(point_plane_ccd(Vec3(0, 0, 1), Vec3(5, 0, 0.5), zero, up, zero), 1.0);
+  // A thickness of 0.2 m: the floor is 0.2 + 0.1 * 0.8 = 0.28 m, reached at 0.36.
+  EXPECT_NEAR(point_plane_ccd(Vec3(0, 0, 1), Vec3(0, 0, -2), zero, up, zero, 0.2), 0.36, 1e-15);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  int hits = 0;
+  for (int trial = 0; trial < 2000; ++trial) {
+    const Vec3 c(u(rng), u(rng), u(rng)), dc = 0.3 * Vec3(u(rng), u(rng), u(rng));
+    const double r = 0.3 + 0.2 * u(rng);
+    const Vec3 p = c + (r + 0.05 + std::abs(u(rng))) * Vec3(u(rng), u(rng), u(rng)).normalized();
+    const Vec3 dp = 3.0 * Vec3(u(rng), u(rng), u(rng));
+    const double t = point_sphere_ccd(p, dp, c, r, dc);
+    auto distance = [&](double s) { return (p + s * dp - (c + s * dc)).norm(); };
+    const double d0 = distance(0.0), floor = r + 0.1 * (d0 - r);
+    // The first time the path reaches the sphere, by sampling (the reference).
+    double t_star = 2.0;
+    for (int k = 0; k <= 20000 && t_star > 1.0; ++k)
+      if (distance(k / 20000.0) <= r) t_star = k / 20000.0;
+    if (t_star <= 1.0) {
+      ++hits;
+      EXPECT_LT(t, t_star) << trial;
+    }
+    if (t < 1.0) {
+      EXPECT_NEAR(distance(t), floor, 1e-12) << trial;  // exact: the floor itself
+    } else {
+      for (int k = 0; k <= 2000; ++k) EXPECT_GT(distance(k / 2000.0), floor - 1e-12) << trial;
+    }
+  }
+  EXPECT_GT(hits, 100);
+}
+
 }  // namespace
 }  // namespace hooke::contact
