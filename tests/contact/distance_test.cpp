@@ -73,6 +73,20 @@ double reference_distance(const Vec3& p, const Vec3& a, const Vec3& b, const Vec
       {segment_distance(p, a, b), segment_distance(p, b, c), segment_distance(p, c, a)});
 }
 
+/// True if type_of gives x's type at every x +- 1e-4 e_i too: x lies off the boundaries of the
+/// regions (or types), so one form's derivatives hold around it and central differences see them.
+template <class TypeOf>
+bool keeps_type(const Vector<12>& x, TypeOf type_of) {
+  const auto type = type_of(x);
+  for (int i = 0; i < 12; ++i)
+    for (double s : {-1e-4, 1e-4}) {
+      Vector<12> y = x;
+      y[i] += s;
+      if (type_of(y) != type) return false;
+    }
+  return true;
+}
+
 /// Largest |a - b| relative to the largest |b| (or 1).
 template <class A, class B>
 double relative_error(const A& a, const B& b) {
@@ -167,15 +181,10 @@ TEST(ContactDistance, PointTriangleIsTheDistanceToTheTriangleInEveryRegion) {
     Vector<12> x;
     x << p, t0, t1, t2;
     // Derivatives where every perturbed stencil keeps the type (off the regions' boundaries).
-    bool same = true;
-    for (int i = 0; i < 12 && same; ++i)
-      for (double s : {-1e-4, 1e-4}) {
-        Vector<12> y = x;
-        y[i] += s;
-        same =
-            same && point_triangle_type(point(y, 0), point(y, 1), point(y, 2), point(y, 3)) == type;
-      }
-    if (!same) continue;
+    if (!keeps_type(x, [](const Vector<12>& y) {
+          return point_triangle_type(point(y, 0), point(y, 1), point(y, 2), point(y, 3));
+        }))
+      continue;
     Vector<12> g;
     Matrix<12> H;
     point_triangle_sq_derivatives(p, t0, t1, t2, &g, &H);
@@ -254,14 +263,11 @@ TEST(ContactDistance, EdgeEdgeIsTheDistanceBetweenTheSegmentsOfEveryType) {
     const double ref = reference_edge_distance(a0, a1, b0, b1);
     EXPECT_NEAR(std::sqrt(edge_edge_sq(a0, a1, b0, b1)), ref, 1e-12 * std::max(1.0, ref));
     const EdgeEdgeType type = edge_edge_type(a0, a1, b0, b1);
-    bool same = ref > 0.05;  // derivatives off contact (the lines' form is 0/0 on it)
-    for (int i = 0; i < 12 && same; ++i)
-      for (double s : {-1e-4, 1e-4}) {
-        Vector<12> y = x;
-        y[i] += s;
-        same = same && edge_edge_type(point(y, 0), point(y, 1), point(y, 2), point(y, 3)) == type;
-      }
-    if (!same) continue;
+    // Derivatives off contact (the lines' form is 0/0 on it) and off the types' boundaries.
+    if (!(ref > 0.05) || !keeps_type(x, [](const Vector<12>& y) {
+          return edge_edge_type(point(y, 0), point(y, 1), point(y, 2), point(y, 3));
+        }))
+      continue;
     Vector<12> g;
     Matrix<12> H;
     edge_edge_sq_derivatives(a0, a1, b0, b1, &g, &H);
