@@ -8,6 +8,8 @@
 
 #include "hooke/constraints/collider.hpp"
 #include "hooke/constraints/strain_limit.hpp"
+#include "hooke/contact/contact_model.hpp"
+#include "hooke/contact/distance.hpp"
 #include "hooke/forces/air_drag.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
@@ -151,6 +153,9 @@ void read_ode(TableReader& ode, Scene& scene) {
 struct SceneCollider {
   std::string key, what, placed_by;
   const Constraint* constraint;
+  /// Under [contact] the obstacle acts through the barrier, and this projection (grown by the
+  /// thickness) only serves the check; it is not the system's.
+  std::shared_ptr<const Constraint> check_only;
 };
 
 std::string fmt(double v) {
@@ -208,6 +213,50 @@ void check_particles_outside(const std::vector<SceneCollider>& colliders, const 
        << c.placed_by << ") or the object ([mesh] placement) so that no "
        << "free particle starts inside; a particle exactly on the surface is fine";
     throw InputError(scene.file, c.key, os.str());
+  }
+}
+
+/// Under [contact]: refuses a contact gap that starts at or below 0 (a free particle on or inside
+/// an obstacle grown by contact.thickness, or a triangle that touches or cuts a sphere), which
+/// the barrier cannot start from. `colliders` lists the planes, then the spheres, as the model.
+void check_contact_start(const std::vector<SceneCollider>& colliders, const Scene& scene) {
+  const ContactModel* model = scene.system->contact();
+  if (model == nullptr) return;
+  const Vec& x = scene.initial.x;
+  const std::vector<char>& pinned = scene.system->pinned();
+  const double xi = model->options().thickness;
+  auto refuse = [&](size_t collider, const std::string& what, double gap) {
+    const SceneCollider& c = colliders[collider];
+    throw InputError(scene.file, c.key,
+                     what + " starts at a contact gap of " + fmt(gap) + " m from " + c.what +
+                         ": barrier contact needs every gap > 0 at the start. Move the obstacle (" +
+                         c.placed_by + ") or the object ([mesh] placement)");
+  };
+  const Index n = scene.system->num_particles();
+  const size_t planes = model->planes().size();
+  for (size_t q = 0; q < planes; ++q) {
+    const ContactPlane& pl = model->planes()[q];
+    for (Index i = 0; i < n; ++i)
+      if (!pinned[size_t(i)]) {
+        const double gap = pl.normal.dot(x.segment<3>(3 * i)) - pl.offset - xi;
+        if (!(gap > 0.0)) refuse(q, "free particle " + std::to_string(i), gap);
+      }
+  }
+  for (size_t s = 0; s < model->spheres().size(); ++s) {
+    const ContactSphere& sp = model->spheres()[s];
+    for (Index i = 0; i < n; ++i)
+      if (!pinned[size_t(i)]) {
+        const double gap = (x.segment<3>(3 * i) - sp.center).norm() - sp.radius - xi;
+        if (!(gap > 0.0)) refuse(planes + s, "free particle " + std::to_string(i), gap);
+      }
+    for (size_t t = 0; t < model->triangles().size(); ++t) {
+      const auto& tr = model->triangles()[t];
+      const double gap =
+          std::sqrt(contact::point_triangle_sq(sp.center, x.segment<3>(3 * tr[0]),
+                                               x.segment<3>(3 * tr[1]), x.segment<3>(3 * tr[2]))) -
+          sp.radius - xi;
+      if (!(gap > 0.0)) refuse(planes + s, "triangle " + std::to_string(t), gap);
+    }
   }
 }
 
@@ -274,6 +323,84 @@ void read_pin_motion(TableReader& root, Scene& scene) {
   scene.system->set_pin_motion(std::move(motion));
 }
 
+/// [contact]: barrier contact's settings (ContactOptions).
+ContactOptions read_contact_options(TableReader& root) {
+  ContactOptions o;
+  auto ct = root.table("contact");
+  o.distance = ct->positive("distance", o.distance);
+  o.stiffness = ct->non_negative("stiffness", o.stiffness);
+  o.friction_velocity = ct->positive("friction_velocity", o.friction_velocity);
+  o.thickness = ct->non_negative("thickness", o.thickness);
+  ct->finish();
+  return o;
+}
+
+/// The sphere's motion keys, which only the barrier takes.
+void read_sphere_motion(TableReader& sp, bool contact, ContactSphere& s) {
+  for (const char* key : {"velocity", "angular_velocity"})
+    if (!contact)
+      sp.reject_if_present(key,
+                           "a moving sphere acts through barrier contact: add a [contact] "
+                           "section (and method = \"implicit\")");
+  if (!contact) return;
+  s.velocity = sp.vec3("velocity", Vec3::Zero());
+  s.angular_velocity = sp.vec3("angular_velocity", Vec3::Zero());
+}
+
+/// [collision.*]: each kind as one table ([collision.ground]) or several ([[collision.ground]]:
+/// walls, floors, any normal; [[collision.sphere]]). Without [contact] they are post-step
+/// projections, applied in the order given, planes first; with it, obstacles of the system's
+/// barrier contact (ContactModel over the mesh's triangles).
+void read_colliders(TableReader& root, const MeshBuild& b, MassSpringSystem& sys,
+                    std::vector<SceneCollider>& colliders) {
+  const bool contact = root.has("contact");
+  const ContactOptions options = contact ? read_contact_options(root) : ContactOptions{};
+  const double xi = options.thickness;
+  std::vector<ContactSphere> spheres;
+  std::vector<ContactPlane> planes;
+  auto add = [&](std::unique_ptr<Constraint> c, SceneCollider entry) {
+    entry.constraint = c.get();
+    if (contact)
+      entry.check_only = std::move(c);
+    else
+      sys.add_constraint(std::move(c));
+    colliders.push_back(std::move(entry));
+  };
+  if (auto c = root.table("collision")) {
+    for (TableReader& g : c->tables("ground")) {
+      const Vec3 normal = g.vec3("normal", Vec3(0, 1, 0));
+      if (normal.norm() == 0.0) g.fail("normal", "must be a nonzero vector");
+      const double height = g.number("height", 0.0);
+      const double mu = g.non_negative("friction", 0.0);
+      g.finish();
+      planes.push_back({normal.normalized(), height, mu});
+      add(std::make_unique<GroundPlane>(normal, height + xi, mu),
+          {g.name(),
+           "the ground plane (normal " + fmt(Vec3(normal.normalized())) + ", height " +
+               fmt(height) + (contact ? ", with contact.thickness " + fmt(xi) : "") + ")",
+           g.path("height") + ", " + g.path("normal"), nullptr, nullptr});
+    }
+    for (TableReader& sp : c->tables("sphere")) {
+      ContactSphere s;
+      s.center = sp.vec3("center", Vec3::Zero());
+      s.radius = sp.positive("radius", 0.5);
+      s.friction = sp.non_negative("friction", 0.0);
+      read_sphere_motion(sp, contact, s);
+      sp.finish();
+      spheres.push_back(s);
+      add(std::make_unique<SphereCollider>(s.center, s.radius + xi, s.friction),
+          {sp.name(),
+           "the sphere (center " + fmt(s.center) + ", radius " + fmt(s.radius) +
+               (contact ? ", with contact.thickness " + fmt(xi) : "") + ")",
+           sp.path("center") + ", " + sp.path("radius"), nullptr, nullptr});
+    }
+    c->finish();
+  }
+  if (contact)
+    sys.set_contact(std::make_shared<ContactModel>(options, b.triangles, std::move(spheres),
+                                                   std::move(planes)));
+}
+
 /// Forces, colliders and strain limiting: each added only when the scene declares it. The
 /// colliders are listed in `colliders` for check_particles_outside().
 void add_forces_and_constraints(TableReader& root, const MeshBuild& b, Scene& scene,
@@ -308,36 +435,7 @@ void add_forces_and_constraints(TableReader& root, const MeshBuild& b, Scene& sc
     f->finish();
   }
 
-  if (auto c = root.table("collision")) {
-    // Each kind as one table ([collision.ground]) or several ([[collision.ground]]: walls,
-    // floors, any normal; [[collision.sphere]]), applied in the order given, planes first.
-    for (TableReader& g : c->tables("ground")) {
-      const Vec3 normal = g.vec3("normal", Vec3(0, 1, 0));
-      if (normal.norm() == 0.0) g.fail("normal", "must be a nonzero vector");
-      const double height = g.number("height", 0.0);
-      const double mu = g.non_negative("friction", 0.0);
-      g.finish();
-      auto plane = std::make_unique<GroundPlane>(normal, height, mu);
-      colliders.push_back({g.name(),
-                           "the ground plane (normal " + fmt(Vec3(normal.normalized())) +
-                               ", height " + fmt(height) + ")",
-                           g.path("height") + ", " + g.path("normal"), plane.get()});
-      sys.add_constraint(std::move(plane));
-    }
-    for (TableReader& sp : c->tables("sphere")) {
-      const Vec3 centre = sp.vec3("center", Vec3::Zero());
-      const double radius = sp.positive("radius", 0.5);
-      const double mu = sp.non_negative("friction", 0.0);
-      sp.finish();
-      auto sphere = std::make_unique<SphereCollider>(centre, radius, mu);
-      colliders.push_back({sp.name(),
-                           "the sphere (center " + fmt(centre) + ", radius " + fmt(radius) + ")",
-                           sp.path("center") + ", " + sp.path("radius"), sphere.get()});
-      sys.add_constraint(std::move(sphere));
-    }
-    c->finish();
-  }
-
+  read_colliders(root, b, sys, colliders);
   if (auto sl = root.table("strain_limit")) {
     const double max_strain = sl->positive("max_strain", 0.1);
     const int passes = static_cast<int>(sl->integer("passes", 10, 1, 1000000));
@@ -372,6 +470,9 @@ void read_run_settings(TableReader& root, Scene& scene) {
                            (scene.ode ? "an [ode]" : "a [mesh]") + ")");
     r.set_variant(method);
     scene.integrator.adaptive = read_error_control(r, method, scene.integrator.error_control);
+    if (scene.integrator.adaptive && r.contact_scene())
+      r.fail("adaptive",
+             "barrier contact ([contact]) takes fixed steps (time.dt) for now; remove adaptive");
     if (scene.integrator.adaptive && scene.ode)
       r.fail("adaptive",
              "[ode] scenes take fixed steps (time.dt); error control runs on particle "
@@ -487,6 +588,7 @@ Scene load_parsed(toml::table tbl, const std::string& file,
                   const std::vector<std::string>& overrides) {
   auto context = std::make_shared<ReadContext>();
   for (const auto& o : overrides) context->overridden.insert(apply_override(tbl, o));
+  context->contact = tbl.contains("contact");
   Scene scene;
   scene.file = file;
   scene.name = std::filesystem::path(file).stem().string();
@@ -546,6 +648,7 @@ Scene load_parsed(toml::table tbl, const std::string& file,
     read_pin_motion(root, scene);
     scene.system->finalize();
     check_particles_outside(colliders, scene);
+    check_contact_start(colliders, scene);
   }
   read_run_settings(root, scene);
   if (scene.system) {

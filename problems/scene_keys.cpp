@@ -400,6 +400,45 @@ void add_scene_part_keys(std::vector<SceneKey>& t) {
           .def("0")
           .non_negative()
           .meaning("Coulomb friction coefficient of the contact"));
+  add(K("collision.sphere.velocity", T::Vector3)
+          .unit("m/s")
+          .def("[0, 0, 0]")
+          .needs({"contact.distance=0.001", "integrator.method=implicit"})
+          .meaning("the sphere's centre moves at this velocity from t = 0 (needs [contact])"));
+  add(K("collision.sphere.angular_velocity", T::Vector3)
+          .unit("rad/s")
+          .def("[0, 0, 0]")
+          .needs({"contact.distance=0.001", "integrator.method=implicit"})
+          .meaning("the sphere spins about its centre (a vector along the axis, right-handed); "
+                   "friction drags the cloth with its surface (needs [contact])"));
+
+  // [contact]: barrier contact (solver/contact/, docs/contact.md).
+  add(K("contact.distance", T::Number)
+          .needs({"integrator.method=implicit"})
+          .unit("m")
+          .def("0.001")
+          .positive()
+          .meaning("dhat: gaps below it are in contact and feel the barrier kappa b(d), b IPC's "
+                   "clamped log barrier on the gap"));
+  add(K("contact.stiffness", T::Number)
+          .needs({"integrator.method=implicit"})
+          .unit("N/m")
+          .def("0")
+          .non_negative()
+          .meaning("kappa, the barrier's stiffness; 0 chooses it from the masses, gravity and "
+                   "dt and doubles it when a gap falls below 0.05 dhat (up to 1000 times)"));
+  add(K("contact.friction_velocity", T::Number)
+          .needs({"integrator.method=implicit"})
+          .unit("m/s")
+          .def("0.001")
+          .positive()
+          .meaning("epsilon_v: slip speeds below it are smoothed static friction"));
+  add(K("contact.thickness", T::Number)
+          .needs({"integrator.method=implicit"})
+          .unit("m")
+          .def("0")
+          .non_negative()
+          .meaning("gaps are measured from this offset of the cloth's surface (a thickness)"));
 }
 
 /// Adds [bending]: angle-based bending as element sets (solver/forces/bending.hpp); its keys'

@@ -20,6 +20,8 @@ namespace hooke {
 struct ReadContext {
   std::set<std::string> overridden;
   std::vector<std::string> warnings;
+  /// The scene has [contact] (barrier contact), which changes the implicit method's defaults.
+  bool contact = false;
 };
 
 /// Strict, typed reading of one TOML table of a scene. Every getter checks type, finiteness and
@@ -40,6 +42,8 @@ class TableReader {
   /// Dotted path of key under this table, as used in messages ("mesh.nx").
   std::string path(const std::string& key) const;
   const std::string& file() const { return m_file; }
+  /// True if the scene being read has [contact] (ReadContext::contact).
+  bool contact_scene() const { return m_context && m_context->contact; }
   [[noreturn]] void fail(const std::string& key, const std::string& reason) const;
   /// True if key was given (or replaced) with --set rather than by the scene file.
   bool overridden(const std::string& key) const;
@@ -95,6 +99,13 @@ class TableReader {
   /// Replaces the string recorded in the resolved table for key (already read by a getter), e.g. a
   /// relative path made absolute so that the resolved scene runs from any directory.
   void set_resolved(const std::string& key, const std::string& value);
+  /// Records value (a number or boolean) as key's resolved value: for a key left out whose
+  /// default depends on another section (the implicit method's Newton keys under [contact]), so
+  /// that the resolved scene reloads to the same settings.
+  template <class T>
+  void set_resolved_value(const std::string& key, T value) {
+    m_out.insert_or_assign(key, value);
+  }
   /// The sub-table key, if present (it must be a table).
   std::optional<TableReader> table(const std::string& key);
   /// The sub-tables of key: one for a table ([a.b]), one per element for an array of tables

@@ -146,6 +146,7 @@ class PySimulation {
     d["analyze_seconds"] = s.analyze_seconds;
     d["factor_seconds"] = s.factor_seconds;
     d["solve_seconds"] = s.solve_seconds;
+    d["contact_seconds"] = s.contact_seconds;
     d["total_seconds"] = s.total_seconds;
     if (adaptive()) {  // the error control's counts (integrator.adaptive)
       d["accepted"] = m_sim->accepted_steps();

@@ -6,6 +6,7 @@
 #include "hooke/integrators/explicit_mass_spring_stepper.hpp"
 #include "hooke/integrators/step_doubling.hpp"
 #include "hooke/linear/linear_registry.hpp"
+#include "hooke/whole_step/contact_newton.hpp"
 #if HOOKE_WITH_SUNDIALS
 #include "hooke/whole_step/sundials/cvode_stepper.hpp"
 #include "hooke/whole_step/sundials/ida_stepper.hpp"
@@ -268,12 +269,27 @@ ImplicitOptions implicit_defaults(const std::string& name) {
 
 std::unique_ptr<Stepper> make_stepper(const std::string& name, const MassSpringSystem& system,
                                       const MethodOptions& options) {
+  if (system.contact() != nullptr && name != "implicit")
+    throw std::invalid_argument(method_unsupported(name, system));
   for (const auto& e : implicit_table())
     if (name == e.info.name) {
       ImplicitOptions o = options.empty() ? ImplicitOptions::defaults(e.scheme)
                                           : options.as<ImplicitOptions>(e.info.name);
       if (const OptionError err = o.validate(); !err.ok()) throw std::invalid_argument(err.message);
       if (o.linear_solver.empty()) o.linear_solver = default_linear_solver();
+      if (system.contact() != nullptr) {
+        if (options.empty()) {
+          o = ContactNewtonStepper::default_options();
+          o.linear_solver = default_linear_solver();
+        }
+        if (const std::string why = method_unsupported(name, system); !why.empty())
+          throw std::invalid_argument(why);
+        if (o.beta != 1.0)
+          throw std::invalid_argument("beta = " + std::to_string(o.beta) +
+                                      ": [contact] steps backward Euler (beta = 1)");
+        auto solver = make_linear_solver(o.linear_solver, o.preconditioner, {o.petsc_options});
+        return std::make_unique<ContactNewtonStepper>(system, std::move(solver), o);
+      }
       auto solver = make_linear_solver(o.linear_solver, o.preconditioner,
                                        {o.petsc_options, system.distribution()});
       return std::make_unique<ImplicitStepper>(system, e.scheme, std::move(solver), o);
@@ -308,6 +324,14 @@ std::string method_unsupported(const std::string& name, const MassSpringSystem& 
            "' steps mass-spring systems and would ignore the fluid's pressure; a fluid is "
            "stepped by the fluid methods (" +
            fluid_method_names() + ")";
+  // Barrier contact is posed as backward Euler's incremental potential (ContactNewtonStepper).
+  if (system.contact() != nullptr) {
+    if (name != "implicit")
+      return "'" + name +
+             "' does not take [contact] yet: barrier contact steps with method = \"implicit\" "
+             "(backward Euler, beta = 1); vbd comes with self-contact";
+    return contact_unsupported(system);
+  }
   for (const auto& e : whole_step_table()) {
     if (name != e.info.name) continue;
     if (kind == MethodKind::Fluid) return e.unsupported(system);

@@ -6,6 +6,7 @@
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/linear/linear_registry.hpp"
 #include "hooke/registry.hpp"
+#include "hooke/whole_step/contact_newton.hpp"
 #include "problems/methods/method_family.hpp"
 #include "problems/methods/reader_rules.hpp"
 #include "problems/scene_key_builder.hpp"
@@ -27,7 +28,11 @@ void add_newton_keys(std::vector<SceneKey>& t) {
           .in({"implicit", "bdf2"})
           .def("1")
           .between(1, 100000)
-          .meaning("most Newton iterations per step; 1 is the linearised step"));
+          .meaning("most Newton iterations per step; 1 is the linearised step; with [contact] "
+                   "the default is " +
+                   std::to_string(ContactNewtonStepper::kNewtonIterations) +
+                   " (barrier Newton, which stops on contact.distance's scale: see "
+                   "docs/contact.md)"));
   add(K("integrator.newton_iterations", T::Integer)
           .in({"implicit-midpoint"})
           .def(std::to_string(ImplicitOptions::kMidpointNewtonIterations))
@@ -39,7 +44,9 @@ void add_newton_keys(std::vector<SceneKey>& t) {
           .def("1e-10")
           .positive()
           .needs({"integrator.newton_iterations=2"})
-          .meaning(kNewtonStop));
+          .meaning(kNewtonStop +
+                   "; with [contact] the default is 1e-06 and Newton stops when max |dx| <= "
+                   "tolerance * max(h |v|, h |v0|, contact.distance)"));
   add(K("integrator.tolerance", T::Number)
           .in({"implicit-midpoint"})
           .def("1e-08")
@@ -107,13 +114,23 @@ void add_implicit_keys(std::vector<SceneKey>& t) {
   add(K("integrator.clamp_compressed", T::Boolean)
           .in(implicit_methods)
           .def("true")
-          .meaning(
-              "drop the indefinite part of compressed springs' stiffness, keeping the matrix SPD"));
+          .meaning("drop the indefinite part of compressed springs' stiffness, keeping the matrix "
+                   "SPD; with [contact] the default is false: exact where the matrix is positive "
+                   "definite, clamped in a Newton iteration where it is not"));
 }
 
 MethodOptions read_implicit(TableReader& r, const std::string& method) {
   ImplicitOptions o = implicit_defaults(method);
+  // Barrier contact is Newton on backward Euler's incremental potential: it iterates by default
+  // (ContactNewtonStepper), with the exact stiffness until the matrix is indefinite. Those
+  // defaults replace the key table's (which the keys' text states) where the key is left out.
+  const bool contact = r.contact_scene() && method == "implicit";
+  const bool given_iterations = r.has("newton_iterations"), given_tolerance = r.has("tolerance"),
+             given_clamp = r.has("clamp_compressed");
   if (method == "implicit") o.beta = r.number("beta", o.beta);
+  if (contact && o.beta != 1.0)
+    r.fail("beta",
+           "[contact] steps backward Euler, beta = 1 (the step is a minimisation only then)");
   o.linear_solver = r.string("linear_solver", default_linear_solver());
   if (const std::string why = linear_solver_unknown(o.linear_solver); !why.empty())
     r.fail("linear_solver", why);
@@ -129,6 +146,10 @@ MethodOptions read_implicit(TableReader& r, const std::string& method) {
       !why.empty())
     r.fail("preconditioner", why);
   o.newton_iterations = r.int_field("newton_iterations", o.newton_iterations);
+  if (contact && !given_iterations) {
+    o.newton_iterations = ContactNewtonStepper::kNewtonIterations;
+    r.set_resolved_value("newton_iterations", (long long)o.newton_iterations);
+  }
   // One iteration is the linearised step: it ends without a convergence test.
   if (o.newton_iterations == 1)
     refuse_ignored(r, "tolerance",
@@ -138,6 +159,10 @@ MethodOptions read_implicit(TableReader& r, const std::string& method) {
                    "set newton_iterations > 1 to iterate Newton to this tolerance");
   else
     o.newton_tolerance = r.number("tolerance", o.newton_tolerance);
+  if (contact && !given_tolerance && o.newton_iterations > 1) {
+    o.newton_tolerance = ContactNewtonStepper::kNewtonTolerance;
+    r.set_resolved_value("tolerance", o.newton_tolerance);
+  }
   read_petsc_options(r, o.linear_solver, o.petsc_options, "linear_solver");
   const std::string backend = canonical_linear_solver(o.linear_solver, o.preconditioner);
   if (direct_linear_solver(backend)) {
@@ -150,6 +175,10 @@ MethodOptions read_implicit(TableReader& r, const std::string& method) {
     o.max_linear_iterations = r.int_field("max_linear_iterations", o.max_linear_iterations);
   }
   o.clamp_compressed = r.boolean("clamp_compressed", o.clamp_compressed);
+  if (contact && !given_clamp) {
+    o.clamp_compressed = false;
+    r.set_resolved_value("clamp_compressed", false);
+  }
   if (method == "implicit-midpoint") {
     if (o.newton_iterations == 1)
       refuse_ignored(r, "discrete_gradient", {"newton_iterations", "newton_iterations = 1"},

@@ -348,3 +348,43 @@ void edge_edge_sq_derivatives(const Vec3& a0, const Vec3& a1, const Vec3& b0, co
 }
 
 }  // namespace hooke::contact
+
+namespace hooke::contact {
+
+Vec3 point_triangle_weights(const Vec3& p, const Vec3& t0, const Vec3& t1, const Vec3& t2) {
+  // The parameter of p's projection on the segment from a to b, clamped to [0, 1].
+  auto along = [&p](const Vec3& a, const Vec3& b) {
+    const Vec3 e = b - a;
+    return std::clamp((p - a).dot(e) / e.squaredNorm(), 0.0, 1.0);
+  };
+  switch (point_triangle_type(p, t0, t1, t2)) {
+    case PointTriangleType::P_T0:
+      return {1.0, 0.0, 0.0};
+    case PointTriangleType::P_T1:
+      return {0.0, 1.0, 0.0};
+    case PointTriangleType::P_T2:
+      return {0.0, 0.0, 1.0};
+    case PointTriangleType::P_E0: {
+      const double s = along(t0, t1);
+      return {1.0 - s, s, 0.0};
+    }
+    case PointTriangleType::P_E1: {
+      const double s = along(t1, t2);
+      return {0.0, 1.0 - s, s};
+    }
+    case PointTriangleType::P_E2: {
+      const double s = along(t2, t0);
+      return {s, 0.0, 1.0 - s};
+    }
+    case PointTriangleType::P_T:
+      break;
+  }
+  // The projection on the plane: solve the 2 x 2 normal equations of p - t0 = a e1 + b e2.
+  const Vec3 e1 = t1 - t0, e2 = t2 - t0, r = p - t0;
+  const double a11 = e1.dot(e1), a12 = e1.dot(e2), a22 = e2.dot(e2);
+  const double b1 = e1.dot(r), b2 = e2.dot(r), det = a11 * a22 - a12 * a12;
+  const double a = (a22 * b1 - a12 * b2) / det, b = (a11 * b2 - a12 * b1) / det;
+  return {1.0 - a - b, a, b};
+}
+
+}  // namespace hooke::contact

@@ -88,3 +88,12 @@ void point_triangle_sq_derivatives(const Vec3& p, const Vec3& t0, const Vec3& t1
                                    Vector<12>* gradient, Matrix<12>* hessian);
 
 }  // namespace hooke::contact
+
+namespace hooke::contact {
+
+/// Barycentric weights (w0, w1, w2; each >= 0, summing to 1) of the point of triangle
+/// (t0, t1, t2) closest to p, the point of the region point_triangle_type gives: the contact point
+/// that IPC's lagged friction keeps for a step.
+Vec3 point_triangle_weights(const Vec3& p, const Vec3& t0, const Vec3& t1, const Vec3& t2);
+
+}  // namespace hooke::contact

@@ -24,6 +24,9 @@ class StepMatrix {
   void assemble_discrete_gradient_jacobians(ConstRef x0, ConstRef x1, ConstRef xm, ConstRef vm,
                                             const JacobianOptions& options);
   const Jacobians& jacobians() const { return m_J; }
+  /// K itself, between assemble_jacobians() and form(), for a caller that adds a term the
+  /// system's forces do not hold (barrier contact: ContactNewtonStepper).
+  SparseMatrix& stiffness() { return m_J.K; }
   /// A = M - a D - b K over K's values, then the pinned rows and columns. K is gone until the
   /// next assemble_jacobians().
   void form(double a, double b);

@@ -13,10 +13,11 @@ void add_work(StepperStats& to, const StepperStats& from) {
   for (auto m : {&StepperStats::internal_steps, &StepperStats::iterations,
                  &StepperStats::linear_iterations, &StepperStats::factorizations})
     to.*m += from.*m;
-  for (auto m : {&StepperStats::assembly_seconds, &StepperStats::analyze_seconds,
-                 &StepperStats::factor_seconds, &StepperStats::solve_seconds,
-                 &StepperStats::local_seconds, &StepperStats::global_seconds,
-                 &StepperStats::total_seconds, &StepperStats::factor_nonzeros})
+  for (auto m :
+       {&StepperStats::assembly_seconds, &StepperStats::analyze_seconds,
+        &StepperStats::factor_seconds, &StepperStats::solve_seconds, &StepperStats::local_seconds,
+        &StepperStats::global_seconds, &StepperStats::contact_seconds, &StepperStats::total_seconds,
+        &StepperStats::factor_nonzeros})
     to.*m += from.*m;
 }
 
@@ -52,6 +53,7 @@ std::string format_stats(const StepperStats& s) {
   time(s.solve_seconds, "solve");
   time(s.local_seconds, "local");
   time(s.global_seconds, "global");
+  time(s.contact_seconds, "contact");
   time(s.total_seconds, "total");
   return os.str();
 }

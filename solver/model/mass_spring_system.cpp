@@ -39,6 +39,11 @@ void MassSpringSystem::set_fluid(std::shared_ptr<const FluidModel> fluid) {
   m_fluid = std::move(fluid);
 }
 
+void MassSpringSystem::set_contact(std::shared_ptr<const ContactModel> contact) {
+  HOOKE_ASSERT(!m_finalized, "set_contact after finalize");
+  m_contact = std::move(contact);
+}
+
 void MassSpringSystem::add_force(std::unique_ptr<Force> force) {
   HOOKE_ASSERT(!m_finalized, "add_force after finalize");
   m_forces.push_back(std::move(force));
@@ -52,6 +57,7 @@ void MassSpringSystem::add_constraint(std::unique_ptr<Constraint> constraint) {
 void MassSpringSystem::finalize() {
   HOOKE_ASSERT(!m_finalized, "finalize called twice");
   for (const auto& f : m_forces) f->declare_blocks(m_pattern);
+  if (m_contact) m_contact->declare_blocks(m_pattern);
   m_pattern.finalize();
   for (auto& f : m_forces) f->bind(m_pattern);
   m_velocity_jacobian = std::any_of(m_forces.begin(), m_forces.end(),
@@ -91,6 +97,7 @@ std::unique_ptr<MassSpringSystem> MassSpringSystem::localize(const LocalIndex& i
                "localize: an index over " << index.local_of.size() << " particles for a system of "
                                           << num_particles());
   if (m_fluid) throw SetupError("a fluid scene cannot be split between processes yet");
+  if (m_contact) throw SetupError("a scene with [contact] cannot be split between processes yet");
   const Index n = index.num_local();
   Vec masses(n);
   std::vector<char> pinned(size_t(n), 0);

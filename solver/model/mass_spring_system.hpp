@@ -5,6 +5,7 @@
 
 #include "hooke/constraints/constraint.hpp"
 #include "hooke/constraints/pin_motion.hpp"
+#include "hooke/contact/contact_model.hpp"
 #include "hooke/forces/force.hpp"
 #include "hooke/local_index.hpp"
 #include "hooke/model/distribution.hpp"
@@ -46,6 +47,10 @@ class MassSpringSystem {
   /// external forces. make_fluid_system (sph/fluid_system.hpp) builds such a system and checks
   /// that the fluid's particle counts match it.
   void set_fluid(std::shared_ptr<const FluidModel> fluid);
+  /// Gives the system barrier contact against obstacles (before finalize only): the scene's
+  /// [contact]. Only the methods that take it step such a system (method_unsupported); finalize
+  /// declares the blocks its triangles couple.
+  void set_contact(std::shared_ptr<const ContactModel> contact);
   /// Builds the Jacobian block pattern and binds the forces to it. Call once, after all forces.
   void finalize();
   /// The local particles of the process that owns particles [begin, end) of this finalized
@@ -83,6 +88,8 @@ class MassSpringSystem {
   bool has_pin_motion() const { return !m_pin_motion.empty(); }
   /// The fluid of a fluid scene (set_fluid), nullptr for a mass-spring system.
   const FluidModel* fluid() const { return m_fluid.get(); }
+  /// The barrier contact (set_contact), nullptr without one.
+  const ContactModel* contact() const { return m_contact.get(); }
   /// 3n mask: 1 for the DOFs that move with the state's velocity (free particles and scripted
   /// pins), 0 for pins that stay still.
   const Vec& moving() const { return m_moving; }
@@ -141,6 +148,7 @@ class MassSpringSystem {
   std::vector<char> m_pinned;
   PinMotion m_pin_motion;
   std::shared_ptr<const FluidModel> m_fluid;
+  std::shared_ptr<const ContactModel> m_contact;
   std::shared_ptr<const Distribution> m_distribution;
   std::vector<std::unique_ptr<Force>> m_forces;
   std::vector<std::unique_ptr<Constraint>> m_constraints;

@@ -1,0 +1,120 @@
+#pragma once
+#include <Eigen/Core>
+#include <limits>
+#include <vector>
+
+#include "hooke/contact/contact_model.hpp"
+#include "hooke/core.hpp"
+#include "hooke/forces/element_set.hpp"
+#include "hooke/sparse/block_pattern.hpp"
+
+namespace hooke {
+
+/// A step's contact figures at a state: the contact stencils with a gap below dhat, and the
+/// smallest gap of any stencil within reach of dhat (infinity when none is).
+struct ContactFigures {
+  long long active = 0;
+  double min_gap = std::numeric_limits<double>::infinity();
+};
+
+/// One backward-Euler step's contact energy over a ContactModel, for a Newton method that
+/// minimises the incremental potential (IPC): at positions x at the step's end,
+///
+///   E_c(x) = kappa sum_k b(d_k(x))  +  sum_j mu_j lambda_j F0(|u_j(x)|),
+///
+/// the barrier (contact/barrier.hpp) on every gap d_k below dhat, and IPC's lagged, smoothed
+/// friction: for each contact j active at the step's start x0 (with the obstacles where they are
+/// at t0), its normal force lambda_j = kappa |b'(d_j(x0))|, its tangent basis T_j (3 x 2,
+/// orthonormal, perpendicular to the contact normal at x0) and its contact point's barycentric
+/// weights w_j on the cloth are frozen; its tangential slip over the step is
+/// u_j = T_j^T (sum_i w_ji (x_i - x0_i) - h s_j), s_j the obstacle's surface velocity there
+/// (a spinning sphere's drags the cloth). F0 is the smoothed slip: F0'(y) = f1(y) =
+/// 2 y / eps - y^2 / eps^2 for y < eps = epsilon_v h (static friction, C^1 at eps) and 1 beyond
+/// (sliding: a force mu lambda against the slip). Obstacles stand where they are at t1 = t0 + h.
+///
+/// Gaps: a sphere's to a triangle is |c - q| - r - xi with q the triangle's point closest to the
+/// centre c (contact/distance.hpp: its squared distance with exact derivatives); to a particle no
+/// triangle holds, |c - p| - r - xi; a plane's to a particle, n . p - offset - xi.
+///
+/// Stencils whose particles are all pinned are left out (their energy is constant). Every call
+/// loops over all triangles with a bounding-box test against each sphere (no broad-phase
+/// structure yet: a sphere is one primitive); nothing allocates after the first step.
+class ContactPotential {
+ public:
+  /// masses and pinned per particle; pattern the system's (finalized, holding the triangles'
+  /// blocks: ContactModel::declare_blocks); gravity the magnitude of the scene's gravity (m/s^2),
+  /// for the chosen stiffness.
+  ContactPotential(const ContactModel& model, const Vec& masses, const std::vector<char>& pinned,
+                   const BlockPattern& pattern, double gravity);
+
+  /// Sets up a step of h from x0 at t0: the obstacles at t0 + h, the lagged friction from x0 with
+  /// the obstacles at t0, and, on the first call with stiffness 0, kappa (kappa_for).
+  void begin_step(double t0, double h, ConstRef x0);
+  /// After an accepted step whose smallest gap was min_gap: with stiffness 0, kappa doubles when
+  /// min_gap < kAdaptiveGap dhat (up to kMaxAdaptiveGrowth times its first value), as IPC raises
+  /// it when contacts get close (Li et al. 2020, section 4.3).
+  void end_step(double min_gap);
+
+  /// E_c(x) (J).
+  double energy(ConstRef x) const;
+  /// Adds -dE_c/dx (N) into f (3n).
+  void add_forces(ConstRef x, VecRef f) const;
+  /// Adds scale times d^2E_c/dx^2 into A (the system's pattern), each barrier stencil's Hessian
+  /// made positive semi-definite first as `projection` asks (Clamp by default, so a Newton matrix
+  /// stays positive definite; None gives the exact Hessian). The friction's is PSD as it is.
+  void add_hessian(ConstRef x, double scale, SparseMatrix& A,
+                   PsdProjection projection = PsdProjection::Clamp) const;
+  /// The largest fraction t in [0, 1] such that moving x to x + t dx keeps every gap above a
+  /// tenth of where it started (contact/ccd.hpp: exact for planes and particle-sphere pairs,
+  /// conservative advancement for triangle-sphere pairs).
+  double max_step(ConstRef x, ConstRef dx) const;
+  /// The active stencils and smallest gap at x.
+  ContactFigures figures(ConstRef x) const;
+  /// Adds the magnitude of the contact force (barrier and friction, N) on each particle into f
+  /// (n values), for frames.
+  void add_force_magnitudes(ConstRef x, VecRef f) const;
+
+  double kappa() const { return m_kappa; }
+  /// Restores kappa (a checkpoint's); 0 chooses it anew at the next step.
+  void set_kappa(double kappa) { m_kappa = kappa; }
+  /// The stiffness chosen when [contact] gives 0 for a step of h: a particle of the average free
+  /// mass m resting on an obstacle under m (g + dhat / h^2) (its weight plus stopping it from
+  /// dhat / h in one step) sits at dhat / 2: kappa = m (g + dhat / h^2) / |b'(dhat / 2)|.
+  double kappa_for(double h) const;
+
+  static constexpr double kAdaptiveGap = 0.05;
+  static constexpr double kMaxAdaptiveGrowth = 1000.0;
+
+ private:
+  /// A contact with its friction frozen at the step's start.
+  struct FrictionPair {
+    int count;    // particles of the cloth's contact point: 1 or 3
+    int tri;      // their triangle (count 3)
+    int ids[3];   // their ids
+    double w[3];  // and weights
+    Eigen::Matrix<double, 3, 2> T;
+    Vec3 slip;  // the obstacle's surface motion over the step, h s_j (m)
+    double mu_lambda;
+  };
+  /// Calls f(gap) for every stencil with a gap below reach, with its derivatives up to Order
+  /// (0 the value, 1 the gradient, 2 the Hessian).
+  template <int Order, class F>
+  void for_each_gap(ConstRef x, double reach, F&& f) const;
+  Vec3 friction_slip(const FrictionPair& p, ConstRef x) const;
+  void lag_friction(double t0, double h, ConstRef x0);
+
+  const ContactModel& m_model;
+  const Vec& m_masses;
+  const std::vector<char>& m_pinned;
+  double m_gravity;
+  std::vector<char> m_in_triangle;          // per particle: held by a triangle
+  std::vector<char> m_triangle_free;        // per triangle: has a free vertex
+  std::vector<BlockSlot> m_diag_slots;      // per particle
+  std::vector<BlockSlot> m_triangle_slots;  // per triangle: 9, (a, b) at 3 a + b
+  std::vector<Vec3> m_centres;              // the spheres' centres at t1
+  std::vector<FrictionPair> m_friction;
+  Vec m_x0;
+  double m_h = 0.0, m_kappa = 0.0, m_first_kappa = 0.0;
+};
+
+}  // namespace hooke

@@ -1,0 +1,294 @@
+#include "hooke/whole_step/contact_newton.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <sstream>
+
+#include "hooke/forces/force.hpp"
+
+namespace hooke {
+namespace {
+
+bool dissipative(ForceForm form) {
+  return form == ForceForm::Dampers || form == ForceForm::Drag || form == ForceForm::ElementDampers;
+}
+
+void add_summary(LinearSummary& total, const LinearSummary& s) {
+  total.iterations += s.iterations;
+  total.analyze_seconds += s.analyze_seconds;
+  total.factor_seconds += s.factor_seconds;
+  total.solve_seconds += s.solve_seconds;
+}
+
+/// The magnitude of gravity among the system's forces (m/s^2), for the chosen stiffness.
+double gravity_of(const MassSpringSystem& system) {
+  Vec3 g = Vec3::Zero();
+  for (const auto& f : system.forces())
+    if (f->terms().form == ForceForm::Gravity) g += f->terms().acceleration;
+  return g.norm();
+}
+
+}  // namespace
+
+std::string contact_unsupported(const MassSpringSystem& system) {
+  if (system.contact() == nullptr)
+    return "the contact step needs a system with [contact] (MassSpringSystem::set_contact)";
+  for (const auto& f : system.forces())
+    if (f->terms().form == ForceForm::Unknown)
+      return std::string(
+                 "the contact step poses backward Euler as a minimisation and needs each "
+                 "force to be a potential or a damper; '") +
+             f->name() + "' is neither";
+  return "";
+}
+
+ContactNewtonStepper::ContactNewtonStepper(const MassSpringSystem& system,
+                                           std::unique_ptr<LinearSolver> solver,
+                                           ImplicitOptions options)
+    : m_system(system),
+      m_solver(std::move(solver)),
+      m_options(options),
+      m_A(system),
+      m_contact(*system.contact(), system.masses(), system.pinned(), system.pattern(),
+                gravity_of(system)) {
+  const std::string why = contact_unsupported(system);
+  HOOKE_ASSERT(why.empty(), why);
+  const OptionError err = m_options.validate();
+  HOOKE_ASSERT(err.ok(), "ImplicitOptions: " << err.message);
+  HOOKE_ASSERT(m_options.beta == 1.0,
+               "the contact step is backward Euler (beta = 1), got beta = " << m_options.beta);
+  m_jac_options.damping_position_terms = false;
+  for (const auto& f : system.forces())
+    m_dissipative = m_dissipative || dissipative(f->terms().form);
+  const Index N = system.dofs();
+  for (Vec* v : {&m_x0, &m_x, &m_xhat, &m_v, &m_f, &m_fd, &m_rhs, &m_dx, &m_trial, &m_tmp})
+    v->setZero(N);
+  m_force_magnitude.setZero(system.num_particles());
+  const LinearSummary a = m_solver->analyze(m_A.matrix());
+  if (a.status != Status::Converged) throw SetupError(a.message);
+  add_summary(m_totals, a);
+}
+
+void ContactNewtonStepper::restore_history(const std::vector<double>& history) {
+  if (history.empty()) {
+    m_contact.set_kappa(0.0);
+    return;
+  }
+  HOOKE_ASSERT(history.size() == 1 && history[0] >= 0.0,
+               name() << ": contact history of " << history.size() << " numbers, expected 1");
+  m_contact.set_kappa(history[0]);
+}
+
+std::string ContactNewtonStepper::start(const State& s0, double h) {
+  m_x0 = s0.x;
+  m_x = s0.x;
+  const Vec& moving = m_system.moving();
+  m_xhat = s0.x + h * s0.v.cwiseProduct(moving);
+  const PinMotion& pins = m_system.pin_motion();
+  for (size_t k = 0; k < pins.particles().size(); ++k) {
+    const Index p = pins.particles()[k];
+    m_x.segment<3>(3 * p) = pins.position(k, s0.t + h);
+  }
+  m_contact.begin_step(s0.t, h, s0.x);
+  const ContactFigures fig = m_contact.figures(m_x);
+  m_min_gap = fig.min_gap;
+  if (!(fig.min_gap > 0.0)) {
+    std::ostringstream os;
+    os << name() << ": a contact gap is " << fig.min_gap
+       << " m at the step's start with the obstacles where they are at t = " << s0.t + h
+       << " s: an obstacle moves into the cloth within one step, or a pinned particle is placed "
+          "inside one (lower time.dt)";
+    return os.str();
+  }
+  return "";
+}
+
+void ContactNewtonStepper::assemble(double h) {
+  const auto ta = Clock::now();
+  m_v = (m_x - m_x0) / h;
+  m_system.compute_forces(m_x, m_v, m_f);
+  m_A.assemble_jacobians(m_x, m_v, m_jac_options);
+  const auto tc = Clock::now();
+  m_contact.add_forces(m_x, m_f);
+  m_contact.add_hessian(m_x, -1.0, m_A.stiffness());
+  m_contact_seconds += seconds_since(tc);
+  if (m_dissipative) {
+    m_fd.setZero();
+    for (const auto& f : m_system.forces())
+      if (dissipative(f->terms().form)) f->add_forces(m_x, m_v, m_fd);
+  }
+  m_rhs = h * h * m_f;
+  m_rhs -= m_system.mass_diagonal().cwiseProduct(m_x - m_xhat);
+  m_A.zero_pinned(m_rhs);
+  m_A.form(h, h * h);
+  m_assembly_seconds += seconds_since(ta);
+}
+
+bool ContactNewtonStepper::line_search(double h, double& fraction) {
+  const auto tc = Clock::now();
+  double alpha = m_contact.max_step(m_x, m_dx);
+  m_contact_seconds += seconds_since(tc);
+  fraction = alpha;
+  // g(x) h^2 in difference form from the iterate m_x: the inertia term exactly, the potentials
+  // and the contact energy as differences, the dissipative model by its definition.
+  const Vec& mass = m_system.mass_diagonal();
+  const Vec& moving = m_system.moving();
+  const double e0 = m_system.potential_energy(m_x), c0 = m_contact.energy(m_x);
+  const double h2 = h * h;
+  // The predicted decrease of h^2 g along dx (A is positive definite, so it is >= 0).
+  const double predicted = m_rhs.dot(m_dx);
+  const double scale = h2 * (std::abs(e0) + std::abs(c0)) +
+                       0.5 * (m_x - m_xhat).cwiseProduct(moving).cwiseAbs2().dot(mass);
+  const Jacobians& J = m_A.jacobians();
+  for (int k = 0; k < 60; ++k) {
+    m_trial = m_x + alpha * m_dx;
+    if (alpha * predicted <= 1e-12 * scale) return true;  // below g's round-off: take it
+    const auto te = Clock::now();
+    const double dc = m_contact.energy(m_trial) - c0;
+    m_contact_seconds += seconds_since(te);
+    double change = h2 * (m_system.potential_energy(m_trial) - e0 + dc);
+    // Inertia: m/2 (|x + a dx - xhat|^2 - |x - xhat|^2) = m a dx . (x - xhat + a dx / 2).
+    m_tmp = (m_x - m_xhat + 0.5 * alpha * m_dx).cwiseProduct(moving);
+    change += alpha * m_dx.cwiseProduct(mass).dot(m_tmp);
+    if (m_dissipative) {
+      // -h^2 f_d . (a dx) + h a^2 dx^T (-D) dx / 2.
+      change -= h2 * alpha * m_fd.dot(m_dx);
+      if (J.velocity_values() != nullptr) {
+        m_tmp.noalias() = J.D * m_dx;
+        change -= 0.5 * h * alpha * alpha * m_dx.dot(m_tmp);
+      }
+    }
+    if (change <= 0.0) return true;
+    alpha *= 0.5;
+  }
+  return false;
+}
+
+StepSummary ContactNewtonStepper::step(const State& s0, double h, State& s1) {
+  const auto t_start = Clock::now();
+  StepSummary out;
+  ++m_steps;
+  m_stepped = true;
+  m_ccd_fraction = 1.0;
+  if (std::string why = start(s0, h); !why.empty()) {
+    out.status = Status::BrokeDown;
+    out.message = why;
+    m_total_seconds += seconds_since(t_start);
+    return out;
+  }
+  LinearSolveOptions lin;
+  lin.tolerance = m_options.linear_tolerance;
+  lin.max_iterations = m_options.max_linear_iterations;
+  lin.warm_start = false;
+  const double dhat = m_system.contact()->options().distance;
+  const double v0 = s0.v.cwiseProduct(m_system.moving()).lpNorm<Eigen::Infinity>();
+  bool converged = false;
+  double dx_norm = 0.0;
+  // The exact spring Hessian where A is positive definite (Newton converges quadratically), the
+  // clamped one in an iteration where it is not (projected Newton).
+  for (int k = 0; k < m_options.newton_iterations; ++k) {
+    const bool clamp = m_options.clamp_compressed;
+    m_jac_options.clamp_compressed = clamp;
+    assemble(h);
+    m_solver->set_coordinates(m_x);
+    LinearSummary fs = m_solver->factor(m_A.matrix());
+    add_summary(m_totals, fs);
+    if (fs.status != Status::Converged && fs.not_positive_definite && !clamp) {
+      ++m_clamped_iterations;
+      m_jac_options.clamp_compressed = true;
+      assemble(h);
+      fs = m_solver->factor(m_A.matrix());
+      add_summary(m_totals, fs);
+    }
+    out.newton_iterations = k + 1;
+    if (fs.status != Status::Converged) {
+      out.status = fs.status;
+      out.message = fs.message;
+      break;
+    }
+    m_dx.setZero();
+    const LinearSummary ss = m_solver->solve(m_rhs, m_dx, lin);
+    add_summary(m_totals, ss);
+    out.iterations += ss.iterations;
+    out.residual = ss.residual;
+    if (ss.status == Status::BrokeDown || ss.status == Status::Fatal) {
+      out.status = ss.status;
+      out.message = ss.message;
+      break;
+    }
+    m_A.zero_pinned(m_dx);
+    dx_norm = m_dx.lpNorm<Eigen::Infinity>();
+    const double motion = h * std::max(m_v.lpNorm<Eigen::Infinity>(), v0);
+    if (dx_norm <= m_options.newton_tolerance * std::max(motion, dhat)) {
+      converged = true;
+      break;
+    }
+    double fraction = 1.0;
+    const bool descended = line_search(h, fraction);
+
+    m_ccd_fraction = std::min(m_ccd_fraction, fraction);
+    if (!descended) {
+      std::ostringstream os;
+      os << name() << ": the line search found no decrease of the incremental potential at "
+         << "Newton iteration " << k + 1 << " (||dx||_inf = " << dx_norm << " m)";
+      out.status = Status::NotConverged;
+      out.message = os.str();
+      break;
+    }
+    m_x = m_trial;
+    const auto tf = Clock::now();
+    m_min_gap = std::min(m_min_gap, m_contact.figures(m_x).min_gap);
+    m_contact_seconds += seconds_since(tf);
+  }
+  m_newton_iterations += out.newton_iterations;
+  m_last_newton = out.newton_iterations;
+  if (!converged && out.status == Status::Converged) {
+    std::ostringstream os;
+    os << name() << ": Newton did not converge in " << m_options.newton_iterations
+       << " iterations: last ||dx||_inf = " << dx_norm << " m (tolerance "
+       << m_options.newton_tolerance << " relative)";
+    out.status = Status::NotConverged;
+    out.message = os.str();
+  }
+  s1.x = m_x;
+  s1.v = (m_x - m_x0) / h;
+  s1.v = s1.v.cwiseProduct(m_system.moving());
+  s1.t = s0.t + h;
+  if (!step_failed(out)) m_contact.end_step(m_min_gap);
+  m_total_seconds += seconds_since(t_start);
+  return out;
+}
+
+StepperStats ContactNewtonStepper::stats() const {
+  StepperStats s;
+  s.steps = m_steps;
+  s.iterations = m_newton_iterations;
+  s.linear_iterations = m_totals.iterations;
+  s.factorizations = m_solver->factorizations();
+  s.assembly_seconds = m_assembly_seconds;
+  s.analyze_seconds = m_totals.analyze_seconds;
+  s.factor_seconds = m_totals.factor_seconds;
+  s.solve_seconds = m_totals.solve_seconds;
+  s.contact_seconds = m_contact_seconds;
+  s.total_seconds = m_total_seconds;
+  return s;
+}
+
+std::vector<StepFigure> ContactNewtonStepper::step_figures(const State& s) {
+  const ContactFigures fig = m_contact.figures(s.x);
+  const double min_gap = m_stepped ? m_min_gap : fig.min_gap;
+  return {{"newton_iterations", double(m_stepped ? m_last_newton : 0), 17},
+          {"contacts", double(fig.active), 17},
+          {"min_gap", min_gap, 9},
+          {"ccd_fraction", m_stepped ? m_ccd_fraction : 1.0, 6},
+          {"kappa", m_contact.kappa(), 6}};
+}
+
+std::vector<ParticleField> ContactNewtonStepper::output_fields(const State& s) {
+  m_force_magnitude.setZero();
+  m_contact.add_force_magnitudes(s.x, m_force_magnitude);
+  return {{"contact_force", &m_force_magnitude}};
+}
+
+}  // namespace hooke
