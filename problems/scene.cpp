@@ -9,7 +9,7 @@
 #include "hooke/constraints/collider.hpp"
 #include "hooke/constraints/strain_limit.hpp"
 #include "hooke/contact/contact_model.hpp"
-#include "hooke/contact/distance.hpp"
+#include "hooke/contact/contact_potential.hpp"
 #include "hooke/forces/air_drag.hpp"
 #include "hooke/forces/gravity.hpp"
 #include "hooke/forces/hooke_spring.hpp"
@@ -187,6 +187,7 @@ void check_particles_outside(const std::vector<SceneCollider>& colliders, const 
   const std::vector<char>& pinned = scene.system->pinned();
   Vec moved(x.size()), v(x.size());
   for (const auto& c : colliders) {
+    if (c.constraint == nullptr) continue;  // a mesh obstacle: check_contact_start's
     moved = x;
     v.setZero();
     // Colliders move positions only: x0 = x1 (no motion within the step), h only scales v.
@@ -217,47 +218,29 @@ void check_particles_outside(const std::vector<SceneCollider>& colliders, const 
 }
 
 /// Under [contact]: refuses a contact gap that starts at or below 0 (a free particle on or inside
-/// an obstacle grown by contact.thickness, or a triangle that touches or cuts a sphere), which
-/// the barrier cannot start from. `colliders` lists the planes, then the spheres, as the model.
+/// an obstacle grown by contact.thickness, a triangle that touches or cuts a sphere, a surface that
+/// meets a mesh obstacle), which the barrier cannot start from. `colliders` lists the planes,
+/// then the spheres, then the meshes, as the model does.
 void check_contact_start(const std::vector<SceneCollider>& colliders, const Scene& scene) {
-  const ContactModel* model = scene.system->contact();
+  const MassSpringSystem& sys = *scene.system;
+  const ContactModel* model = sys.contact();
   if (model == nullptr) return;
-  const Vec& x = scene.initial.x;
-  const std::vector<char>& pinned = scene.system->pinned();
-  const double xi = model->options().thickness;
-  auto refuse = [&](size_t collider, const std::string& what, double gap) {
-    const SceneCollider& c = colliders[collider];
-    throw InputError(scene.file, c.key,
-                     what + " starts at a contact gap of " + fmt(gap) + " m from " + c.what +
-                         ": barrier contact needs every gap > 0 at the start. Move the obstacle (" +
-                         c.placed_by + ") or the object ([mesh] placement)");
-  };
-  const Index n = scene.system->num_particles();
-  const size_t planes = model->planes().size();
-  for (size_t q = 0; q < planes; ++q) {
-    const ContactPlane& pl = model->planes()[q];
-    for (Index i = 0; i < n; ++i)
-      if (!pinned[size_t(i)]) {
-        const double gap = pl.normal.dot(x.segment<3>(3 * i)) - pl.offset - xi;
-        if (!(gap > 0.0)) refuse(q, "free particle " + std::to_string(i), gap);
-      }
-  }
-  for (size_t s = 0; s < model->spheres().size(); ++s) {
-    const ContactSphere& sp = model->spheres()[s];
-    for (Index i = 0; i < n; ++i)
-      if (!pinned[size_t(i)]) {
-        const double gap = (x.segment<3>(3 * i) - sp.center).norm() - sp.radius - xi;
-        if (!(gap > 0.0)) refuse(planes + s, "free particle " + std::to_string(i), gap);
-      }
-    for (size_t t = 0; t < model->triangles().size(); ++t) {
-      const auto& tr = model->triangles()[t];
-      const double gap =
-          std::sqrt(contact::point_triangle_sq(sp.center, x.segment<3>(3 * tr[0]),
-                                               x.segment<3>(3 * tr[1]), x.segment<3>(3 * tr[2]))) -
-          sp.radius - xi;
-      if (!(gap > 0.0)) refuse(planes + s, "triangle " + std::to_string(t), gap);
-    }
-  }
+  ContactPotential potential(*model, sys.masses(), sys.pinned(), sys.pattern(), 0.0);
+  const ContactFigures fig = potential.figures(scene.initial.x);
+  if (fig.min_gap > 0.0) return;
+  const size_t planes = model->planes().size(), spheres = model->spheres().size();
+  const size_t k = fig.min_plane >= 0    ? size_t(fig.min_plane)
+                   : fig.min_sphere >= 0 ? planes + size_t(fig.min_sphere)
+                                         : planes + spheres + size_t(fig.min_mesh);
+  const SceneCollider& c = colliders[k];
+  throw InputError(
+      scene.file, c.key,
+      "the cloth starts at a contact gap of " + fmt(fig.min_gap) + " m from " + c.what +
+          (model->options().thickness > 0.0 ? " (gaps are measured from contact.thickness = " +
+                                                  fmt(model->options().thickness) + ")"
+                                            : "") +
+          ": barrier contact needs every gap > 0 at the start. Move the obstacle (" + c.placed_by +
+          ") or the object ([mesh] placement)");
 }
 
 /// [[pin_motion]]: scripted pins. Each table moves the pinned particles whose initial position lies
@@ -347,6 +330,50 @@ void read_sphere_motion(TableReader& sp, bool contact, ContactSphere& s) {
   s.angular_velocity = sp.vec3("angular_velocity", Vec3::Zero());
 }
 
+/// [[collision.mesh]]: triangle-mesh obstacles from OBJ files (placed by scale and translate,
+/// moved rigidly as [[pin_motion]] moves pins), listed in `colliders` after the planes and spheres.
+std::vector<ContactMesh> read_mesh_obstacles(TableReader& c, bool contact,
+                                             std::vector<SceneCollider>& colliders) {
+  std::vector<ContactMesh> meshes;
+  if (!c.has("mesh")) return meshes;
+  if (!contact)
+    c.fail("mesh",
+           "a mesh obstacle acts through barrier contact: add a [contact] section (and method = "
+           "\"implicit\")");
+  const std::string base_dir = std::filesystem::path(c.file()).parent_path().string();
+  for (TableReader& t : c.tables("mesh")) {
+    ObjSurface obj = read_obj_surface(t, base_dir);
+    if (obj.triangles.empty()) t.fail("file", "the OBJ file has no faces");
+    const double scale = t.positive("scale", 1.0);
+    const Vec3 shift = t.vec3("translate", Vec3::Zero());
+    ContactMesh m;
+    for (Vec3& v : obj.vertices) v = scale * v + shift;
+    Vec3 lo = Vec3::Constant(HUGE_VAL), hi = -lo;
+    for (const Vec3& v : obj.vertices) {
+      lo = lo.cwiseMin(v);
+      hi = hi.cwiseMax(v);
+    }
+    m.vertices = std::move(obj.vertices);
+    m.triangles = std::move(obj.triangles);
+    m.friction = t.non_negative("friction", 0.0);
+    m.velocity = t.vec3("velocity", Vec3::Zero());
+    m.angular_velocity = t.vec3("angular_velocity", Vec3::Zero());
+    m.center = t.vec3("center", 0.5 * (lo + hi));
+    m.start = t.non_negative("start", 0.0);
+    if (t.has("stop")) {
+      m.stop = t.positive("stop");
+      if (!(m.stop > m.start)) t.fail("stop", "must be after start = " + fmt(m.start) + " s");
+    }
+    t.finish();
+    colliders.push_back({t.name(),
+                         "the mesh obstacle (" + std::to_string(m.triangles.size()) +
+                             " triangles in " + fmt(lo) + " .. " + fmt(hi) + ")",
+                         t.path("file") + ", " + t.path("translate"), nullptr, nullptr});
+    meshes.push_back(std::move(m));
+  }
+  return meshes;
+}
+
 /// [collision.*]: each kind as one table ([collision.ground]) or several ([[collision.ground]]:
 /// walls, floors, any normal; [[collision.sphere]]). Without [contact] they are post-step
 /// projections, applied in the order given, planes first; with it, obstacles of the system's
@@ -394,7 +421,12 @@ void read_colliders(TableReader& root, const MeshBuild& b, MassSpringSystem& sys
                (contact ? ", with contact.thickness " + fmt(xi) : "") + ")",
            sp.path("center") + ", " + sp.path("radius"), nullptr, nullptr});
     }
+    std::vector<ContactMesh> meshes = read_mesh_obstacles(*c, contact, colliders);
     c->finish();
+    if (contact)
+      sys.set_contact(std::make_shared<ContactModel>(options, b.triangles, std::move(spheres),
+                                                     std::move(planes), std::move(meshes), b.x));
+    return;
   }
   if (contact)
     sys.set_contact(std::make_shared<ContactModel>(options, b.triangles, std::move(spheres),

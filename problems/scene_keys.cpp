@@ -355,6 +355,92 @@ void add_springs_keys(std::vector<SceneKey>& t) {
           .meaning("damping of the mesh.springs rows that give none"));
 }
 
+/// Adds [[collision.mesh]] and [contact]: barrier contact (solver/contact/, docs/contact.md).
+void add_contact_keys(std::vector<SceneKey>& t) {
+  auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
+  // [[collision.mesh]]: triangle-mesh obstacles, under [contact] only.
+  const std::vector<std::string> contact_needs = {"contact.distance=0.001",
+                                                  "integrator.method=implicit"};
+  std::vector<std::string> mesh_needs = contact_needs;
+  mesh_needs.push_back("collision.mesh.file='meshes/box.obj'");
+  add(K("collision.mesh.file", T::String)
+          .example("'meshes/box.obj'")
+          .needs(contact_needs)
+          .meaning("Wavefront OBJ file of the obstacle (v and f lines), relative to the scene "
+                   "file's folder; needs [contact]"));
+  add(K("collision.mesh.scale", T::Number)
+          .def("1")
+          .positive()
+          .needs(mesh_needs)
+          .meaning("factor applied to the OBJ coordinates"));
+  add(K("collision.mesh.translate", T::Vector3)
+          .unit("m")
+          .def("[0, 0, 0]")
+          .needs(mesh_needs)
+          .meaning("offset added after scaling"));
+  add(K("collision.mesh.friction", T::Number)
+          .def("0")
+          .non_negative()
+          .needs(mesh_needs)
+          .meaning("Coulomb friction coefficient of the contact"));
+  add(K("collision.mesh.velocity", T::Vector3)
+          .unit("m/s")
+          .def("[0, 0, 0]")
+          .needs(mesh_needs)
+          .meaning("translation velocity of the obstacle's rigid motion (as [[pin_motion]])"));
+  add(K("collision.mesh.angular_velocity", T::Vector3)
+          .unit("rad/s")
+          .def("[0, 0, 0]")
+          .needs(mesh_needs)
+          .meaning("angular velocity of its rigid motion, about center"));
+  add(K("collision.mesh.center", T::Vector3)
+          .unit("m")
+          .computed("the centre of the obstacle's bounding box")
+          .needs(mesh_needs)
+          .meaning("centre of the rotation at start"));
+  add(K("collision.mesh.start", T::Number)
+          .unit("s")
+          .def("0")
+          .non_negative()
+          .needs(mesh_needs)
+          .meaning("time the motion starts"));
+  add(K("collision.mesh.stop", T::Number)
+          .unit("s")
+          .computed("never")
+          .positive()
+          .example("0.5")
+          .needs(mesh_needs)
+          .meaning("time the motion stops (after start)"));
+
+  // [contact]: barrier contact (solver/contact/, docs/contact.md).
+  add(K("contact.distance", T::Number)
+          .needs({"integrator.method=implicit"})
+          .unit("m")
+          .def("0.001")
+          .positive()
+          .meaning("dhat: gaps below it are in contact and feel the barrier kappa b(d), b IPC's "
+                   "clamped log barrier on the gap"));
+  add(K("contact.stiffness", T::Number)
+          .needs({"integrator.method=implicit"})
+          .unit("N/m")
+          .def("0")
+          .non_negative()
+          .meaning("kappa, the barrier's stiffness; 0 chooses it from the masses, gravity and "
+                   "dt and doubles it when a gap falls below 0.05 dhat (up to 1000 times)"));
+  add(K("contact.friction_velocity", T::Number)
+          .needs({"integrator.method=implicit"})
+          .unit("m/s")
+          .def("0.001")
+          .positive()
+          .meaning("epsilon_v: slip speeds below it are smoothed static friction"));
+  add(K("contact.thickness", T::Number)
+          .needs({"integrator.method=implicit"})
+          .unit("m")
+          .def("0")
+          .non_negative()
+          .meaning("gaps are measured from this offset of the cloth's surface (a thickness)"));
+}
+
 /// Adds [forces] and [collision.*].
 void add_scene_part_keys(std::vector<SceneKey>& t) {
   auto add = [&t](SceneKey k) { t.push_back(std::move(k)); };
@@ -411,34 +497,7 @@ void add_scene_part_keys(std::vector<SceneKey>& t) {
           .needs({"contact.distance=0.001", "integrator.method=implicit"})
           .meaning("the sphere spins about its centre (a vector along the axis, right-handed); "
                    "friction drags the cloth with its surface (needs [contact])"));
-
-  // [contact]: barrier contact (solver/contact/, docs/contact.md).
-  add(K("contact.distance", T::Number)
-          .needs({"integrator.method=implicit"})
-          .unit("m")
-          .def("0.001")
-          .positive()
-          .meaning("dhat: gaps below it are in contact and feel the barrier kappa b(d), b IPC's "
-                   "clamped log barrier on the gap"));
-  add(K("contact.stiffness", T::Number)
-          .needs({"integrator.method=implicit"})
-          .unit("N/m")
-          .def("0")
-          .non_negative()
-          .meaning("kappa, the barrier's stiffness; 0 chooses it from the masses, gravity and "
-                   "dt and doubles it when a gap falls below 0.05 dhat (up to 1000 times)"));
-  add(K("contact.friction_velocity", T::Number)
-          .needs({"integrator.method=implicit"})
-          .unit("m/s")
-          .def("0.001")
-          .positive()
-          .meaning("epsilon_v: slip speeds below it are smoothed static friction"));
-  add(K("contact.thickness", T::Number)
-          .needs({"integrator.method=implicit"})
-          .unit("m")
-          .def("0")
-          .non_negative()
-          .meaning("gaps are measured from this offset of the cloth's surface (a thickness)"));
+  add_contact_keys(t);
 }
 
 /// Adds [bending]: angle-based bending as element sets (solver/forces/bending.hpp); its keys'

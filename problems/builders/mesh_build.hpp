@@ -65,6 +65,15 @@ void build_fluid(TableReader& fluid, const Vec3& gravity, Scene& scene);
 /// Refuses, naming the key: a model the mesh type cannot carry, a mesh with no hinge, degenerate
 /// rest triangles, and a quadratic model on a mesh bent at rest.
 void add_bending(TableReader& bending, const MeshBuild& b, MassSpringSystem& sys);
+/// The surface of a Wavefront OBJ file.
+struct ObjSurface {
+  std::vector<Vec3> vertices;
+  std::vector<std::array<int, 3>> triangles;
+};
+/// Reads the OBJ file that mesh's key `file` names (relative to base_dir unless absolute),
+/// refusing a missing, irregular, oversized or malformed file (naming the key or the file's line),
+/// and records its absolute path as the resolved `file`.
+ObjSurface read_obj_surface(TableReader& mesh, const std::string& base_dir);
 /// base_dir: directory of the scene file, against which a relative OBJ path is resolved.
 void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_dir,
                MeshBuild& out);

@@ -131,8 +131,7 @@ ObjMesh read_obj(const std::string& path, TableReader& mesh) {
 
 }  // namespace
 
-void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_dir,
-               MeshBuild& out) {
+ObjSurface read_obj_surface(TableReader& mesh, const std::string& base_dir) {
   const std::string file = mesh.string("file");
   namespace fs = std::filesystem;
   const fs::path p = fs::path(file).is_absolute() ? fs::path(file) : fs::path(base_dir) / file;
@@ -154,6 +153,12 @@ void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_
   // The resolved scene (scene.toml in the output directory) must find the mesh from anywhere.
   mesh.set_resolved("file", fs::absolute(p).lexically_normal().string());
   ObjMesh obj = read_obj(p.string(), mesh);
+  return {std::move(obj.vertices), std::move(obj.triangles)};
+}
+
+void build_obj(TableReader& mesh, TableReader& springs, const std::string& base_dir,
+               MeshBuild& out) {
+  const ObjSurface obj = read_obj_surface(mesh, base_dir);
   const Index n = static_cast<Index>(obj.vertices.size());
   check_size(mesh, "file", double(n), 3.0 * double(obj.triangles.size()));
   const double scale = mesh.positive("scale", 1.0);

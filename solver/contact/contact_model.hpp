@@ -52,20 +52,46 @@ struct ContactPlane {
   double friction = 0.0;  ///< Coulomb mu of the cloth against it
 };
 
+/// A triangle-mesh obstacle (an OBJ's surface) in rigid scripted motion, as [[pin_motion]]
+/// moves pins: from t = start to stop, with tau = clamp(t, start, stop) - start, a vertex given
+/// at X is at center + velocity tau + R(angular_velocity tau) (X - center).
+struct ContactMesh {
+  std::vector<Vec3> vertices;  ///< at t <= start (m)
+  std::vector<std::array<int, 3>> triangles;
+  double friction = 0.0;  ///< Coulomb mu of the cloth against it
+  Vec3 velocity = Vec3::Zero();
+  Vec3 angular_velocity = Vec3::Zero();
+  Vec3 center = Vec3::Zero();
+  double start = 0.0, stop = 1e300;
+  /// Its pose at t: a vertex given at X is at R X + d.
+  void pose(double t, Mat3& R, Vec3& d) const;
+};
+
 /// What a scene's barrier contact is made of, fixed once built (MassSpringSystem::set_contact):
 /// the settings, the obstacles, and the particles' surface. Spheres act on the surface triangles
 /// (the distance from the centre to each triangle, so a triangle cannot pass through a sphere
 /// smaller than the spacing) and on the particles no triangle holds (strands, loose particles);
-/// planes act on every particle (a plane's closest point to a triangle is one of its vertices).
+/// planes act on every particle (a plane's closest point to a triangle is one of its vertices);
+/// meshes act by IPC's three pair kinds: each particle against the mesh's triangles, each mesh
+/// vertex against the surface triangles, and each surface edge against the mesh's edges.
 /// The stepper that takes contact evaluates it through ContactPotential.
 class ContactModel {
  public:
+  /// rest: the particles' 3n rest positions, for the edge-edge mollifier's scale (needed with
+  /// meshes only).
   ContactModel(ContactOptions options, std::vector<std::array<int, 3>> triangles,
-               std::vector<ContactSphere> spheres, std::vector<ContactPlane> planes);
+               std::vector<ContactSphere> spheres, std::vector<ContactPlane> planes,
+               std::vector<ContactMesh> meshes = {}, const Vec& rest = Vec());
   const ContactOptions& options() const { return m_options; }
   const std::vector<std::array<int, 3>>& triangles() const { return m_triangles; }
   const std::vector<ContactSphere>& spheres() const { return m_spheres; }
   const std::vector<ContactPlane>& planes() const { return m_planes; }
+  const std::vector<ContactMesh>& meshes() const { return m_meshes; }
+  /// The surface's edges (each once, the lower id first) and their rest lengths (with meshes).
+  const std::vector<std::array<int, 2>>& edges() const { return m_edges; }
+  const std::vector<double>& edge_rest() const { return m_edge_rest; }
+  /// Mesh m's edges, each once.
+  const std::vector<std::array<int, 2>>& mesh_edges(size_t m) const { return m_mesh_edges[m]; }
   /// Declares the blocks a triangle's contact couples (its vertices pairwise), so that the
   /// Newton matrix holds them (MassSpringSystem::finalize calls it).
   void declare_blocks(BlockPattern& pattern) const;
@@ -75,6 +101,13 @@ class ContactModel {
   std::vector<std::array<int, 3>> m_triangles;
   std::vector<ContactSphere> m_spheres;
   std::vector<ContactPlane> m_planes;
+  std::vector<ContactMesh> m_meshes;
+  std::vector<std::array<int, 2>> m_edges;
+  std::vector<double> m_edge_rest;
+  std::vector<std::vector<std::array<int, 2>>> m_mesh_edges;
 };
+
+/// The edges of triangles, each once with the lower id first, in ascending order.
+std::vector<std::array<int, 2>> unique_edges(const std::vector<std::array<int, 3>>& triangles);
 
 }  // namespace hooke

@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "hooke/contact/contact_model.hpp"
+#include "hooke/contact/obstacle_grid.hpp"
 #include "hooke/core.hpp"
 #include "hooke/forces/element_set.hpp"
 #include "hooke/sparse/block_pattern.hpp"
@@ -11,10 +12,12 @@
 namespace hooke {
 
 /// A step's contact figures at a state: the contact stencils with a gap below dhat, and the
-/// smallest gap of any stencil within reach of dhat (infinity when none is).
+/// smallest gap below kFigureReach dhat (infinity when none is).
 struct ContactFigures {
   long long active = 0;
   double min_gap = std::numeric_limits<double>::infinity();
+  /// The obstacle of the smallest gap: its kind and index in ContactModel's lists.
+  int min_sphere = -1, min_plane = -1, min_mesh = -1;
 };
 
 /// One backward-Euler step's contact energy over a ContactModel, for a Newton method that
@@ -30,15 +33,23 @@ struct ContactFigures {
 /// u_j = T_j^T (sum_i w_ji (x_i - x0_i) - h s_j), s_j the obstacle's surface velocity there
 /// (a spinning sphere's drags the cloth). F0 is the smoothed slip: F0'(y) = f1(y) =
 /// 2 y / eps - y^2 / eps^2 for y < eps = epsilon_v h (static friction, C^1 at eps) and 1 beyond
-/// (sliding: a force mu lambda against the slip). Obstacles stand where they are at t1 = t0 + h.
+/// (sliding: a force mu lambda against the slip). Obstacles stand where they are at t1 = t0 + h;
+/// a mesh's surface motion over the step is its vertices' rigid motion from t0 to t1.
 ///
 /// Gaps: a sphere's to a triangle is |c - q| - r - xi with q the triangle's point closest to the
 /// centre c (contact/distance.hpp: its squared distance with exact derivatives); to a particle no
-/// triangle holds, |c - p| - r - xi; a plane's to a particle, n . p - offset - xi.
+/// triangle holds, |c - p| - r - xi; a plane's to a particle, n . p - offset - xi. A mesh's, by
+/// IPC's pairs: particle to mesh triangle and mesh vertex to surface triangle (point-triangle
+/// distances), surface edge to mesh edge (edge-edge distance, its barrier times IPC's mollifier
+/// m(c) = (2 - c / c0) c / c0 below c0 = kMollifierThreshold |ea|^2 |eb|^2 at rest, c = |ea x
+/// eb|^2, and 1 above), each minus xi. Pairs sharing a feature are all summed (no deduplication:
+/// the sum of point-triangle barriers is C^1 where each is, at the cost of counting a vertex's
+/// contact once per incident triangle).
 ///
-/// Stencils whose particles are all pinned are left out (their energy is constant). Every call
-/// loops over all triangles with a bounding-box test against each sphere (no broad-phase
-/// structure yet: a sphere is one primitive); nothing allocates after the first step.
+/// Stencils whose particles are all pinned are left out (their energy is constant). Spheres loop
+/// over all triangles with a bounding-box test (a sphere is one primitive); meshes are found by
+/// a grid over each mesh in its rest frame (ObstacleGrid). Nothing allocates after the first
+/// step.
 class ContactPotential {
  public:
   /// masses and pinned per particle; pattern the system's (finalized, holding the triangles'
@@ -84,24 +95,42 @@ class ContactPotential {
 
   static constexpr double kAdaptiveGap = 0.05;
   static constexpr double kMaxAdaptiveGrowth = 1000.0;
+  /// The edge-edge mollifier's threshold: edges whose |ea x eb|^2 is below this times
+  /// |ea|^2 |eb|^2 at rest (about 1.8 degrees from parallel) have their barrier faded out to 0 at
+  /// parallel (Li et al. 2020, section 4.1), where the edge-edge distance is not smooth.
+  static constexpr double kMollifierThreshold = 1e-3;
+  /// min_gap reports gaps below this times dhat (infinity when none is).
+  static constexpr double kFigureReach = 10.0;
 
  private:
   /// A contact with its friction frozen at the step's start.
   struct FrictionPair {
-    int count;    // particles of the cloth's contact point: 1 or 3
-    int tri;      // their triangle (count 3)
-    int ids[3];   // their ids
-    double w[3];  // and weights
+    int count;               // particles of the cloth's contact point: 1 to 3
+    int ids[3];              // their ids
+    double w[3];             // and weights
+    const BlockSlot* slots;  // their count x count blocks
     Eigen::Matrix<double, 3, 2> T;
     Vec3 slip;  // the obstacle's surface motion over the step, h s_j (m)
     double mu_lambda;
+  };
+  /// A mesh obstacle during a step: its pose and vertices at t1 and t0, and its grids (built once
+  /// in its rest frame) over its triangles, vertices and edges.
+  struct MeshState {
+    Mat3 R = Mat3::Identity(), R0 = Mat3::Identity();
+    Vec3 d = Vec3::Zero(), d0 = Vec3::Zero();
+    std::vector<Vec3> x, x0;
+    ObstacleGrid triangles, vertices, edges;
   };
   /// Calls f(gap) for every stencil with a gap below reach, with its derivatives up to Order
   /// (0 the value, 1 the gradient, 2 the Hessian).
   template <int Order, class F>
   void for_each_gap(ConstRef x, double reach, F&& f) const;
+  template <int Order, class F>
+  void for_each_mesh_gap(ConstRef x, double reach, F&& f) const;
+  double mesh_max_step(ConstRef x, ConstRef dx) const;
   Vec3 friction_slip(const FrictionPair& p, ConstRef x) const;
   void lag_friction(double t0, double h, ConstRef x0);
+  void place_obstacles(double t, bool start_of_step);
 
   const ContactModel& m_model;
   const Vec& m_masses;
@@ -109,9 +138,12 @@ class ContactPotential {
   double m_gravity;
   std::vector<char> m_in_triangle;          // per particle: held by a triangle
   std::vector<char> m_triangle_free;        // per triangle: has a free vertex
+  std::vector<char> m_edge_free;            // per surface edge: has a free endpoint
   std::vector<BlockSlot> m_diag_slots;      // per particle
   std::vector<BlockSlot> m_triangle_slots;  // per triangle: 9, (a, b) at 3 a + b
+  std::vector<BlockSlot> m_edge_slots;      // per surface edge: 4, (a, b) at 2 a + b
   std::vector<Vec3> m_centres;              // the spheres' centres at t1
+  std::vector<MeshState> m_meshes;
   std::vector<FrictionPair> m_friction;
   Vec m_x0;
   double m_h = 0.0, m_kappa = 0.0, m_first_kappa = 0.0;

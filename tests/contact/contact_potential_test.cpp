@@ -88,15 +88,16 @@ Vec forces(const ContactPotential& pot, const Vec& x) {
 }
 
 /// Checks forces against -dE/dx and the exact Hessian against -df/dx by central differences at
-/// x, with the gaps still within (0, dhat) there; eps the friction's slip scale (the difference
-/// step is small against it and against dhat).
-void check_derivatives(const Fixture& fx, const ContactPotential& pot, const Vec& x, double eps) {
+/// x, with the gaps still positive there and at least `active` of them below dhat; eps the
+/// friction's slip scale (the difference step is small against it and against dhat).
+void check_derivatives(double dhat, const BlockPattern& pattern, const ContactPotential& pot,
+                       const Vec& x, double eps, long long active) {
   const ContactFigures fig = pot.figures(x);
   ASSERT_GT(fig.min_gap, 0.0);
-  ASSERT_GE(fig.active, 10) << "the grid's triangles, the loose particle, the plane's particles";
+  ASSERT_GE(fig.active, active);
   const Vec f = forces(pot, x);
   ASSERT_GT(f.norm(), 0.0);
-  const double step = 1e-4 * std::min(fx.dhat, eps);
+  const double step = 1e-4 * std::min(dhat, eps);
   Vec xp = x, xm = x;
   Eigen::MatrixXd H_fd(x.size(), x.size());
   double worst_f = 0.0;
@@ -109,12 +110,12 @@ void check_derivatives(const Fixture& fx, const ContactPotential& pot, const Vec
     xp[i] = x[i];
     xm[i] = x[i];
   }
-  EXPECT_LT(worst_f, 1e-6 * f.lpNorm<Eigen::Infinity>()) << "dhat " << fx.dhat;
-  const Eigen::MatrixXd H = dense_hessian(pot, fx.pattern, x, PsdProjection::None);
+  EXPECT_LT(worst_f, 1e-6 * f.lpNorm<Eigen::Infinity>()) << "dhat " << dhat;
+  const Eigen::MatrixXd H = dense_hessian(pot, pattern, x, PsdProjection::None);
   EXPECT_LT((H - H_fd).lpNorm<Eigen::Infinity>(), 1e-5 * H.lpNorm<Eigen::Infinity>())
-      << "dhat " << fx.dhat;
+      << "dhat " << dhat;
   EXPECT_LT((H - H.transpose()).lpNorm<Eigen::Infinity>(), 1e-12 * H.lpNorm<Eigen::Infinity>());
-  const Eigen::MatrixXd P = dense_hessian(pot, fx.pattern, x, PsdProjection::Clamp);
+  const Eigen::MatrixXd P = dense_hessian(pot, pattern, x, PsdProjection::Clamp);
   EXPECT_GE(Eigen::SelfAdjointEigenSolver<Eigen::MatrixXd>(P).eigenvalues().minCoeff(),
             -1e-10 * P.lpNorm<Eigen::Infinity>());
 }
@@ -131,8 +132,48 @@ TEST(ContactPotential, ForcesAndHessianAreTheEnergysDerivativesStaticAndSliding)
     for (const double slip : {0.3 * eps, 3.0 * eps}) {
       Vec x = fx.x0;
       for (Index i = 0; i < x.size(); ++i) x[i] += std::min(slip, 0.02 * dhat) * n01(rng);
-      check_derivatives(fx, pot, x, eps);
+      // The grid's triangles, the loose particle against the sphere and the plane.
+      check_derivatives(fx.dhat, fx.pattern, pot, x, eps, 10);
     }
+  }
+}
+
+TEST(ContactPotential, MeshPairsForcesAndHessianAreTheEnergysDerivatives) {
+  // A mesh obstacle of one triangle in y = 0, moving and spinning (so its friction slips), under
+  // three cloth triangles at gaps of 0.6 to 0.8 dhat: one above its face (particle-face pairs),
+  // one across its edge on the x axis, with one edge 1 degree from parallel to it (edge-edge
+  // pairs, one mollified), and one over its vertex (1, 0, 0) (a vertex-face pair).
+  const double dhat = 0.01, h = 0.01, eps_v = 0.05;
+  ContactMesh mesh;
+  mesh.vertices = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 0, 1)};
+  mesh.triangles = {{0, 1, 2}};
+  mesh.friction = 0.4;
+  mesh.velocity = Vec3(0.1, 0, 0);
+  mesh.angular_velocity = Vec3(0, 0.2, 0);
+  Vec x0(27);
+  x0 << 0.3, 0.006, 0.3, 0.5, 0.007, 0.35, 0.35, 0.008, 0.5,       // over the face
+      0.6, 0.007, 0.001, 0.75, 0.0075, -0.08, 0.9, 0.006, 0.0062,  // across the edge
+      0.95, 0.008, -0.05, 1.05, 0.007, -0.05, 1.0, 0.006, 0.06;    // over the vertex
+  const std::vector<std::array<int, 3>> tris = {{0, 1, 2}, {3, 4, 5}, {6, 7, 8}};
+  ContactOptions o;
+  o.distance = dhat;
+  o.stiffness = 100.0;
+  o.friction_velocity = eps_v;
+  ContactModel model(o, tris, {}, {}, {mesh}, x0);
+  BlockPattern pattern(9);
+  model.declare_blocks(pattern);
+  pattern.finalize();
+  const Vec masses = Vec::Constant(9, 0.01);
+  const std::vector<char> pinned(9, 0);
+  ContactPotential pot(model, masses, pinned, pattern, 9.81);
+  pot.begin_step(0.0, h, x0);
+  std::mt19937 rng(3);
+  std::normal_distribution<double> n01;
+  for (const double move : {0.0, 2e-4}) {
+    Vec x = x0;
+    for (Index i = 0; i < x.size(); ++i) x[i] += move * n01(rng);
+    // 5 particle-face, 3 edge-edge (one mollified), 1 vertex-face, and more edge pairs.
+    check_derivatives(dhat, pattern, pot, x, eps_v * h, 9);
   }
 }
 
@@ -205,11 +246,17 @@ TEST(ContactPotential, CcdKeepsATrianglePassingOverASmallSphereOutside) {
   x << -0.05, y, -0.03, 0.05, y, -0.03, 0.0, y, 0.06;
   for (int k = 0; k < 3; ++k) dx.segment<3>(3 * k) = Vec3(0.001 * k, -0.2, 0.0);
   pot.begin_step(0.0, 0.01, x);
-  const double gap0 = pot.figures(x).min_gap;
+  // The face's gap to the sphere along the path.
+  auto gap = [&](double s) {
+    const Vec y = x + s * dx;
+    return std::sqrt(contact::point_triangle_sq(Vec3::Zero(), y.segment<3>(0), y.segment<3>(3),
+                                                y.segment<3>(6))) -
+           sp.radius;
+  };
+  const double gap0 = gap(0.0);
   const double t = pot.max_step(x, dx);
   ASSERT_LT(t, 1.0);
-  // The exact time the face reaches the sphere, by bisection on the distance along the path.
-  auto gap = [&](double s) { return pot.figures(x + s * dx).min_gap; };
+  // The exact time the face reaches the sphere, by bisection on the gap along the path.
   double lo = 0.0, hi = 0.25;  // at 0.25 the face is at y = 0, through the centre
   ASSERT_LT(gap(hi), 0.0) << "the motion does cross";
   while (hi - lo > 1e-14) (gap(0.5 * (lo + hi)) > 0.0 ? lo : hi) = 0.5 * (lo + hi);
