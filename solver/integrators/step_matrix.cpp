@@ -45,6 +45,12 @@ void StepMatrix::form(double a, double b) {
   for (size_t i = 0; i < m_diag.size(); ++i) A[m_diag[i]] += mass[Index(i)];
 }
 
+void StepMatrix::add_mass_multiple(double s) {
+  double* A = m_J.K.valuePtr();
+  const Vec& mass = m_system.mass_diagonal();
+  for (size_t i = 0; i < m_diag.size(); ++i) A[m_diag[i]] += s * mass[Index(i)];
+}
+
 void StepMatrix::zero_pinned(VecRef r) const {
   for (const int i : m_pinned_dofs) r[i] = 0.0;
 }

@@ -34,6 +34,9 @@ class StepMatrix {
   const SparseMatrix& matrix() const { return m_J.K; }
   /// r(pinned DOFs) = 0.
   void zero_pinned(VecRef r) const;
+  /// A += s M (after form()): a multiple of the mass matrix on the diagonal, the shift that makes
+  /// an indefinite Newton matrix positive definite (Nocedal and Wright, section 3.4).
+  void add_mass_multiple(double s);
 
  private:
   const MassSpringSystem& m_system;

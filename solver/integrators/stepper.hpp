@@ -36,7 +36,8 @@ struct StepperStats {
   double solve_seconds = 0.0;     ///< linear solves (s)
   double local_seconds = 0.0;     ///< local steps of local/global methods (s)
   double global_seconds = 0.0;    ///< global steps of local/global methods (s)
-  double contact_seconds = 0.0;   ///< contact distances, barrier, friction and CCD (s)
+  double contact_seconds = 0.0;   ///< contact distances, barrier, friction and CCD (s; not in
+                                  ///< assembly_seconds)
   double total_seconds = 0.0;     ///< wall time inside step() (s); 0 if the method does not time it
   double factor_nonzeros = 0.0;   ///< entries of the current factor (direct global solves)
 };

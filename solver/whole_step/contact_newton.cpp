@@ -112,7 +112,8 @@ void ContactNewtonStepper::assemble(double h) {
   const auto tc = Clock::now();
   m_contact.add_forces(m_x, m_f);
   m_contact.add_hessian(m_x, -1.0, m_A.stiffness());
-  m_contact_seconds += seconds_since(tc);
+  const double contact = seconds_since(tc);
+  m_contact_seconds += contact;
   if (m_dissipative) {
     m_fd.setZero();
     for (const auto& f : m_system.forces())
@@ -122,7 +123,7 @@ void ContactNewtonStepper::assemble(double h) {
   m_rhs -= m_system.mass_diagonal().cwiseProduct(m_x - m_xhat);
   m_A.zero_pinned(m_rhs);
   m_A.form(h, h * h);
-  m_assembly_seconds += seconds_since(ta);
+  m_assembly_seconds += seconds_since(ta) - contact;  // the contact terms count apart
 }
 
 bool ContactNewtonStepper::line_search(double h, double& fraction) {
@@ -185,22 +186,26 @@ StepSummary ContactNewtonStepper::step(const State& s0, double h, State& s1) {
   const double v0 = s0.v.cwiseProduct(m_system.moving()).lpNorm<Eigen::Infinity>();
   bool converged = false;
   double dx_norm = 0.0;
-  // The exact spring Hessian where A is positive definite (Newton converges quadratically), the
-  // clamped one in an iteration where it is not (projected Newton).
+  // The exact spring Hessian where A is positive definite (Newton converges quadratically);
+  // where it is not, A + s M with the smallest s of 1e-3 * 4^j that a factorization accepts
+  // (a Hessian modification; the step stays a descent direction), s remembered and quartered at
+  // each next iteration. clamp_compressed = true clamps compressed springs instead, always.
   for (int k = 0; k < m_options.newton_iterations; ++k) {
-    const bool clamp = m_options.clamp_compressed;
-    m_jac_options.clamp_compressed = clamp;
+    m_jac_options.clamp_compressed = m_options.clamp_compressed;
     assemble(h);
+    if (m_shift > 0.0) m_A.add_mass_multiple(m_shift);
     m_solver->set_coordinates(m_x);
     LinearSummary fs = m_solver->factor(m_A.matrix());
     add_summary(m_totals, fs);
-    if (fs.status != Status::Converged && fs.not_positive_definite && !clamp) {
-      ++m_clamped_iterations;
-      m_jac_options.clamp_compressed = true;
+    for (int j = 0; j < 30 && fs.status != Status::Converged && fs.not_positive_definite; ++j) {
+      ++m_shifted_factorizations;
+      m_shift = m_shift > 0.0 ? 4.0 * m_shift : kFirstShift;
       assemble(h);
+      m_A.add_mass_multiple(m_shift);
       fs = m_solver->factor(m_A.matrix());
       add_summary(m_totals, fs);
     }
+    m_shift = m_shift > 4.0 * kFirstShift ? 0.25 * m_shift : 0.0;
     out.newton_iterations = k + 1;
     if (fs.status != Status::Converged) {
       out.status = fs.status;
