@@ -152,10 +152,9 @@ void read_ode(TableReader& ode, Scene& scene) {
 /// (for messages), the keys that place it, and the constraint the system owns.
 struct SceneCollider {
   std::string key, what, placed_by;
+  /// The system's projection; nullptr under [contact], whose obstacles check_contact_start
+  /// checks.
   const Constraint* constraint;
-  /// Under [contact] the obstacle acts through the barrier, and this projection (grown by the
-  /// thickness) only serves the check; it is not the system's.
-  std::shared_ptr<const Constraint> check_only;
 };
 
 std::string fmt(double v) {
@@ -187,7 +186,7 @@ void check_particles_outside(const std::vector<SceneCollider>& colliders, const 
   const std::vector<char>& pinned = scene.system->pinned();
   Vec moved(x.size()), v(x.size());
   for (const auto& c : colliders) {
-    if (c.constraint == nullptr) continue;  // a mesh obstacle: check_contact_start's
+    if (c.constraint == nullptr) continue;  // a barrier obstacle: check_contact_start's
     moved = x;
     v.setZero();
     // Colliders move positions only: x0 = x1 (no motion within the step), h only scales v.
@@ -368,7 +367,7 @@ std::vector<ContactMesh> read_mesh_obstacles(TableReader& c, bool contact,
     colliders.push_back({t.name(),
                          "the mesh obstacle (" + std::to_string(m.triangles.size()) +
                              " triangles in " + fmt(lo) + " .. " + fmt(hi) + ")",
-                         t.path("file") + ", " + t.path("translate"), nullptr, nullptr});
+                         t.path("file") + ", " + t.path("translate"), nullptr});
     meshes.push_back(std::move(m));
   }
   return meshes;
@@ -381,16 +380,13 @@ std::vector<ContactMesh> read_mesh_obstacles(TableReader& c, bool contact,
 void read_colliders(TableReader& root, const MeshBuild& b, MassSpringSystem& sys,
                     std::vector<SceneCollider>& colliders) {
   const bool contact = root.has("contact");
-  const ContactOptions options = contact ? read_contact_options(root) : ContactOptions{};
-  const double xi = options.thickness;
   std::vector<ContactSphere> spheres;
   std::vector<ContactPlane> planes;
+  std::vector<ContactMesh> meshes;
+  // A projection joins the system; a barrier obstacle joins the ContactModel below.
   auto add = [&](std::unique_ptr<Constraint> c, SceneCollider entry) {
-    entry.constraint = c.get();
-    if (contact)
-      entry.check_only = std::move(c);
-    else
-      sys.add_constraint(std::move(c));
+    entry.constraint = contact ? nullptr : c.get();
+    if (!contact) sys.add_constraint(std::move(c));
     colliders.push_back(std::move(entry));
   };
   if (auto c = root.table("collision")) {
@@ -401,11 +397,11 @@ void read_colliders(TableReader& root, const MeshBuild& b, MassSpringSystem& sys
       const double mu = g.non_negative("friction", 0.0);
       g.finish();
       planes.push_back({normal.normalized(), height, mu});
-      add(std::make_unique<GroundPlane>(normal, height + xi, mu),
+      add(std::make_unique<GroundPlane>(normal, height, mu),
           {g.name(),
            "the ground plane (normal " + fmt(Vec3(normal.normalized())) + ", height " +
-               fmt(height) + (contact ? ", with contact.thickness " + fmt(xi) : "") + ")",
-           g.path("height") + ", " + g.path("normal"), nullptr, nullptr});
+               fmt(height) + ")",
+           g.path("height") + ", " + g.path("normal"), nullptr});
     }
     for (TableReader& sp : c->tables("sphere")) {
       ContactSphere s;
@@ -415,22 +411,17 @@ void read_colliders(TableReader& root, const MeshBuild& b, MassSpringSystem& sys
       read_sphere_motion(sp, contact, s);
       sp.finish();
       spheres.push_back(s);
-      add(std::make_unique<SphereCollider>(s.center, s.radius + xi, s.friction),
-          {sp.name(),
-           "the sphere (center " + fmt(s.center) + ", radius " + fmt(s.radius) +
-               (contact ? ", with contact.thickness " + fmt(xi) : "") + ")",
-           sp.path("center") + ", " + sp.path("radius"), nullptr, nullptr});
+      add(std::make_unique<SphereCollider>(s.center, s.radius, s.friction),
+          {sp.name(), "the sphere (center " + fmt(s.center) + ", radius " + fmt(s.radius) + ")",
+           sp.path("center") + ", " + sp.path("radius"), nullptr});
     }
-    std::vector<ContactMesh> meshes = read_mesh_obstacles(*c, contact, colliders);
+    meshes = read_mesh_obstacles(*c, contact, colliders);
     c->finish();
-    if (contact)
-      sys.set_contact(std::make_shared<ContactModel>(options, b.triangles, std::move(spheres),
-                                                     std::move(planes), std::move(meshes), b.x));
-    return;
   }
   if (contact)
-    sys.set_contact(std::make_shared<ContactModel>(options, b.triangles, std::move(spheres),
-                                                   std::move(planes)));
+    sys.set_contact(std::make_shared<ContactModel>(read_contact_options(root), b.triangles,
+                                                   std::move(spheres), std::move(planes),
+                                                   std::move(meshes), b.x));
 }
 
 /// Forces, colliders and strain limiting: each added only when the scene declares it. The

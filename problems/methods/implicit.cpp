@@ -116,13 +116,13 @@ void add_implicit_keys(std::vector<SceneKey>& t) {
           .def("true")
           .meaning("drop the indefinite part of compressed springs' stiffness, keeping the matrix "
                    "SPD; with [contact] the default is false: exact where the matrix is positive "
-                   "definite, clamped in a Newton iteration where it is not"));
+                   "definite, shifted by a multiple of the mass matrix where it is not"));
 }
 
 MethodOptions read_implicit(TableReader& r, const std::string& method) {
   ImplicitOptions o = implicit_defaults(method);
   // Barrier contact is Newton on backward Euler's incremental potential: it iterates by default
-  // (ContactNewtonStepper), with the exact stiffness until the matrix is indefinite. Those
+  // (ContactNewtonStepper), with the exact stiffness (shifted where indefinite). Those
   // defaults replace the key table's (which the keys' text states) where the key is left out.
   const bool contact = r.contact_scene() && method == "implicit";
   const bool given_iterations = r.has("newton_iterations"), given_tolerance = r.has("tolerance"),

@@ -12,16 +12,6 @@
 
 namespace hooke {
 
-namespace {
-
-void accumulate(LinearSummary& total, const LinearSummary& s) {
-  total.iterations += s.iterations;
-  total.analyze_seconds += s.analyze_seconds;
-  total.factor_seconds += s.factor_seconds;
-  total.solve_seconds += s.solve_seconds;
-}
-}  // namespace
-
 OptionError ImplicitOptions::validate() const {
   std::ostringstream os;
   std::string field;

@@ -35,6 +35,14 @@ struct LinearSummary {
   bool not_positive_definite = false;
 };
 
+/// Adds s's iterations and times into total (a stepper's sum over its solves).
+inline void accumulate(LinearSummary& total, const LinearSummary& s) {
+  total.iterations += s.iterations;
+  total.analyze_seconds += s.analyze_seconds;
+  total.factor_seconds += s.factor_seconds;
+  total.solve_seconds += s.solve_seconds;
+}
+
 /// A backend for A x = b with A square, sparse (compressed-column, both triangles stored) and,
 /// for most backends, symmetric positive definite. Four verbs:
 ///  - analyze(A): once per sparsity pattern (symbolic work, orderings, colourings, scratch);

@@ -14,13 +14,6 @@ bool dissipative(ForceForm form) {
   return form == ForceForm::Dampers || form == ForceForm::Drag || form == ForceForm::ElementDampers;
 }
 
-void add_summary(LinearSummary& total, const LinearSummary& s) {
-  total.iterations += s.iterations;
-  total.analyze_seconds += s.analyze_seconds;
-  total.factor_seconds += s.factor_seconds;
-  total.solve_seconds += s.solve_seconds;
-}
-
 /// The magnitude of gravity among the system's forces (m/s^2), for the chosen stiffness.
 double gravity_of(const MassSpringSystem& system) {
   Vec3 g = Vec3::Zero();
@@ -67,7 +60,7 @@ ContactNewtonStepper::ContactNewtonStepper(const MassSpringSystem& system,
   m_force_magnitude.setZero(system.num_particles());
   const LinearSummary a = m_solver->analyze(m_A.matrix());
   if (a.status != Status::Converged) throw SetupError(a.message);
-  add_summary(m_totals, a);
+  accumulate(m_totals, a);
 }
 
 void ContactNewtonStepper::restore_history(const std::vector<double>& history) {
@@ -196,14 +189,14 @@ StepSummary ContactNewtonStepper::step(const State& s0, double h, State& s1) {
     if (m_shift > 0.0) m_A.add_mass_multiple(m_shift);
     m_solver->set_coordinates(m_x);
     LinearSummary fs = m_solver->factor(m_A.matrix());
-    add_summary(m_totals, fs);
+    accumulate(m_totals, fs);
     for (int j = 0; j < 30 && fs.status != Status::Converged && fs.not_positive_definite; ++j) {
       ++m_shifted_factorizations;
-      m_shift = m_shift > 0.0 ? 4.0 * m_shift : kFirstShift;
-      assemble(h);
-      m_A.add_mass_multiple(m_shift);
+      const double shift = m_shift > 0.0 ? 4.0 * m_shift : kFirstShift;
+      m_A.add_mass_multiple(shift - m_shift);  // A already holds m_shift M
+      m_shift = shift;
       fs = m_solver->factor(m_A.matrix());
-      add_summary(m_totals, fs);
+      accumulate(m_totals, fs);
     }
     m_shift = m_shift > 4.0 * kFirstShift ? 0.25 * m_shift : 0.0;
     out.newton_iterations = k + 1;
@@ -214,7 +207,7 @@ StepSummary ContactNewtonStepper::step(const State& s0, double h, State& s1) {
     }
     m_dx.setZero();
     const LinearSummary ss = m_solver->solve(m_rhs, m_dx, lin);
-    add_summary(m_totals, ss);
+    accumulate(m_totals, ss);
     out.iterations += ss.iterations;
     out.residual = ss.residual;
     if (ss.status == Status::BrokeDown || ss.status == Status::Fatal) {
@@ -231,7 +224,6 @@ StepSummary ContactNewtonStepper::step(const State& s0, double h, State& s1) {
     }
     double fraction = 1.0;
     const bool descended = line_search(h, fraction);
-
     m_ccd_fraction = std::min(m_ccd_fraction, fraction);
     if (!descended) {
       std::ostringstream os;
@@ -257,8 +249,7 @@ StepSummary ContactNewtonStepper::step(const State& s0, double h, State& s1) {
     out.message = os.str();
   }
   s1.x = m_x;
-  s1.v = (m_x - m_x0) / h;
-  s1.v = s1.v.cwiseProduct(m_system.moving());
+  s1.v = ((m_x - m_x0) / h).cwiseProduct(m_system.moving());
   s1.t = s0.t + h;
   if (!step_failed(out)) m_contact.end_step(m_min_gap);
   m_total_seconds += seconds_since(t_start);

@@ -74,6 +74,25 @@ struct Fixture {
   }
 };
 
+/// A ContactPotential over n free particles of 0.01 kg (mass), with the model's blocks declared.
+struct Bound {
+  BlockPattern pattern;
+  Vec masses;
+  std::vector<char> pinned;
+  ContactPotential pot;
+  Bound(const ContactModel& model, Index n, double mass = 0.01)
+      : pattern(declared(model, n)),
+        masses(Vec::Constant(n, mass)),
+        pinned(size_t(n), 0),
+        pot(model, masses, pinned, pattern, 9.81) {}
+  static BlockPattern declared(const ContactModel& model, Index n) {
+    BlockPattern p(n);
+    model.declare_blocks(p);
+    p.finalize();
+    return p;
+  }
+};
+
 Eigen::MatrixXd dense_hessian(const ContactPotential& pot, const BlockPattern& pattern,
                               const Vec& x, PsdProjection projection) {
   SparseMatrix A = pattern.make_matrix();
@@ -160,20 +179,15 @@ TEST(ContactPotential, MeshPairsForcesAndHessianAreTheEnergysDerivatives) {
   o.stiffness = 100.0;
   o.friction_velocity = eps_v;
   ContactModel model(o, tris, {}, {}, {mesh}, x0);
-  BlockPattern pattern(9);
-  model.declare_blocks(pattern);
-  pattern.finalize();
-  const Vec masses = Vec::Constant(9, 0.01);
-  const std::vector<char> pinned(9, 0);
-  ContactPotential pot(model, masses, pinned, pattern, 9.81);
-  pot.begin_step(0.0, h, x0);
+  Bound b(model, 9);
+  b.pot.begin_step(0.0, h, x0);
   std::mt19937 rng(3);
   std::normal_distribution<double> n01;
   for (const double move : {0.0, 2e-4}) {
     Vec x = x0;
     for (Index i = 0; i < x.size(); ++i) x[i] += move * n01(rng);
     // 5 particle-face, 3 edge-edge (one mollified), 1 vertex-face, and more edge pairs.
-    check_derivatives(dhat, pattern, pot, x, eps_v * h, 9);
+    check_derivatives(dhat, b.pattern, b.pot, x, eps_v * h, 9);
   }
 }
 
@@ -189,14 +203,11 @@ TEST(ContactPotential, FrictionIsSmoothedCoulombAgainstTheSurfaceMotion) {
   ContactPlane pl;
   pl.friction = mu;
   ContactModel model(o, {}, {}, {pl});
-  BlockPattern pattern(1);
-  pattern.finalize();
-  const Vec masses = Vec::Constant(1, 0.1);
-  const std::vector<char> pinned(1, 0);
-  ContactPotential pot(model, masses, pinned, pattern, 9.81);
+  Bound b(model, 1, 0.1);
+  const ContactPotential& pot = b.pot;
   const double d0 = 0.6 * dhat;
   const Vec x0 = Vec3(0.2, d0, -0.1);
-  pot.begin_step(0.0, h, x0);
+  b.pot.begin_step(0.0, h, x0);
   const double lambda = kappa * std::abs(contact::barrier_first(d0, dhat));
   const Vec3 dir = Vec3(3, 0, 4).normalized();
   auto tangential = [&](double s) {
@@ -217,10 +228,10 @@ TEST(ContactPotential, FrictionIsSmoothedCoulombAgainstTheSurfaceMotion) {
   sp.friction = mu;
   sp.angular_velocity = Vec3(0, 2.0, 0);
   ContactModel spun(o, {}, {sp}, {});
-  ContactPotential pot2(spun, masses, pinned, pattern, 9.81);
+  Bound b2(spun, 1, 0.1);
   const Vec x1 = Vec3(0.5 + d0, 0, 0);
-  pot2.begin_step(0.0, h, x1);
-  const Vec f = forces(pot2, x1);  // at rest, the surface moves at (0, 0, -1) m/s: +- z
+  b2.pot.begin_step(0.0, h, x1);
+  const Vec f = forces(b2.pot, x1);  // at rest, the surface moves at (0, 0, -1) m/s: +- z
   const Vec3 surface = sp.angular_velocity.cross(Vec3(0.5, 0, 0));
   EXPECT_NEAR(f.dot(surface.normalized()), mu * lambda, 1e-12 * mu * lambda)
       << "the slip h |w| = " << h * surface.norm() << " m is beyond eps = " << eps;
@@ -235,12 +246,8 @@ TEST(ContactPotential, CcdKeepsATrianglePassingOverASmallSphereOutside) {
   ContactSphere sp;
   sp.radius = 0.01;
   ContactModel model(o, {{0, 1, 2}}, {sp}, {});
-  BlockPattern pattern(3);
-  model.declare_blocks(pattern);
-  pattern.finalize();
-  const Vec masses = Vec::Constant(3, 0.01);
-  const std::vector<char> pinned(3, 0);
-  ContactPotential pot(model, masses, pinned, pattern, 9.81);
+  Bound b(model, 3);
+  ContactPotential& pot = b.pot;
   Vec x(9), dx(9);
   const double y = 0.05;
   x << -0.05, y, -0.03, 0.05, y, -0.03, 0.0, y, 0.06;
