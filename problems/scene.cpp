@@ -227,6 +227,13 @@ void check_contact_start(const std::vector<SceneCollider>& colliders, const Scen
   ContactPotential potential(*model, sys.masses(), sys.pinned(), sys.pattern(), 0.0);
   const ContactFigures fig = potential.figures(scene.initial.x);
   if (fig.min_gap > 0.0) return;
+  if (fig.min_self)
+    throw InputError(scene.file, "contact.self",
+                     "two parts of the cloth start at a gap of " + fmt(fig.min_gap) +
+                         " m (gaps between its parts are measured from 2 contact.thickness = " +
+                         fmt(2.0 * model->options().thickness) +
+                         "): self-contact needs every gap > 0 at the start; the mesh must not "
+                         "cross itself");
   const size_t planes = model->planes().size(), spheres = model->spheres().size();
   const size_t k = fig.min_plane >= 0    ? size_t(fig.min_plane)
                    : fig.min_sphere >= 0 ? planes + size_t(fig.min_sphere)
@@ -313,6 +320,12 @@ ContactOptions read_contact_options(TableReader& root) {
   o.stiffness = ct->non_negative("stiffness", o.stiffness);
   o.friction_velocity = ct->positive("friction_velocity", o.friction_velocity);
   o.thickness = ct->non_negative("thickness", o.thickness);
+  o.self = ct->boolean("self", o.self);
+  o.friction = ct->non_negative("friction", o.friction);
+  if (!o.self && o.friction > 0.0)
+    ct->fail("friction",
+             "is the friction between parts of the cloth and needs self = true (an obstacle's "
+             "friction is its own key)");
   ct->finish();
   return o;
 }

@@ -438,7 +438,18 @@ void add_contact_keys(std::vector<SceneKey>& t) {
           .unit("m")
           .def("0")
           .non_negative()
-          .meaning("gaps are measured from this offset of the cloth's surface (a thickness)"));
+          .meaning("gaps are measured from this offset of the cloth's surface (a thickness; "
+                   "between two parts of the cloth under self, 2 thickness)"));
+  add(K("contact.self", T::Boolean)
+          .needs({"integrator.method=implicit"})
+          .def("false")
+          .meaning("self-contact: the barrier also acts between the cloth's own triangles and "
+                   "edges (point-triangle and edge-edge pairs sharing no particle)"));
+  add(K("contact.friction", T::Number)
+          .needs({"integrator.method=implicit", "contact.self=true"})
+          .def("0")
+          .non_negative()
+          .meaning("mu, Coulomb friction between parts of the cloth (with self)"));
 }
 
 /// Adds [forces] and [collision.*].

@@ -147,6 +147,9 @@ class PySimulation {
     d["factor_seconds"] = s.factor_seconds;
     d["solve_seconds"] = s.solve_seconds;
     d["contact_seconds"] = s.contact_seconds;
+    d["ccd_seconds"] = s.ccd_seconds;
+    d["broad_phase_seconds"] = s.broad_phase_seconds;
+    d["contact_pattern_builds"] = s.contact_pattern_builds;
     d["total_seconds"] = s.total_seconds;
     if (adaptive()) {  // the error control's counts (integrator.adaptive)
       d["accepted"] = m_sim->accepted_steps();

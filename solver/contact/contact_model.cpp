@@ -16,6 +16,7 @@ OptionError ContactOptions::validate() const {
     return option_error("friction_velocity", friction_velocity, "must be finite and > 0");
   if (!non_negative(thickness))
     return option_error("thickness", thickness, "must be finite and >= 0");
+  if (!non_negative(friction)) return option_error("friction", friction, "must be finite and >= 0");
   return {};
 }
 
@@ -56,17 +57,18 @@ ContactModel::ContactModel(ContactOptions options, std::vector<std::array<int, 3
     HOOKE_ASSERT(len > 0.0, "ContactModel: a plane with a zero normal");
     p.normal /= len;
   }
-  if (m_meshes.empty()) return;
+  if (m_meshes.empty() && !m_options.self) return;
   m_edges = unique_edges(m_triangles);
   HOOKE_ASSERT(rest.size() > 0 || m_edges.empty(),
-               "ContactModel: meshes need the particles' rest positions");
+               "ContactModel: meshes and self-contact need the particles' rest positions");
   for (const auto& e : m_edges)
     m_edge_rest.push_back((rest.segment<3>(3 * e[0]) - rest.segment<3>(3 * e[1])).norm());
   for (const ContactMesh& m : m_meshes) m_mesh_edges.push_back(unique_edges(m.triangles));
 }
 
 void ContactModel::declare_blocks(BlockPattern& pattern) const {
-  if (m_spheres.empty() && m_meshes.empty()) return;  // planes act on single particles
+  // Planes act on single particles; self-contact's blocks come and go (ContactMatrix).
+  if (m_spheres.empty() && m_meshes.empty()) return;
   for (const auto& t : m_triangles) {
     pattern.add_pair(t[0], t[1]);
     pattern.add_pair(t[1], t[2]);

@@ -25,6 +25,13 @@ struct ContactOptions {
   /// xi (m, >= 0): the gap is measured from this offset of the cloth's surface (a thickness);
   /// the surfaces themselves never come closer than it.
   double thickness = 0.0;
+  /// Self-contact: the barrier also acts between the cloth's own triangles and edges (point-
+  /// triangle and edge-edge pairs of its surface that share no particle), each surface offset by
+  /// thickness (so a self gap is the distance minus 2 thickness), and Coulomb friction `friction`
+  /// between its parts (SelfContact).
+  bool self = false;
+  /// mu between parts of the cloth (>= 0; with self only).
+  double friction = 0.0;
   /// The first field that breaks a rule, if any.
   OptionError validate() const;
 };

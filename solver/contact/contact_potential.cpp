@@ -6,9 +6,16 @@
 #include "hooke/contact/barrier.hpp"
 #include "hooke/contact/ccd.hpp"
 #include "hooke/contact/distance.hpp"
+#include "hooke/contact/contact_terms.hpp"
 
 namespace hooke {
 namespace {
+
+using contact::segment_params;
+using contact::slip_f0;
+using contact::slip_f1_over_y;
+using contact::slip_radial;
+using contact::tangent_basis;
 
 using V9 = Eigen::Matrix<double, 9, 1>;
 using M9 = Eigen::Matrix<double, 9, 9>;
@@ -41,26 +48,6 @@ double box_distance_sq(const Vec3& c, const Vec3& lo, const Vec3& hi) {
   return (lo - c).cwiseMax(c - hi).cwiseMax(0.0).squaredNorm();
 }
 
-/// The smoothed slip F0 (ContactPotential) and f1(y) / y, f1 = F0'.
-double slip_f0(double y, double eps) {
-  return y >= eps ? y : y * y / eps - y * y * y / (3.0 * eps * eps) + eps / 3.0;
-}
-double slip_f1_over_y(double y, double eps) {
-  return y >= eps ? 1.0 / y : 2.0 / eps - y / (eps * eps);
-}
-/// (f1'(y) y - f1(y)) / y: the coefficient of u^ u^T in F0's Hessian in u (u^ = u / y).
-double slip_radial(double y, double eps) { return y >= eps ? -1.0 / y : -y / (eps * eps); }
-
-/// An orthonormal basis of the plane perpendicular to the unit vector n.
-Eigen::Matrix<double, 3, 2> tangent_basis(const Vec3& n) {
-  const Vec3 a = std::abs(n.x()) < 0.9 ? Vec3::UnitX() : Vec3::UnitY();
-  const Vec3 t1 = (a - a.dot(n) * n).normalized();
-  Eigen::Matrix<double, 3, 2> T;
-  T.col(0) = t1;
-  T.col(1) = n.cross(t1);
-  return T;
-}
-
 Vec3 at(ConstRef x, int i) { return x.segment<3>(3 * Index(i)); }
 
 /// The box, in a mesh's rest frame (a scene point y is R X + d of its rest point X), of the
@@ -81,47 +68,16 @@ void gap_derivatives(double sq, const Eigen::Matrix<double, N, 1>& gs,
   if (Hs) e.H.topLeftCorner<N, N>() = *Hs / (2.0 * dist) - gs * gs.transpose() / (4.0 * sq * dist);
 }
 
-/// The parameters s, t in [0, 1] of the closest points a0 + s (a1 - a0) and b0 + t (b1 - b0) of
-/// two segments of positive length (Ericson, Real-Time Collision Detection, 5.1.9).
-void segment_params(const Vec3& a0, const Vec3& a1, const Vec3& b0, const Vec3& b1, double& s,
-                    double& t) {
-  const Vec3 d1 = a1 - a0, d2 = b1 - b0, r = a0 - b0;
-  const double a = d1.squaredNorm(), e = d2.squaredNorm(), f = d2.dot(r), c = d1.dot(r);
-  const double b = d1.dot(d2), denom = a * e - b * b;
-  s = denom > 0.0 ? std::clamp((b * f - c * e) / denom, 0.0, 1.0) : 0.0;
-  t = (b * s + f) / e;
-  if (t < 0.0) {
-    t = 0.0;
-    s = std::clamp(-c / a, 0.0, 1.0);
-  } else if (t > 1.0) {
-    t = 1.0;
-    s = std::clamp((b - c) / a, 0.0, 1.0);
-  }
-}
-
-/// IPC's edge-edge mollifier on the cloth edge (a0, a1) against the fixed edge eb, into e:
-/// m(c) = (2 - c / c0) c / c0 for c = |ea x eb|^2 < c0, else 1 (then e.mollified stays false).
+/// IPC's edge-edge mollifier on the cloth edge (a0, a1) against the fixed edge eb, into e
+/// (contact::edge_mollifier; e.mollified stays false above its threshold).
 template <int Order>
 void mollify(const Vec3& ea, const Vec3& eb, double c0, GapEval& e) {
-  const double c = ea.cross(eb).squaredNorm();
-  e.mollified = c < c0;
-  e.m = 1.0;
+  contact::Vector<12> g;
+  contact::Matrix<12> H;
+  e.mollified = contact::edge_mollifier<Order>(ea, eb, c0, e.m, g, H);
   if (!e.mollified) return;
-  e.m = (2.0 - c / c0) * c / c0;
-  if (Order < 1) return;
-  const double dm = 2.0 / c0 - 2.0 * c / (c0 * c0), ddm = -2.0 / (c0 * c0);
-  const double ab = ea.dot(eb), bb = eb.squaredNorm();
-  const Vec3 gc = 2.0 * bb * ea - 2.0 * ab * eb;  // dc/d(ea); ea = a1 - a0
-  e.gm.head<6>() << -dm * gc, dm * gc;
-  if (Order < 2) return;
-  const Mat3 Hc = 2.0 * bb * Mat3::Identity() - 2.0 * eb * eb.transpose();
-  Eigen::Matrix<double, 6, 1> J;
-  J << -gc, gc;
-  e.Hm.topLeftCorner<6, 6>() = ddm * J * J.transpose();
-  e.Hm.block<3, 3>(0, 0) += dm * Hc;
-  e.Hm.block<3, 3>(3, 3) += dm * Hc;
-  e.Hm.block<3, 3>(0, 3) -= dm * Hc;
-  e.Hm.block<3, 3>(3, 0) -= dm * Hc;
+  if (Order >= 1) e.gm.head<6>() = g.head<6>();
+  if (Order >= 2) e.Hm.topLeftCorner<6, 6>() = H.topLeftCorner<6, 6>();
 }
 
 /// kappa m b(gap) and its gradient and Hessian over the stencil (n = 3 count coordinates).
@@ -209,6 +165,7 @@ ContactPotential::ContactPotential(const ContactModel& model, const Vec& masses,
   }
   place_obstacles(0.0, false);
   m_x0.setZero(3 * n);
+  if (model.options().self) m_self = std::make_unique<SelfContact>(model, pinned);
 }
 
 void ContactPotential::place_obstacles(double t, bool start_of_step) {
@@ -414,6 +371,24 @@ void ContactPotential::begin_step(double t0, double h, ConstRef x0) {
   place_obstacles(t0, true);
   lag_friction(t0, h, x0);
   place_obstacles(t0 + h, false);
+  if (m_self) {
+    m_self->lag_friction(x0, m_kappa, h);
+    m_self->find_candidates(x0, Vec());
+  }
+}
+
+void ContactPotential::prepare_line(ConstRef x, ConstRef dx) {
+  if (m_self) m_self->find_candidates(x, dx);
+}
+
+void ContactPotential::self_blocks(ConstRef x, std::vector<std::pair<int, int>>& out) const {
+  out.clear();
+  if (m_self) m_self->blocks(x, out);
+}
+
+void ContactPotential::add_self_hessian(ConstRef x, double scale, ContactMatrix& A,
+                                        PsdProjection projection) const {
+  if (m_self) m_self->add_hessian(x, m_kappa, scale, A, projection);
 }
 
 void ContactPotential::end_step(double min_gap) {
@@ -508,6 +483,7 @@ double ContactPotential::energy(ConstRef x) const {
     const Eigen::Vector2d u = p.T.transpose() * friction_slip(p, x);
     total += p.mu_lambda * slip_f0(u.norm(), eps);
   }
+  if (m_self) total += m_self->energy(x, m_kappa);
   return total;
 }
 
@@ -523,6 +499,7 @@ void ContactPotential::add_forces(ConstRef x, VecRef f) const {
     const Vec3 force = -p.mu_lambda * slip_f1_over_y(u.norm(), eps) * (p.T * u);
     for (int k = 0; k < p.count; ++k) f.segment<3>(3 * Index(p.ids[k])) += p.w[k] * force;
   }
+  if (m_self) m_self->add_forces(x, m_kappa, f);
 }
 
 void ContactPotential::add_hessian(ConstRef x, double scale, SparseMatrix& A,
@@ -583,6 +560,7 @@ double ContactPotential::max_step(ConstRef x, ConstRef dx) const {
                                                pl.normal, Vec3::Zero(), xi, kScale));
     }
   if (!m_meshes.empty()) t = std::min(t, mesh_max_step(x, dx));
+  if (m_self) t = std::min(t, m_self->max_step(x, dx));
   return t;
 }
 
@@ -664,6 +642,16 @@ ContactFigures ContactPotential::figures(ConstRef x) const {
     }
     if (e.gap < dhat) ++out.active;
   });
+  if (m_self) {
+    double gap = out.min_gap;
+    m_self->figures(x, kFigureReach * dhat, out.self_active, gap);
+    out.active += out.self_active;
+    if (gap < out.min_gap) {
+      out.min_gap = gap;
+      out.min_sphere = out.min_plane = out.min_mesh = -1;
+      out.min_self = true;
+    }
+  }
   return out;
 }
 

@@ -1,10 +1,13 @@
 #pragma once
 #include <Eigen/Core>
 #include <limits>
+#include <memory>
+#include <utility>
 #include <vector>
 
 #include "hooke/contact/contact_model.hpp"
 #include "hooke/contact/obstacle_grid.hpp"
+#include "hooke/contact/self_contact.hpp"
 #include "hooke/core.hpp"
 #include "hooke/forces/element_set.hpp"
 #include "hooke/sparse/block_pattern.hpp"
@@ -15,9 +18,12 @@ namespace hooke {
 /// smallest gap below kFigureReach dhat (infinity when none is).
 struct ContactFigures {
   long long active = 0;
+  long long self_active = 0;  ///< of active: the cloth's pairs with itself
   double min_gap = std::numeric_limits<double>::infinity();
-  /// The obstacle of the smallest gap: its kind and index in ContactModel's lists.
+  /// The obstacle of the smallest gap: its kind and index in ContactModel's lists, or the cloth
+  /// itself (self-contact).
   int min_sphere = -1, min_plane = -1, min_mesh = -1;
+  bool min_self = false;
 };
 
 /// One backward-Euler step's contact energy over a ContactModel, for a Newton method that
@@ -46,10 +52,14 @@ struct ContactFigures {
 /// the sum of point-triangle barriers is C^1 where each is, at the cost of counting a vertex's
 /// contact once per incident triangle).
 ///
+/// With [contact] self, E_c also holds the cloth's contact with itself (SelfContact: the same
+/// kappa, its own friction), whose candidate pairs come from a broad phase over a segment of
+/// states (prepare_line), and whose Hessian blocks go into a grown matrix (add_self_hessian).
+///
 /// Stencils whose particles are all pinned are left out (their energy is constant). Spheres loop
 /// over all triangles with a bounding-box test (a sphere is one primitive); meshes are found by
 /// a grid over each mesh in its rest frame (ObstacleGrid). Nothing allocates after the first
-/// step.
+/// step (self-contact's lists grow to their largest size and stay).
 class ContactPotential {
  public:
   /// masses and pinned per particle; pattern the system's (finalized, holding the triangles'
@@ -59,8 +69,20 @@ class ContactPotential {
                    const BlockPattern& pattern, double gravity);
 
   /// Sets up a step of h from x0 at t0: the obstacles at t0 + h, the lagged friction from x0 with
-  /// the obstacles at t0, and, on the first call with stiffness 0, kappa (kappa_for).
+  /// the obstacles at t0, and, on the first call with stiffness 0, kappa (kappa_for); with
+  /// self-contact, its candidates at x0 (as prepare_line(x0, 0)).
   void begin_step(double t0, double h, ConstRef x0);
+  /// With self-contact: finds its candidate pairs for every state x + t dx, t in [0, 1]. Energy,
+  /// forces and Hessians at such states, and max_step(x, dx), then see every self pair within
+  /// dhat. Without self-contact, nothing.
+  void prepare_line(ConstRef x, ConstRef dx);
+  /// The self-contact, or nullptr without [contact] self.
+  const SelfContact* self_contact() const { return m_self.get(); }
+  /// With self-contact: the particle pairs its Hessian couples at x (SelfContact::blocks).
+  void self_blocks(ConstRef x, std::vector<std::pair<int, int>>& out) const;
+  /// With self-contact: adds scale times its Hessian at x into A (which holds self_blocks(x)).
+  void add_self_hessian(ConstRef x, double scale, ContactMatrix& A,
+                        PsdProjection projection = PsdProjection::Clamp) const;
   /// After an accepted step whose smallest gap was min_gap: with stiffness 0, kappa doubles when
   /// min_gap < kAdaptiveGap dhat (up to kMaxAdaptiveGrowth times its first value), as IPC raises
   /// it when contacts get close (Li et al. 2020, section 4.3).
@@ -70,14 +92,16 @@ class ContactPotential {
   double energy(ConstRef x) const;
   /// Adds -dE_c/dx (N) into f (3n).
   void add_forces(ConstRef x, VecRef f) const;
-  /// Adds scale times d^2E_c/dx^2 into A (the system's pattern), each barrier stencil's Hessian
+  /// Adds scale times d^2E_c/dx^2 but self-contact's into A (the system's pattern), each barrier
+  /// stencil's Hessian
   /// made positive semi-definite first as `projection` asks (Clamp by default, so a Newton matrix
   /// stays positive definite; None gives the exact Hessian). The friction's is PSD as it is.
   void add_hessian(ConstRef x, double scale, SparseMatrix& A,
                    PsdProjection projection = PsdProjection::Clamp) const;
   /// The largest fraction t in [0, 1] such that moving x to x + t dx keeps every gap above a
   /// tenth of where it started (contact/ccd.hpp: exact for planes and particle-sphere pairs,
-  /// conservative advancement for triangle-sphere pairs).
+  /// conservative advancement for triangle-sphere, mesh and self pairs; self pairs need
+  /// prepare_line(x, dx) first).
   double max_step(ConstRef x, ConstRef dx) const;
   /// The active stencils and smallest gap at x.
   ContactFigures figures(ConstRef x) const;
@@ -98,7 +122,7 @@ class ContactPotential {
   /// The edge-edge mollifier's threshold: edges whose |ea x eb|^2 is below this times
   /// |ea|^2 |eb|^2 at rest (about 1.8 degrees from parallel) have their barrier faded out to 0 at
   /// parallel (Li et al. 2020, section 4.1), where the edge-edge distance is not smooth.
-  static constexpr double kMollifierThreshold = 1e-3;
+  static constexpr double kMollifierThreshold = SelfContact::kMollifierThreshold;
   /// min_gap reports gaps below this times dhat (infinity when none is).
   static constexpr double kFigureReach = 10.0;
 
@@ -145,6 +169,7 @@ class ContactPotential {
   std::vector<Vec3> m_centres;              // the spheres' centres at t1
   std::vector<MeshState> m_meshes;
   std::vector<FrictionPair> m_friction;
+  std::unique_ptr<SelfContact> m_self;
   Vec m_x0;
   double m_h = 0.0, m_kappa = 0.0, m_first_kappa = 0.0;
 };

@@ -10,13 +10,15 @@ double Stepper::error_norm(double, double) {
 }
 
 void add_work(StepperStats& to, const StepperStats& from) {
-  for (auto m : {&StepperStats::internal_steps, &StepperStats::iterations,
-                 &StepperStats::linear_iterations, &StepperStats::factorizations})
+  for (auto m :
+       {&StepperStats::internal_steps, &StepperStats::iterations, &StepperStats::linear_iterations,
+        &StepperStats::factorizations, &StepperStats::contact_pattern_builds})
     to.*m += from.*m;
   for (auto m :
        {&StepperStats::assembly_seconds, &StepperStats::analyze_seconds,
         &StepperStats::factor_seconds, &StepperStats::solve_seconds, &StepperStats::local_seconds,
-        &StepperStats::global_seconds, &StepperStats::contact_seconds, &StepperStats::total_seconds,
+        &StepperStats::global_seconds, &StepperStats::contact_seconds, &StepperStats::ccd_seconds,
+        &StepperStats::broad_phase_seconds, &StepperStats::total_seconds,
         &StepperStats::factor_nonzeros})
     to.*m += from.*m;
 }
@@ -41,6 +43,7 @@ std::string format_stats(const StepperStats& s) {
   count(s.iterations, "iterations");
   count(s.linear_iterations, "linear iterations");
   count(s.factorizations, "factorizations");
+  count(s.contact_pattern_builds, "contact pattern builds");
   const char* sep = "; ";
   auto time = [&](double v, const char* what) {
     if (v == 0.0) return;
@@ -54,6 +57,8 @@ std::string format_stats(const StepperStats& s) {
   time(s.local_seconds, "local");
   time(s.global_seconds, "global");
   time(s.contact_seconds, "contact");
+  time(s.ccd_seconds, "of which CCD");
+  time(s.broad_phase_seconds, "of which broad phase");
   time(s.total_seconds, "total");
   return os.str();
 }

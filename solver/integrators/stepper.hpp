@@ -30,16 +30,19 @@ struct StepperStats {
   long long linear_iterations = 0;  ///< iterations of iterative linear solvers (CG, GMRES)
   long long factorizations = 0;  ///< numeric factorizations (or matrix refreshes) of linear solvers
   double last_residual = 0.0;    ///< residual of the last step's solve (its units: see StepSummary)
-  double assembly_seconds = 0.0;  ///< forces and Jacobian values (s)
-  double analyze_seconds = 0.0;   ///< symbolic analysis of sparsity patterns (s)
-  double factor_seconds = 0.0;    ///< numeric factorizations and preconditioner set-up (s)
-  double solve_seconds = 0.0;     ///< linear solves (s)
-  double local_seconds = 0.0;     ///< local steps of local/global methods (s)
-  double global_seconds = 0.0;    ///< global steps of local/global methods (s)
-  double contact_seconds = 0.0;   ///< contact distances, barrier, friction and CCD (s; not in
-                                  ///< assembly_seconds)
-  double total_seconds = 0.0;     ///< wall time inside step() (s); 0 if the method does not time it
-  double factor_nonzeros = 0.0;   ///< entries of the current factor (direct global solves)
+  double assembly_seconds = 0.0;     ///< forces and Jacobian values (s)
+  double analyze_seconds = 0.0;      ///< symbolic analysis of sparsity patterns (s)
+  double factor_seconds = 0.0;       ///< numeric factorizations and preconditioner set-up (s)
+  double solve_seconds = 0.0;        ///< linear solves (s)
+  double local_seconds = 0.0;        ///< local steps of local/global methods (s)
+  double global_seconds = 0.0;       ///< global steps of local/global methods (s)
+  double contact_seconds = 0.0;      ///< contact distances, barrier, friction and CCD (s; not in
+                                     ///< assembly_seconds)
+  double ccd_seconds = 0.0;          ///< of contact_seconds: continuous collision detection (s)
+  double broad_phase_seconds = 0.0;  ///< of contact_seconds: self-contact's broad phase (s)
+  long long contact_pattern_builds = 0;  ///< Newton matrix patterns built for self-contact
+  double total_seconds = 0.0;    ///< wall time inside step() (s); 0 if the method does not time it
+  double factor_nonzeros = 0.0;  ///< entries of the current factor (direct global solves)
 };
 
 /// "N steps, I iterations, L linear iterations, F factorizations; assembly a s, ..." with the

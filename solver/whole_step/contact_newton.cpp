@@ -58,7 +58,9 @@ ContactNewtonStepper::ContactNewtonStepper(const MassSpringSystem& system,
   for (Vec* v : {&m_x0, &m_x, &m_xhat, &m_v, &m_f, &m_fd, &m_rhs, &m_dx, &m_trial, &m_tmp})
     v->setZero(N);
   m_force_magnitude.setZero(system.num_particles());
-  const LinearSummary a = m_solver->analyze(m_A.matrix());
+  if (m_contact.self_contact() != nullptr)
+    m_grown = std::make_unique<ContactMatrix>(system.pattern());
+  const LinearSummary a = m_solver->analyze(newton_matrix());
   if (a.status != Status::Converged) throw SetupError(a.message);
   accumulate(m_totals, a);
 }
@@ -84,6 +86,17 @@ std::string ContactNewtonStepper::start(const State& s0, double h) {
     m_x.segment<3>(3 * p) = pins.position(k, s0.t + h);
   }
   m_contact.begin_step(s0.t, h, s0.x);
+  if (m_grown) {
+    // The candidates over the pins' motion to t0 + h, and the grown pattern's unused blocks.
+    m_tmp = m_x - m_x0;
+    m_contact.prepare_line(m_x0, m_tmp);
+    m_contact.self_blocks(m_x, m_pairs);
+    if (m_grown->shrink(m_pairs)) {
+      const LinearSummary a = m_solver->analyze(m_grown->matrix());
+      accumulate(m_totals, a);
+      if (a.status != Status::Converged) return a.message;
+    }
+  }
   const ContactFigures fig = m_contact.figures(m_x);
   m_min_gap = fig.min_gap;
   if (!(fig.min_gap > 0.0)) {
@@ -97,7 +110,18 @@ std::string ContactNewtonStepper::start(const State& s0, double h) {
   return "";
 }
 
-void ContactNewtonStepper::assemble(double h) {
+const SparseMatrix& ContactNewtonStepper::newton_matrix() const {
+  return m_grown ? m_grown->matrix() : m_A.matrix();
+}
+
+void ContactNewtonStepper::shift_matrix(double s) {
+  if (m_grown)
+    m_grown->add_diagonal(m_system.mass_diagonal(), s);
+  else
+    m_A.add_mass_multiple(s);
+}
+
+LinearSummary ContactNewtonStepper::assemble(double h) {
   const auto ta = Clock::now();
   m_v = (m_x - m_x0) / h;
   m_system.compute_forces(m_x, m_v, m_f);
@@ -116,12 +140,50 @@ void ContactNewtonStepper::assemble(double h) {
   m_rhs -= m_system.mass_diagonal().cwiseProduct(m_x - m_xhat);
   m_A.zero_pinned(m_rhs);
   m_A.form(h, h * h);
-  m_assembly_seconds += seconds_since(ta) - contact;  // the contact terms count apart
+  LinearSummary out;
+  double self = 0.0;
+  if (m_grown) {
+    // Self-contact's blocks, the pattern grown (and analyzed) if one is missing, its Hessian.
+    const auto ts = Clock::now();
+    m_contact.self_blocks(m_x, m_pairs);
+    self += seconds_since(ts);
+    if (m_grown->grow(m_pairs)) {
+      out = m_solver->analyze(m_grown->matrix());
+      accumulate(m_totals, out);
+    }
+    m_grown->copy_from(m_A.matrix());
+    const auto th = Clock::now();
+    m_contact.add_self_hessian(m_x, h * h, *m_grown);
+    self += seconds_since(th);
+    m_contact_seconds += self;
+  }
+  m_assembly_seconds += seconds_since(ta) - contact - self;  // the contact terms count apart
+  return out;
+}
+
+LinearSummary ContactNewtonStepper::factor_shifted() {
+  if (m_shift > 0.0) shift_matrix(m_shift);
+  m_solver->set_coordinates(m_x);
+  LinearSummary fs = m_solver->factor(newton_matrix());
+  accumulate(m_totals, fs);
+  for (int j = 0; j < 30 && fs.status != Status::Converged && fs.not_positive_definite; ++j) {
+    ++m_shifted_factorizations;
+    const double shift = m_shift > 0.0 ? 4.0 * m_shift : kFirstShift;
+    shift_matrix(shift - m_shift);  // A already holds m_shift M
+    m_shift = shift;
+    fs = m_solver->factor(newton_matrix());
+    accumulate(m_totals, fs);
+  }
+  m_shift = m_shift > 4.0 * kFirstShift ? 0.25 * m_shift : 0.0;
+  return fs;
 }
 
 bool ContactNewtonStepper::line_search(double h, double& fraction) {
   const auto tc = Clock::now();
+  m_contact.prepare_line(m_x, m_dx);
+  const auto tccd = Clock::now();
   double alpha = m_contact.max_step(m_x, m_dx);
+  m_ccd_seconds += seconds_since(tccd);
   m_contact_seconds += seconds_since(tc);
   fraction = alpha;
   // g(x) h^2 in difference form from the iterate m_x: the inertia term exactly, the potentials
@@ -185,20 +247,8 @@ StepSummary ContactNewtonStepper::step(const State& s0, double h, State& s1) {
   // each next iteration. clamp_compressed = true clamps compressed springs instead, always.
   for (int k = 0; k < m_options.newton_iterations; ++k) {
     m_jac_options.clamp_compressed = m_options.clamp_compressed;
-    assemble(h);
-    if (m_shift > 0.0) m_A.add_mass_multiple(m_shift);
-    m_solver->set_coordinates(m_x);
-    LinearSummary fs = m_solver->factor(m_A.matrix());
-    accumulate(m_totals, fs);
-    for (int j = 0; j < 30 && fs.status != Status::Converged && fs.not_positive_definite; ++j) {
-      ++m_shifted_factorizations;
-      const double shift = m_shift > 0.0 ? 4.0 * m_shift : kFirstShift;
-      m_A.add_mass_multiple(shift - m_shift);  // A already holds m_shift M
-      m_shift = shift;
-      fs = m_solver->factor(m_A.matrix());
-      accumulate(m_totals, fs);
-    }
-    m_shift = m_shift > 4.0 * kFirstShift ? 0.25 * m_shift : 0.0;
+    const LinearSummary as = assemble(h);
+    const LinearSummary fs = as.status == Status::Converged ? factor_shifted() : as;
     out.newton_iterations = k + 1;
     if (fs.status != Status::Converged) {
       out.status = fs.status;
@@ -267,6 +317,10 @@ StepperStats ContactNewtonStepper::stats() const {
   s.factor_seconds = m_totals.factor_seconds;
   s.solve_seconds = m_totals.solve_seconds;
   s.contact_seconds = m_contact_seconds;
+  s.ccd_seconds = m_ccd_seconds;
+  if (const SelfContact* sc = m_contact.self_contact())
+    s.broad_phase_seconds = sc->broad_phase_seconds();
+  if (m_grown) s.contact_pattern_builds = m_grown->rebuilds();
   s.total_seconds = m_total_seconds;
   return s;
 }
@@ -274,11 +328,13 @@ StepperStats ContactNewtonStepper::stats() const {
 std::vector<StepFigure> ContactNewtonStepper::step_figures(const State& s) {
   const ContactFigures fig = m_contact.figures(s.x);
   const double min_gap = m_stepped ? m_min_gap : fig.min_gap;
-  return {{"newton_iterations", double(m_stepped ? m_last_newton : 0), 17},
-          {"contacts", double(fig.active), 17},
-          {"min_gap", min_gap, 9},
-          {"ccd_fraction", m_stepped ? m_ccd_fraction : 1.0, 6},
-          {"kappa", m_contact.kappa(), 6}};
+  std::vector<StepFigure> out = {{"newton_iterations", double(m_stepped ? m_last_newton : 0), 17},
+                                 {"contacts", double(fig.active), 17},
+                                 {"min_gap", min_gap, 9},
+                                 {"ccd_fraction", m_stepped ? m_ccd_fraction : 1.0, 6},
+                                 {"kappa", m_contact.kappa(), 6}};
+  if (m_grown) out.push_back({"self_contacts", double(fig.self_active), 17});
+  return out;
 }
 
 std::vector<ParticleField> ContactNewtonStepper::output_fields(const State& s) {

@@ -3,6 +3,7 @@
 #include <string>
 #include <vector>
 
+#include "hooke/contact/contact_matrix.hpp"
 #include "hooke/contact/contact_potential.hpp"
 #include "hooke/integrators/implicit_stepper.hpp"
 #include "hooke/integrators/step_matrix.hpp"
@@ -46,6 +47,13 @@ std::string contact_unsupported(const MassSpringSystem& system);
 /// the Newton step small against the step's motion (v the current iterate's velocity), or
 /// against dhat when the cloth is at rest (the scale below which contact resolves nothing).
 /// Pinned particles stay put (scripted pins go to their place at t0 + h first).
+///
+/// With self-contact ([contact] self) the barrier couples particles no force does: the Newton
+/// matrix is then a ContactMatrix, the system's pattern plus the blocks the self-contact stencils
+/// need, grown (and analyzed again) when an iterate needs a block it lacks, shrunk at a step's
+/// start when most of its extra blocks are unused. Its candidate pairs are found once per Newton
+/// iteration, over the segment from the iterate to the full Newton step (the line search's and
+/// the next iterate's states).
 class ContactNewtonStepper final : public Stepper {
  public:
   using Options = ImplicitOptions;
@@ -69,7 +77,8 @@ class ContactNewtonStepper final : public Stepper {
   StepperStats stats() const override;
   /// newton_iterations (the last step's), contacts (active stencils at s), min_gap (the smallest
   /// gap over the last step's Newton iterates, m), ccd_fraction (the smallest CCD-safe fraction of
-  /// its line searches), kappa.
+  /// its line searches), kappa; with self-contact, self_contacts (of contacts, the cloth's pairs
+  /// with itself).
   std::vector<StepFigure> step_figures(const State& s) override;
   /// contact_force: the magnitude of the contact force (barrier and friction) on each particle.
   std::vector<ParticleField> output_fields(const State& s) override;
@@ -79,8 +88,16 @@ class ContactNewtonStepper final : public Stepper {
   bool exact_resume() const override { return m_solver->exact_resume(); }
 
  private:
-  /// Forces, Jacobians, the Newton matrix and right-hand side at the iterate m_x.
-  void assemble(double h);
+  /// Forces, Jacobians, the Newton matrix and right-hand side at the iterate m_x; with
+  /// self-contact, analyzes a grown pattern (a failure is returned).
+  LinearSummary assemble(double h);
+  /// The matrix factor() and solve() take: m_A's, or the grown one under self-contact.
+  const SparseMatrix& newton_matrix() const;
+  /// Adds s M to the Newton matrix.
+  void shift_matrix(double s);
+  /// Factors the assembled Newton matrix, shifted by m_shift M, shifting further while a
+  /// factorization finds it indefinite; m_shift then quartered for the next iteration.
+  LinearSummary factor_shifted();
   /// The line search along m_dx from m_x; false if no fraction lowers g.
   bool line_search(double h, double& fraction);
   /// The start of a step: m_x (pins placed), m_xhat; "" or why the step cannot start.
@@ -92,10 +109,13 @@ class ContactNewtonStepper final : public Stepper {
   JacobianOptions m_jac_options;
   StepMatrix m_A;
   ContactPotential m_contact;
+  std::unique_ptr<ContactMatrix> m_grown;  // under self-contact
+  std::vector<std::pair<int, int>> m_pairs;
   bool m_dissipative = false;  // the system has dampers or drag
   Vec m_x0, m_x, m_xhat, m_v, m_f, m_fd, m_rhs, m_dx, m_trial, m_tmp, m_force_magnitude;
   LinearSummary m_totals;
   double m_assembly_seconds = 0.0, m_contact_seconds = 0.0, m_total_seconds = 0.0;
+  double m_ccd_seconds = 0.0;
   long long m_steps = 0, m_newton_iterations = 0;
   long long m_shifted_factorizations = 0;  // factorizations of A + s M after an indefinite A
   double m_shift = 0.0;                    // s of the last iteration (0: exact)
