@@ -11,6 +11,7 @@
 //   hooke stability [--full] [--cases a,b] [--methods a,b] [--k 1e2,1e4] [--out DIR] [--no-plot]
 //   hooke scaling [--full] [--springs 1e4,1e5] [--methods a,b] [--threads 1,2] [--out DIR]
 //   hooke demo [SCENE] [--explicit METHOD] [--out DIR] [--no-plot]
+//   hooke check-intersections DIR
 // Exit codes: 0 success, 1 internal or I/O error, 2 bad input (error: FILE: KEY: reason),
 // 3 a run that diverged or whose step failed numerically (the message names step, time and
 // backend; output so far is kept), 130 / 143 a run stopped by SIGINT / SIGTERM after writing a
@@ -27,19 +28,20 @@
 #include "problems/input_error.hpp"
 
 namespace hooke::cli {
-Command add_run_command(CLI::App& app);               // run/run_command.cpp
-Command add_resume_command(CLI::App& app);            // run/run_command.cpp
-Command add_scenes_command(CLI::App& app);            // info_command.cpp
-Command add_info_command(CLI::App& app);              // info_command.cpp
-Command add_keys_command(CLI::App& app);              // keys_command.cpp
-Command add_crosscheck_command(CLI::App& app);        // studies/crosscheck_command.cpp
-Command add_step_convergence_command(CLI::App& app);  // studies/step_convergence_command.cpp
-Command add_stability_command(CLI::App& app);         // studies/stability_command.cpp
-Command add_workprecision_command(CLI::App& app);     // studies/workprecision_command.cpp
-Command add_resolution_command(CLI::App& app);        // studies/resolution_command.cpp
-Command add_scaling_command(CLI::App& app);           // studies/scaling_command.cpp
-Command add_demo_command(CLI::App& app);              // demo_command.cpp
-Command add_energy_command(CLI::App& app);            // studies/energy_command.cpp
+Command add_run_command(CLI::App& app);                  // run/run_command.cpp
+Command add_resume_command(CLI::App& app);               // run/run_command.cpp
+Command add_scenes_command(CLI::App& app);               // info_command.cpp
+Command add_info_command(CLI::App& app);                 // info_command.cpp
+Command add_keys_command(CLI::App& app);                 // keys_command.cpp
+Command add_crosscheck_command(CLI::App& app);           // studies/crosscheck_command.cpp
+Command add_step_convergence_command(CLI::App& app);     // studies/step_convergence_command.cpp
+Command add_stability_command(CLI::App& app);            // studies/stability_command.cpp
+Command add_workprecision_command(CLI::App& app);        // studies/workprecision_command.cpp
+Command add_resolution_command(CLI::App& app);           // studies/resolution_command.cpp
+Command add_scaling_command(CLI::App& app);              // studies/scaling_command.cpp
+Command add_demo_command(CLI::App& app);                 // demo_command.cpp
+Command add_energy_command(CLI::App& app);               // studies/energy_command.cpp
+Command add_check_intersections_command(CLI::App& app);  // check_intersections_command.cpp
 }  // namespace hooke::cli
 
 int main(int argc, char** argv) {
@@ -50,10 +52,11 @@ int main(int argc, char** argv) {
   app.require_subcommand(1);
   app.set_version_flag("--version", HOOKE_VERSION);
   std::vector<Command> commands;
-  for (auto add : {add_run_command, add_resume_command, add_scenes_command, add_info_command,
-                   add_keys_command, add_crosscheck_command, add_step_convergence_command,
-                   add_stability_command, add_workprecision_command, add_resolution_command,
-                   add_scaling_command, add_energy_command, add_demo_command})
+  for (auto add :
+       {add_run_command, add_resume_command, add_scenes_command, add_info_command, add_keys_command,
+        add_crosscheck_command, add_step_convergence_command, add_stability_command,
+        add_workprecision_command, add_resolution_command, add_scaling_command, add_energy_command,
+        add_demo_command, add_check_intersections_command})
     commands.push_back(add(app));
 
   try {

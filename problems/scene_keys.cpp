@@ -67,6 +67,18 @@ void add_mesh_lattice_keys(std::vector<SceneKey>& t) {
                    "triangles: alternating diagonals (a checkerboard) or all one way (every edge's "
                    "two triangles a parallelogram, where bending.model = 'shell' is exact in "
                    "twist too; the hinge models then couple bending to twist)"));
+  add(K("mesh.layers", T::Integer)
+          .in({"grid"})
+          .def("1")
+          .between(1, 1000)
+          .meaning("sheets stacked layer_spacing apart along the normal (+y horizontal, +z "
+                   "vertical): one body, its sheets colliding under [contact] self"));
+  add(K("mesh.layer_spacing", T::Number)
+          .in({"grid"})
+          .unit("m")
+          .def("0.01")
+          .positive()
+          .meaning("distance between the stacked sheets (mesh.layers)"));
   add(K("mesh.flexion_stride", T::Integer)
           .in({"grid"})
           .def("1")

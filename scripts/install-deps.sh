@@ -20,6 +20,7 @@ packages=(
   libpng-dev                        # final.png pictures
   libtomlplusplus-dev               # scene files
   libspectra-dev                    # largest natural frequency (hooke info, stability limits)
+  libcgal-dev                       # exact predicates: hooke check-intersections
   python3-matplotlib python3-numpy  # plots (run with /usr/bin/python3)
   python3-dev pybind11-dev          # the Python module (python/)
   python3-scipy python3-pytest      # its sparse Jacobians and its tests

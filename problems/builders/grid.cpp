@@ -4,7 +4,8 @@
 // shear | flexion (booleans, default true), and flexion_stride: flexion springs start at every
 // flexion_stride-th particle along their direction (1, the default: every particle; 2: every
 // other particle, the non-overlapping bending springs of common public local/global cloth demos,
-// e.g. the 411 x 411 grid with 842k springs).
+// e.g. the 411 x 411 grid with 842k springs). layers and layer_spacing stack copies of the sheet
+// along its normal: one body of several pieces (a stack of sheets for self-contact).
 #include <cmath>
 #include <sstream>
 
@@ -69,6 +70,32 @@ void lattice(long long nx, long long ny, const Vec3& du, const Vec3& dw, double 
     }
 }
 
+/// Repeats the sheet in out `layers` times, layer k moved by k * offset: particles, pins,
+/// springs and triangles, each layer's ids after the previous layer's.
+void stack_layers(long long layers, const Vec3& offset, MeshBuild& out) {
+  const MeshBuild one = out;
+  const Index n = one.num_particles();
+  out.resize(n * layers);
+  out.springs.clear();
+  out.triangles.clear();
+  for (long long k = 0; k < layers; ++k) {
+    const int base = int(k * n);
+    for (Index i = 0; i < n; ++i) {
+      out.x.segment<3>(3 * (base + i)) = one.x.segment<3>(3 * i) + double(k) * offset;
+      out.v.segment<3>(3 * (base + i)) = one.v.segment<3>(3 * i);
+      out.masses[base + i] = one.masses[i];
+      out.pinned[size_t(base + i)] = one.pinned[size_t(i)];
+    }
+    for (SpringSpec s : one.springs) {
+      s.i += base;
+      s.j += base;
+      out.springs.push_back(s);
+    }
+    for (const auto& t : one.triangles)
+      out.triangles.push_back({t[0] + base, t[1] + base, t[2] + base});
+  }
+}
+
 void pin_grid(TableReader& mesh, const std::vector<std::vector<double>>& pins, long long nx,
               long long ny, MeshBuild& out) {
   for (size_t k = 0; k < pins.size(); ++k) {
@@ -99,11 +126,14 @@ void pin_grid(TableReader& mesh, const std::vector<std::vector<double>>& pins, l
 void build_grid(TableReader& mesh, TableReader& springs, MeshBuild& out) {
   const long long nx = mesh.integer("nx", 20, 2, 1000000000LL);
   const long long ny = mesh.integer("ny", 20, 2, 1000000000LL);
-  check_size(mesh, "nx", double(nx) * double(ny), 6.0 * double(nx) * double(ny));
+  const long long layers = mesh.integer("layers", 1, 1, 1000);
+  const double spacing = mesh.positive("layer_spacing", 0.01);
+  const double all = double(nx) * double(ny) * double(layers);
+  check_size(mesh, layers > 1 ? "layers" : "nx", all, 6.0 * all);
   const double width = mesh.positive("width", 1.0);
   const double height = mesh.positive("height", 1.0);
   const std::string orient = mesh.choice("orientation", "horizontal", {"horizontal", "vertical"});
-  const double mass = read_particle_mass(mesh, nx * ny, 1.0);
+  const double mass = read_particle_mass(mesh, nx * ny * layers, 1.0);
   const double k = springs.non_negative("stiffness", 1e3);
   const double c = springs.non_negative("damping", 0.0);
   const SpringKind structural = read_kind(mesh, springs, "structural", true, k, c);
@@ -138,6 +168,8 @@ void build_grid(TableReader& mesh, TableReader& springs, MeshBuild& out) {
   // Default: the two corners of row j = 0 (a cloth hanging from two corners).
   const auto pins = mesh.rows("pins", 2, 2, std::vector<std::vector<double>>{{0, 0}, {-1, 0}});
   pin_grid(mesh, pins, nx, ny, out);
+  if (layers > 1)
+    stack_layers(layers, orient == "horizontal" ? Vec3(0, spacing, 0) : Vec3(0, 0, spacing), out);
 }
 
 void build_cantilever(TableReader& mesh, TableReader& springs, MeshBuild& out) {

@@ -5,8 +5,8 @@
 
 #include "hooke/contact/barrier.hpp"
 #include "hooke/contact/ccd.hpp"
-#include "hooke/contact/distance.hpp"
 #include "hooke/contact/contact_terms.hpp"
+#include "hooke/contact/distance.hpp"
 
 namespace hooke {
 namespace {

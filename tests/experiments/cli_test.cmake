@@ -655,6 +655,28 @@ elseif(CASE STREQUAL "resolution")
     message(FATAL_ERROR "membrane n = 6 has no finite sag: '${rows}'${report}")
   endif()
 
+elseif(CASE STREQUAL "check_intersections")
+  # The fold (sheet_folded_onto_itself at 10 x 10) with self-contact: no frame has two triangles
+  # that intersect (exit 0). Without self-contact the folded half falls through the lower one:
+  # the checker names the first frame and pair (exit 1). A directory without frames: exit 2.
+  set(_small --no-progress --set mesh.nx=10 --set mesh.ny=10 --set output.interval=0.1)
+  hooke_exec(run "${SCENE}" --out "${OUT}/self" ${_small})
+  expect_rc(0)
+  hooke_exec(check-intersections "${OUT}/self")
+  expect_rc(0)
+  expect_contains("${out}" "no two triangles intersect" "stdout")
+  hooke_exec(run "${SCENE}" --out "${OUT}/through" ${_small} --set contact.self=false
+             --set contact.friction=0)
+  expect_rc(0)
+  hooke_exec(check-intersections "${OUT}/through")
+  expect_rc(1)
+  if(NOT out MATCHES "frame_[0-9]+\\.vtk \\(t = [^)]+\\): triangles [0-9]+ \\(particles ")
+    message(FATAL_ERROR "expected the first frame and pair named${report}")
+  endif()
+  hooke_exec(check-intersections "${OUT}/no_such_dir")
+  expect_rc(2)
+  expect_contains("${err}" "no VTK frames" "stderr")
+
 elseif(CASE STREQUAL "scenes")
   hooke_exec(scenes)
   expect_rc(0)

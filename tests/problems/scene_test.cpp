@@ -255,6 +255,34 @@ pins = [[-1, -1], [0, -1], [-5, -4], [2, -2]]
   EXPECT_EQ(e.key(), "mesh.pins[1]");
 }
 
+TEST(SceneGrid, LayersStackCopiesOfTheSheetAlongItsNormal) {
+  // Three 4 x 3 sheets 2 cm apart: each a copy of the first moved by k * 2 cm along +y (a
+  // horizontal grid's normal), with its own springs, triangles and pins, and total_mass shared by
+  // all; a vertical grid stacks along +z.
+  const std::string head =
+      "[mesh]\ntype = \"grid\"\nnx = 4\nny = 3\ntotal_mass = 1.2\npins = [[0, 0]]\n";
+  const Scene one = load_scene_from_string(head, "grid.toml");
+  const Scene three =
+      load_scene_from_string(head + "layers = 3\nlayer_spacing = 0.02\n", "grid.toml");
+  const Index n = one.system->num_particles();
+  ASSERT_EQ(three.system->num_particles(), 3 * n);
+  EXPECT_EQ(three.edges.size(), 3 * one.edges.size());
+  EXPECT_EQ(three.triangles.size(), 3 * one.triangles.size());
+  EXPECT_EQ(three.system->num_pinned(), 3);
+  for (Index k = 0; k < 3; ++k)
+    for (Index i = 0; i < n; ++i) {
+      const Vec3 want = one.initial.x.segment<3>(3 * i) + Vec3(0.0, 0.02 * double(k), 0.0);
+      EXPECT_EQ(Vec3(three.initial.x.segment<3>(3 * (k * n + i))), want);
+      EXPECT_DOUBLE_EQ(three.system->masses()[k * n + i], 1.2 / double(3 * n));
+    }
+  for (size_t e = 0; e < one.edges.size(); ++e)
+    EXPECT_EQ(three.edges[2 * one.edges.size() + e],
+              (std::array<int, 2>{one.edges[e][0] + int(2 * n), one.edges[e][1] + int(2 * n)}));
+  const Scene upright = load_scene_from_string(
+      head + "orientation = \"vertical\"\nlayers = 2\nlayer_spacing = 0.02\n", "grid.toml");
+  EXPECT_DOUBLE_EQ(upright.initial.x[3 * n + 2] - upright.initial.x[2], 0.02);
+}
+
 TEST(SceneGrid, DefaultPinsAreTheCornersOfTheFirstRow) {
   const Scene s = load_scene_from_string("[mesh]\ntype = \"grid\"\nnx = 6\nny = 3\n", "grid.toml");
   EXPECT_EQ(s.system->num_pinned(), 2);
