@@ -128,7 +128,7 @@ LinearSummary ContactNewtonStepper::assemble(double h) {
   m_A.assemble_jacobians(m_x, m_v, m_jac_options);
   const auto tc = Clock::now();
   m_contact.add_forces(m_x, m_f);
-  m_contact.add_hessian(m_x, -1.0, m_A.stiffness());
+  m_contact.add_hessian(m_x, -1.0, m_A.stiffness(), PsdProjection::None);
   const double contact = seconds_since(tc);
   m_contact_seconds += contact;
   if (m_dissipative) {
@@ -153,7 +153,7 @@ LinearSummary ContactNewtonStepper::assemble(double h) {
     }
     m_grown->copy_from(m_A.matrix());
     const auto th = Clock::now();
-    m_contact.add_self_hessian(m_x, h * h, *m_grown);
+    m_contact.add_self_hessian(m_x, h * h, *m_grown, PsdProjection::None);
     self += seconds_since(th);
     m_contact_seconds += self;
   }
